@@ -1,0 +1,42 @@
+# Finds every third-party dependency and fails early, naming the Debian package that provides it.
+# scripts/setup.sh installs all of them.
+
+function(ctk_missing what package)
+  message(FATAL_ERROR
+    "ctk: ${what} not found. Install the Debian package '${package}' "
+    "(or run scripts/setup.sh, which installs everything ctk needs).")
+endfunction()
+
+macro(ctk_find_package name package)
+  find_package(${name} ${ARGN} QUIET)
+  if(NOT ${name}_FOUND)
+    ctk_missing(${name} ${package})
+  endif()
+endmacro()
+
+ctk_find_package(Eigen3 libeigen3-dev NO_MODULE)
+ctk_find_package(Ceres libceres-dev)
+ctk_find_package(OpenCV libopencv-dev COMPONENTS core imgproc)
+ctk_find_package(OpenImageIO libopenimageio-dev)
+ctk_find_package(OpenEXR libopenexr-dev)
+ctk_find_package(nlohmann_json nlohmann-json3-dev)
+ctk_find_package(CLI11 libcli11-dev)
+ctk_find_package(OpenMP libgomp1 COMPONENTS CXX)
+ctk_find_package(hwy libhwy-dev)
+ctk_find_package(PkgConfig pkg-config)
+
+pkg_check_modules(HEALPIX QUIET IMPORTED_TARGET healpix_cxx)
+if(NOT HEALPIX_FOUND)
+  ctk_missing("HEALPix C++ (healpix_cxx)" libhealpix-cxx-dev)
+endif()
+pkg_check_modules(GEOGRAPHICLIB QUIET IMPORTED_TARGET geographiclib)
+if(NOT GEOGRAPHICLIB_FOUND)
+  ctk_missing(GeographicLib libgeographiclib-dev)
+endif()
+
+if(CTK_BUILD_TESTS)
+  ctk_find_package(GTest libgtest-dev)
+endif()
+if(CTK_BUILD_BENCHMARKS)
+  ctk_find_package(benchmark libbenchmark-dev)
+endif()

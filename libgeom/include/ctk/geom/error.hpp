@@ -1,0 +1,21 @@
+#pragma once
+// Errors caused by a user's input: each names the file, the place in it (a key path such as
+// "detector.pixel_pitch_mm[1]" or a line such as "line 12"), and what was expected.
+#include <stdexcept>
+#include <string>
+
+namespace ctk {
+
+class InputError : public std::runtime_error {
+ public:
+  InputError(std::string file, std::string where, const std::string& what);
+
+  const std::string& file() const { return file_; }
+  const std::string& where() const { return where_; }
+
+ private:
+  std::string file_;
+  std::string where_;
+};
+
+}  // namespace ctk

@@ -1,0 +1,38 @@
+#pragma once
+// Calibrated (or nominal) per-view geometry, format "ctk-geometry/1" (scan-format.md).
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ctk/geom/detector.hpp"
+#include "ctk/geom/projection_matrix.hpp"
+
+namespace ctk {
+
+enum class ViewStatus { ok, rejected, skipped };
+const char* to_string(ViewStatus status);
+
+struct GeometryView {
+  int index = 0;
+  std::string projection;  // file name as in the scan
+  ViewStatus status = ViewStatus::ok;
+  std::string reason;      // why, when not ok
+  std::optional<ProjectionMatrix> P;  // present for every ok view
+  std::optional<double> rms_px;
+  std::optional<int> spheres_used;
+};
+
+struct Geometry {
+  Detector detector;
+  std::vector<GeometryView> views;
+
+  std::vector<int> ok_views() const;  // indices into views
+};
+
+/// Throws InputError naming file and key; an "ok" view must carry P.
+Geometry read_geometry(const std::filesystem::path& file);
+nlohmann::json geometry_to_json(const Geometry& geometry);
+void write_geometry(const Geometry& geometry, const std::filesystem::path& file);
+
+}  // namespace ctk

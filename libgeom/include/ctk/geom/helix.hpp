@@ -1,0 +1,49 @@
+#pragma once
+// The calibration holder: a helix of metal spheres in the holder frame H (scan-format.md):
+// h(tau) = (r cos(rho tau + phi), r sin(rho tau + phi), tau).
+#include <Eigen/Core>
+#include <vector>
+
+#include "ctk/geom/projection_matrix.hpp"
+
+namespace ctk {
+
+struct Helix {
+  double radius_mm = 0;
+  double rho_rad_per_mm = 0;
+  double phase_rad = 0;
+
+  Eigen::Vector3d at(double tau) const;
+  Eigen::Vector3d tangent(double tau) const;  // dh / dtau
+  /// tau of the point of the helix nearest to p along the axis (p's w, refined on the curve).
+  double nearest_tau(const Eigen::Vector3d& p) const;
+};
+
+struct Holder {
+  Helix helix;
+  double sphere_diameter_mm = 0;
+  std::vector<Eigen::Vector3d> spheres_mm;  // declared centres, holder frame
+
+  /// n spheres equally spaced in tau over [tau_begin, tau_end] — how a helix holder is designed.
+  static Holder on_helix(const Helix& helix, double sphere_diameter_mm, int count, double tau_begin,
+                         double tau_end);
+  double tau_min() const;  // extent of the spheres along the axis
+  double tau_max() const;
+};
+
+/// The toolkit's reference holder: 50 spheres of 2 mm on a helix of radius 28 mm making two
+/// turns over 80 mm (rho = 4 pi / 80 rad/mm), centred on the holder origin.
+Holder reference_helix_holder();
+
+struct HelixPoint {
+  double tau = 0;
+  Eigen::Vector2d uv;        // projection of h(tau)
+  double distance_px = 0;    // from the query pixel
+};
+
+/// The point of the projected helix curve nearest to pixel `uv`, searched continuously over
+/// tau in [tau_begin, tau_end] (a coarse scan for the basin, then Newton refinement).
+HelixPoint closest_point_on_projected_helix(const ProjectionMatrix& P, const Helix& helix,
+                                            const Eigen::Vector2d& uv, double tau_begin, double tau_end);
+
+}  // namespace ctk

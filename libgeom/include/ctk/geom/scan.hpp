@@ -1,0 +1,66 @@
+#pragma once
+// scan.json, format "ctk-scan/1": the nominal description of one scan (scan-format.md).
+// read_scan() validates everything the contract requires and resolves paths against the file's
+// folder; it never touches the projections themselves (a missing image is a per-view matter).
+#include <Eigen/Core>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ctk/geom/detector.hpp"
+#include "ctk/geom/geometry_file.hpp"
+#include "ctk/geom/helix.hpp"
+#include "ctk/geom/joint_log.hpp"
+#include "ctk/geom/rigid.hpp"
+
+namespace ctk {
+
+enum class ProjectionKind { counts, line_integrals };
+
+struct ProjectionSet {
+  std::string files_pattern;                  // as written: printf pattern or empty when a list
+  std::vector<std::string> file_names;        // as written when a list was given
+  int count = 0;
+  ProjectionKind kind = ProjectionKind::line_integrals;
+  std::string flat, dark;                     // as written (required for counts)
+  /// Name of projection `view` as written in the file (relative to the scan folder).
+  std::string file_name(int view) const;
+};
+
+struct PandaPoseSource {
+  std::string joints_csv;  // as written
+  Rigid T_camera_base = Rigid::Identity();
+  Rigid T_flange_holder = Rigid::Identity();
+  JointLog joints;  // loaded and checked against projections.count by read_scan
+};
+
+struct MatricesPoseSource {
+  std::string file;  // a ctk-geometry/1 file, as written
+  Geometry geometry; // loaded by read_scan
+};
+
+struct ScanDescription {
+  std::filesystem::path folder;  // where scan.json lives; relative names resolve against it
+  Detector detector;
+  Eigen::Vector2d principal_point_px{0, 0};
+  double source_to_detector_mm = 0;
+  ProjectionSet projections;
+  std::optional<PandaPoseSource> panda;       // exactly one of panda / matrices is set
+  std::optional<MatricesPoseSource> matrices;
+  std::optional<Holder> holder;               // required for calibration, optional otherwise
+  std::vector<std::string> warnings;          // unknown keys and other non-fatal findings
+
+  Intrinsics intrinsics() const { return Intrinsics::from_setup(source_to_detector_mm, detector, principal_point_px); }
+  std::filesystem::path resolve(const std::string& name) const;
+  std::filesystem::path projection_path(int view) const { return resolve(projections.file_name(view)); }
+};
+
+/// Reads and validates; throws InputError naming the file and key on any violation, including
+/// a referenced file (joints, flat, dark, matrices) that cannot be read.
+ScanDescription read_scan(const std::filesystem::path& file);
+nlohmann::json scan_to_json(const ScanDescription& scan);
+/// Writes atomically. Paths stay as written (relative to the scan's folder).
+void write_scan(const ScanDescription& scan, const std::filesystem::path& file);
+
+}  // namespace ctk

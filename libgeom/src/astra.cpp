@@ -1,0 +1,78 @@
+#include "ctk/geom/astra.hpp"
+
+#include <Eigen/LU>
+#include <fstream>
+#include <sstream>
+
+#include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/error.hpp"
+
+namespace ctk {
+
+ConeVec to_cone_vec(const ProjectionMatrix& P, const Detector& detector, double mm_per_unit) {
+  const Eigen::Matrix3d Minv = P.matrix().leftCols<3>().inverse();
+  const Eigen::Vector3d s = P.source_position();
+  // Points s + lambda * Minv (u, v, 1) have depth lambda: lambda > 0 puts the plane in front.
+  const double lambda = detector.pitch_u_mm / Minv.col(0).norm();
+  const Eigen::Vector2d c = detector.centre_px();
+  const Eigen::Vector3d d = s + lambda * Minv * Eigen::Vector3d(c.x(), c.y(), 1.0);
+  const Eigen::Vector3d u = lambda * Minv.col(0), v = lambda * Minv.col(1);
+  ConeVec out{};
+  for (int i = 0; i < 3; ++i) {
+    out[static_cast<std::size_t>(i)] = s[i] / mm_per_unit;
+    out[static_cast<std::size_t>(3 + i)] = d[i] / mm_per_unit;
+    out[static_cast<std::size_t>(6 + i)] = u[i] / mm_per_unit;
+    out[static_cast<std::size_t>(9 + i)] = v[i] / mm_per_unit;
+  }
+  return out;
+}
+
+ProjectionMatrix from_cone_vec(const ConeVec& vec, const Detector& detector, double mm_per_unit) {
+  auto at = [&](int i) -> Eigen::Vector3d {
+    return Eigen::Vector3d(vec[static_cast<std::size_t>(i)], vec[static_cast<std::size_t>(i + 1)],
+                           vec[static_cast<std::size_t>(i + 2)]) * mm_per_unit;
+  };
+  const Eigen::Vector3d s = at(0), d = at(3), u = at(6), v = at(9);
+  const Eigen::Vector2d c = detector.centre_px();
+  const Eigen::Vector3d o = d - c.x() * u - c.y() * v;  // centre of pixel (0, 0)
+  Eigen::Matrix3d B;
+  B << u, v, o - s;
+  Matrix34d P;
+  P.leftCols<3>() = B.inverse();
+  P.col(3) = -B.inverse() * s;
+  return ProjectionMatrix(P).oriented_towards(d);
+}
+
+std::vector<ConeVec> read_cone_vecs(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string(), "", "cannot open the cone_vec file");
+  std::vector<ConeVec> out;
+  std::string line;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::istringstream ss(line);
+    ConeVec v{};
+    for (auto& x : v) {
+      if (!(ss >> x) || !std::isfinite(x))
+        throw InputError(file.string(), "line " + std::to_string(line_number), "expected 12 finite numbers");
+    }
+    double extra;
+    if (ss >> extra) throw InputError(file.string(), "line " + std::to_string(line_number), "more than 12 numbers");
+    out.push_back(v);
+  }
+  return out;
+}
+
+void write_cone_vecs(const std::vector<ConeVec>& vecs, const std::filesystem::path& file) {
+  write_file_atomically(file, [&](std::ostream& out) {
+    out.precision(17);
+    for (const auto& v : vecs) {
+      for (std::size_t i = 0; i < v.size(); ++i) out << (i ? " " : "") << v[i];
+      out << '\n';
+    }
+  });
+}
+
+}  // namespace ctk

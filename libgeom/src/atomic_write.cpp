@@ -1,0 +1,45 @@
+#include "ctk/geom/atomic_write.hpp"
+
+#include <fstream>
+#include <stdexcept>
+#include <unistd.h>
+
+namespace ctk {
+
+namespace fs = std::filesystem;
+
+static fs::path temporary_beside(const fs::path& path) {
+  // Same folder (so rename is atomic), same extension (so format-by-extension writers work).
+  fs::path tmp = path;
+  tmp.replace_filename("." + path.stem().string() + ".tmp" + std::to_string(::getpid()) + path.extension().string());
+  return tmp;
+}
+
+void write_path_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  if (path.has_parent_path()) fs::create_directories(path.parent_path());
+  const fs::path tmp = temporary_beside(path);
+  try {
+    write(tmp);
+    fs::rename(tmp, path);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw;
+  }
+}
+
+void write_file_atomically(const fs::path& path, const std::function<void(std::ostream&)>& write) {
+  write_path_atomically(path, [&](const fs::path& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw std::runtime_error(path.string() + ": cannot open for writing");
+    write(out);
+    out.flush();
+    if (!out) throw std::runtime_error(path.string() + ": write failed (disk full?)");
+  });
+}
+
+void write_text_atomically(const fs::path& path, std::string_view text) {
+  write_file_atomically(path, [&](std::ostream& out) { out.write(text.data(), static_cast<std::streamsize>(text.size())); });
+}
+
+}  // namespace ctk

@@ -1,0 +1,14 @@
+#include "ctk/geom/error.hpp"
+
+namespace ctk {
+
+static std::string compose_message(const std::string& file, const std::string& where, const std::string& what) {
+  std::string message = file;
+  if (!where.empty()) message += ": " + where;
+  return message + ": " + what;
+}
+
+InputError::InputError(std::string file, std::string where, const std::string& what)
+    : std::runtime_error(compose_message(file, where, what)), file_(std::move(file)), where_(std::move(where)) {}
+
+}  // namespace ctk

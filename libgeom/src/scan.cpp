@@ -1,0 +1,201 @@
+#include "ctk/geom/scan.hpp"
+
+#include <cstdio>
+#include <regex>
+
+#include "ctk/geom/atomic_write.hpp"
+
+namespace ctk {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* kFormat = "ctk-scan/1";
+
+bool is_printf_pattern(const std::string& pattern) {
+  static const std::regex one_integer(R"(^[^%]*%0?[0-9]*d[^%]*$)");
+  return std::regex_match(pattern, one_integer);
+}
+
+void require_readable(const ScanDescription& scan, const JsonNode& node, const std::string& name) {
+  const fs::path path = scan.resolve(name);
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) node.fail("file '" + path.string() + "' does not exist or is not a file");
+  if (FILE* f = std::fopen(path.c_str(), "rb")) {
+    std::fclose(f);
+  } else {
+    node.fail("file '" + path.string() + "' cannot be read");
+  }
+}
+
+Detector read_detector(const JsonNode& node, Eigen::Vector2d* principal_point) {
+  node.warn_unknown_keys({"cols", "rows", "pixel_pitch_mm", "principal_point_px"});
+  Detector d;
+  d.cols = node.at("cols").integer();
+  d.rows = node.at("rows").integer();
+  if (d.cols <= 0) node.at("cols").fail("expected a positive integer");
+  if (d.rows <= 0) node.at("rows").fail("expected a positive integer");
+  const auto pitch = node.at("pixel_pitch_mm").numbers(2);
+  if (!(pitch[0] > 0 && pitch[1] > 0)) node.at("pixel_pitch_mm").fail("expected two positive pitches");
+  d.pitch_u_mm = pitch[0];
+  d.pitch_v_mm = pitch[1];
+  if (principal_point) {
+    const auto pp = node.at("principal_point_px").numbers(2);
+    *principal_point = {pp[0], pp[1]};
+  }
+  return d;
+}
+
+ProjectionSet read_projections(const JsonNode& node, const ScanDescription& scan) {
+  node.warn_unknown_keys({"files", "count", "kind", "flat", "dark"});
+  ProjectionSet p;
+  const JsonNode files = node.at("files");
+  if (files.raw().is_string()) {
+    p.files_pattern = files.string();
+    if (!is_printf_pattern(p.files_pattern))
+      files.fail("expected a printf pattern with one integer conversion such as proj_%04d.tif, got '" + p.files_pattern + "'");
+    p.count = node.at("count").integer();
+  } else if (files.raw().is_array()) {
+    for (std::size_t i = 0; i < files.size(); ++i) p.file_names.push_back(files.at(i).string());
+    p.count = static_cast<int>(p.file_names.size());
+    if (auto count = node.find("count"); count && count->integer() != p.count)
+      count->fail("is " + std::to_string(count->integer()) + " but 'files' lists " + std::to_string(p.count) + " names");
+  } else {
+    files.fail("expected a printf pattern (string) or a list of file names");
+  }
+  if (p.count <= 0) node.at("count").fail("expected a positive number of projections");
+  const std::string kind = node.at("kind").string();
+  if (kind == "counts") {
+    p.kind = ProjectionKind::counts;
+    p.flat = node.at("flat").string();
+    p.dark = node.at("dark").string();
+    require_readable(scan, node.at("flat"), p.flat);
+    require_readable(scan, node.at("dark"), p.dark);
+  } else if (kind == "line_integrals") {
+    p.kind = ProjectionKind::line_integrals;
+  } else {
+    node.at("kind").fail("expected \"counts\" or \"line_integrals\", got \"" + kind + "\"");
+  }
+  return p;
+}
+
+Holder read_holder(const JsonNode& node) {
+  node.warn_unknown_keys({"helix", "sphere_diameter_mm", "spheres_mm"});
+  Holder h;
+  const JsonNode helix = node.at("helix");
+  helix.warn_unknown_keys({"radius_mm", "rho_rad_per_mm", "phase_rad"});
+  h.helix.radius_mm = helix.at("radius_mm").positive_number();
+  h.helix.rho_rad_per_mm = helix.at("rho_rad_per_mm").number();
+  h.helix.phase_rad = helix.at("phase_rad").number();
+  h.sphere_diameter_mm = node.at("sphere_diameter_mm").positive_number();
+  const JsonNode spheres = node.at("spheres_mm");
+  for (std::size_t i = 0; i < spheres.size(); ++i) h.spheres_mm.push_back(spheres.at(i).vector3());
+  if (h.spheres_mm.empty()) spheres.fail("expected at least one sphere centre");
+  return h;
+}
+
+}  // namespace
+
+std::string ProjectionSet::file_name(int view) const {
+  if (!file_names.empty()) return file_names.at(static_cast<std::size_t>(view));
+  char buffer[1024];
+  std::snprintf(buffer, sizeof buffer, files_pattern.c_str(), view);
+  return buffer;
+}
+
+fs::path ScanDescription::resolve(const std::string& name) const {
+  const fs::path p(name);
+  return p.is_absolute() ? p : folder / p;
+}
+
+ScanDescription read_scan(const fs::path& file) {
+  ScanDescription scan;
+  scan.folder = file.has_parent_path() ? file.parent_path() : fs::path(".");
+  const nlohmann::json root = read_json_file(file);
+  const JsonNode top(root, file.string(), "", &scan.warnings);
+  if (!root.is_object()) top.fail("expected a JSON object");
+  top.warn_unknown_keys({"format", "detector", "source_to_detector_mm", "projections", "pose_source", "holder"});
+  const std::string format = top.at("format").string();
+  if (format != kFormat) top.at("format").fail("expected \"" + std::string(kFormat) + "\", got \"" + format + "\"");
+
+  scan.detector = read_detector(top.at("detector"), &scan.principal_point_px);
+  scan.source_to_detector_mm = top.at("source_to_detector_mm").positive_number();
+  scan.projections = read_projections(top.at("projections"), scan);
+
+  const JsonNode pose = top.at("pose_source");
+  const std::string kind = pose.at("kind").string();
+  if (kind == "panda") {
+    pose.warn_unknown_keys({"kind", "joints_csv", "T_camera_base", "T_flange_holder"});
+    PandaPoseSource panda;
+    panda.joints_csv = pose.at("joints_csv").string();
+    require_readable(scan, pose.at("joints_csv"), panda.joints_csv);
+    panda.T_camera_base = rigid_from_json(pose.at("T_camera_base"));
+    panda.T_flange_holder = rigid_from_json(pose.at("T_flange_holder"));
+    panda.joints = JointLog::read(scan.resolve(panda.joints_csv), scan.projections.count);
+    scan.panda = std::move(panda);
+  } else if (kind == "matrices") {
+    pose.warn_unknown_keys({"kind", "file"});
+    MatricesPoseSource matrices;
+    matrices.file = pose.at("file").string();
+    require_readable(scan, pose.at("file"), matrices.file);
+    matrices.geometry = read_geometry(scan.resolve(matrices.file));
+    const int n = static_cast<int>(matrices.geometry.views.size());
+    if (n != scan.projections.count)
+      pose.at("file").fail("holds " + std::to_string(n) + " views but projections.count is " +
+                           std::to_string(scan.projections.count));
+    scan.matrices = std::move(matrices);
+  } else {
+    pose.at("kind").fail("expected \"panda\" or \"matrices\", got \"" + kind + "\"");
+  }
+
+  if (auto holder = top.find("holder")) scan.holder = read_holder(*holder);
+  return scan;
+}
+
+nlohmann::json scan_to_json(const ScanDescription& scan) {
+  using nlohmann::json;
+  json j;
+  j["format"] = kFormat;
+  j["detector"] = {{"cols", scan.detector.cols},
+                   {"rows", scan.detector.rows},
+                   {"pixel_pitch_mm", {scan.detector.pitch_u_mm, scan.detector.pitch_v_mm}},
+                   {"principal_point_px", {scan.principal_point_px.x(), scan.principal_point_px.y()}}};
+  j["source_to_detector_mm"] = scan.source_to_detector_mm;
+  const auto& p = scan.projections;
+  json proj;
+  if (p.file_names.empty()) proj["files"] = p.files_pattern; else proj["files"] = p.file_names;
+  proj["count"] = p.count;
+  proj["kind"] = p.kind == ProjectionKind::counts ? "counts" : "line_integrals";
+  if (p.kind == ProjectionKind::counts) {
+    proj["flat"] = p.flat;
+    proj["dark"] = p.dark;
+  }
+  j["projections"] = proj;
+  if (scan.panda) {
+    j["pose_source"] = {{"kind", "panda"},
+                        {"joints_csv", scan.panda->joints_csv},
+                        {"T_camera_base", rigid_to_json(scan.panda->T_camera_base)},
+                        {"T_flange_holder", rigid_to_json(scan.panda->T_flange_holder)}};
+  } else if (scan.matrices) {
+    j["pose_source"] = {{"kind", "matrices"}, {"file", scan.matrices->file}};
+  }
+  if (scan.holder) {
+    const auto& h = *scan.holder;
+    json spheres = json::array();
+    for (const auto& s : h.spheres_mm) spheres.push_back({s.x(), s.y(), s.z()});
+    j["holder"] = {{"helix",
+                    {{"radius_mm", h.helix.radius_mm},
+                     {"rho_rad_per_mm", h.helix.rho_rad_per_mm},
+                     {"phase_rad", h.helix.phase_rad}}},
+                   {"sphere_diameter_mm", h.sphere_diameter_mm},
+                   {"spheres_mm", spheres}};
+  }
+  return j;
+}
+
+void write_scan(const ScanDescription& scan, const fs::path& file) {
+  write_text_atomically(file, scan_to_json(scan).dump(2) + "\n");
+}
+
+}  // namespace ctk

@@ -1,0 +1,80 @@
+// ctk geometry: the nominal per-view geometry a scan file predicts (robot FK through the setup
+// frames, or the matrices given), written as ctk-geometry/1 (and ASTRA cone_vec), with a report.
+#include <algorithm>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+
+#include "commands.hpp"
+#include "ctk/geom/astra.hpp"
+#include "ctk/geom/nominal_geometry.hpp"
+
+namespace ctk::tools {
+
+namespace {
+
+struct GeometryOptions {
+  std::filesystem::path scan, out = "geometry.json", astra;
+};
+
+void report(const ScanDescription& scan, const Geometry& g) {
+  std::vector<double> sod, spheres_visible;
+  int skipped = 0;
+  for (const auto& v : g.views) {
+    if (v.status != ViewStatus::ok) {
+      ++skipped;
+      std::cout << "  view " << v.index << ": " << to_string(v.status) << " — " << v.reason << "\n";
+      continue;
+    }
+    sod.push_back((v.P->source_position()).norm());
+    if (scan.holder) {
+      int n = 0;
+      for (const auto& s : scan.holder->spheres_mm) n += g.detector.contains(v.P->project(s), 1.0) ? 1 : 0;
+      spheres_visible.push_back(n);
+    }
+  }
+  auto range = [](std::vector<double> x) {
+    std::sort(x.begin(), x.end());
+    std::ostringstream s;
+    s << std::fixed << std::setprecision(2) << x.front() << " / " << x[x.size() / 2] << " / " << x.back();
+    return s.str();
+  };
+  std::cout << "views: " << g.views.size() << " (" << g.views.size() - static_cast<std::size_t>(skipped) << " with a pose, "
+            << skipped << " skipped)\n";
+  if (sod.empty()) return;
+  std::cout << "source to holder origin (mm), min / median / max: " << range(sod) << "\n";
+  std::cout << "magnification at the holder origin, median: " << std::fixed << std::setprecision(4)
+            << scan.source_to_detector_mm / sod[sod.size() / 2] << "\n";
+  if (!spheres_visible.empty())
+    std::cout << "holder spheres projecting onto the detector, min / median / max: " << range(spheres_visible) << " of "
+              << scan.holder->spheres_mm.size() << "\n";
+}
+
+void run_geometry(const GeometryOptions& o) {
+  const ScanDescription scan = read_scan(o.scan);
+  for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
+  const Geometry g = nominal_geometry(scan);
+  write_geometry(g, o.out);
+  std::cout << "nominal geometry of " << o.scan.string() << " written to " << o.out.string() << "\n";
+  if (!o.astra.empty()) {
+    std::vector<ConeVec> vecs;
+    for (const auto& v : g.views)
+      if (v.P) vecs.push_back(to_cone_vec(*v.P, g.detector));
+    write_cone_vecs(vecs, o.astra);
+    std::cout << "ASTRA cone_vec rows (mm) of the " << vecs.size() << " posed views written to " << o.astra.string() << "\n";
+  }
+  report(scan, g);
+}
+
+}  // namespace
+
+void register_geometry(CLI::App& app) {
+  auto options = std::make_shared<GeometryOptions>();
+  CLI::App* cmd = app.add_subcommand("geometry", "Nominal per-view geometry of a scan (robot FK or given matrices), with a report");
+  cmd->add_option("--scan", options->scan, "scan.json (ctk-scan/1)")->required();
+  cmd->add_option("--out", options->out, "geometry file to write (ctk-geometry/1)")->capture_default_str();
+  cmd->add_option("--astra", options->astra, "also write ASTRA cone_vec rows (mm) to this file");
+  cmd->callback([options] { run_geometry(*options); });
+}
+
+}  // namespace ctk::tools

@@ -1,0 +1,10 @@
+#pragma once
+// Each ctk subcommand registers itself on the application; one file per subcommand.
+#include <CLI/CLI.hpp>
+
+namespace ctk::tools {
+
+void register_example(CLI::App& app);
+void register_geometry(CLI::App& app);
+
+}  // namespace ctk::tools
