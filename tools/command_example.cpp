@@ -28,11 +28,9 @@ void run_example(const ExampleOptions& o) {
   scan.detector = detector;
   scan.principal_point_px = setup.principal_point_px;
   scan.source_to_detector_mm = o.sdd_mm;
-  scan.projections.files_pattern = "projections/proj_%04d.tif";
+  scan.projections.files_pattern = "projections/proj_%04d.exr";
   scan.projections.count = o.views;
-  scan.projections.kind = ProjectionKind::counts;
-  scan.projections.flat = "flat.tif";
-  scan.projections.dark = "dark.tif";
+  scan.projections.kind = ProjectionKind::line_integrals;
   PandaPoseSource panda;
   panda.joints_csv = "joints.csv";
   panda.T_camera_base = setup.T_camera_base;

@@ -39,18 +39,29 @@ nlohmann::json read_json_file(const std::filesystem::path& file) {
   std::stringstream buffer;
   buffer << in.rdbuf();
   const std::string text = buffer.str();
-  try {
-    return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    const std::size_t offset = e.byte == 0 ? 0 : e.byte - 1;
-    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + std::min(offset, text.size()), '\n'));
-    const std::size_t line_start = text.rfind('\n', offset == 0 ? 0 : offset - 1);
+  // Where in the text a problem sits: "line L, column C (key 'k')".
+  auto position = [&](std::size_t offset) {
+    offset = std::min(offset, text.size());
+    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(offset), '\n'));
+    const std::size_t line_start = offset == 0 ? std::string::npos : text.rfind('\n', offset - 1);
     const std::size_t column = offset - (line_start == std::string::npos ? 0 : line_start + 1) + 1;
     std::string where = "line " + std::to_string(line) + ", column " + std::to_string(column);
     const std::string key = key_before(text, offset);
     if (!key.empty()) where += " (key '" + key + "')";
-    throw InputError(file.string(), where,
+    return where;
+  };
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(file.string(), position(e.byte == 0 ? 0 : e.byte - 1),
                      "not valid JSON (NaN and Infinity are not JSON numbers): " + std::string(e.what()));
+  } catch (const nlohmann::json::out_of_range& e) {
+    // A number too large for a double ("1e999"): the message quotes the literal; find it.
+    const std::string what = e.what();
+    const auto q0 = what.find('\''), q1 = what.rfind('\'');
+    const std::size_t at = q0 != std::string::npos && q1 > q0 ? text.find(what.substr(q0 + 1, q1 - q0 - 1)) : std::string::npos;
+    throw InputError(file.string(), at == std::string::npos ? std::string() : position(at),
+                     "number out of range (not a finite double): " + what);
   }
 }
 

@@ -1,0 +1,56 @@
+#include "ctk/geom/helix.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace ctk {
+namespace {
+
+TEST(Helix, ReferenceHolderSpheresLieOnTheHelix) {
+  const Holder h = reference_helix_holder();
+  ASSERT_EQ(h.spheres_mm.size(), 50u);
+  EXPECT_DOUBLE_EQ(h.tau_min(), -40.0);
+  EXPECT_DOUBLE_EQ(h.tau_max(), 40.0);
+  for (const auto& s : h.spheres_mm) {
+    EXPECT_NEAR(std::hypot(s.x(), s.y()), 28.0, 1e-12);
+    EXPECT_LT((h.helix.at(h.helix.nearest_tau(s)) - s).norm(), 1e-9);
+  }
+  // Two turns over the 80 mm: the phase advances 4 pi.
+  EXPECT_NEAR(h.helix.rho_rad_per_mm * 80.0, 4 * M_PI, 1e-12);
+}
+
+TEST(Helix, TangentIsTheDerivative) {
+  const Helix helix{28, 0.157, 0.3};
+  for (double tau : {-30.0, 0.0, 12.5}) {
+    const Eigen::Vector3d fd = (helix.at(tau + 1e-6) - helix.at(tau - 1e-6)) / 2e-6;
+    EXPECT_LT((fd - helix.tangent(tau)).norm(), 1e-6);
+  }
+}
+
+TEST(Helix, ClosestPointOnProjectedHelixIsContinuousAndExact) {
+  const Helix helix{28, 4 * M_PI / 80, 0.0};
+  const Intrinsics K{2150 / 0.6, 2150 / 0.6, 0, 359.5, 359.5};
+  const auto P = ProjectionMatrix::compose(
+      K, make_rigid(rotation_about(Eigen::Vector3d(1, 0.2, 0), 1.4), Eigen::Vector3d(0.3, -0.2, 1360)));
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> tau_dist(-38, 38), off(-0.6, 0.6);
+  for (int i = 0; i < 50; ++i) {
+    const double tau = tau_dist(rng);
+    // A pixel on the curve is found at distance 0 and at its own tau (where the curve does not cross itself).
+    const Eigen::Vector2d on = P.project(helix.at(tau));
+    const HelixPoint hp = closest_point_on_projected_helix(P, helix, on, -40, 40);
+    EXPECT_LT(hp.distance_px, 1e-6);
+    // A pixel nudged off the curve: the answer is a true local minimum (perpendicular foot).
+    const Eigen::Vector2d near = on + Eigen::Vector2d(off(rng), off(rng));
+    const HelixPoint q = closest_point_on_projected_helix(P, helix, near, -40, 40);
+    EXPECT_LE(q.distance_px, (near - on).norm() + 1e-9);
+    Eigen::Matrix<double, 2, 3> J;
+    P.project(helix.at(q.tau), &J);
+    const Eigen::Vector2d dir = J * helix.tangent(q.tau);
+    EXPECT_LT(std::abs((q.uv - near).dot(dir.normalized())), 1e-6);
+  }
+}
+
+}  // namespace
+}  // namespace ctk

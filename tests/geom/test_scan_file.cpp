@@ -1,0 +1,233 @@
+// Reading scan.json and joints.csv: valid files round-trip; every kind of bad input is a clear
+// InputError that names the file and the key (or line).
+#include <gtest/gtest.h>
+
+#include "../test_support.hpp"
+#include "ctk/geom/nominal_geometry.hpp"
+#include "ctk/geom/panda_setup.hpp"
+#include "ctk/geom/scan.hpp"
+
+namespace ctk {
+namespace {
+
+// A valid robot scan of `views` views in `dir`; returns the path of scan.json.
+std::filesystem::path write_valid_scan(const std::filesystem::path& dir, int views = 12) {
+  const PandaSetup setup = reference_panda_setup({240, 200, 1.2, 1.2}, 2150, 1360);
+  ScanDescription scan;
+  scan.folder = dir;
+  scan.detector = setup.detector;
+  scan.principal_point_px = setup.principal_point_px;
+  scan.source_to_detector_mm = setup.source_to_detector_mm;
+  scan.projections.files_pattern = "proj_%04d.tif";
+  scan.projections.count = views;
+  scan.projections.kind = ProjectionKind::line_integrals;
+  PandaPoseSource panda;
+  panda.joints_csv = "joints.csv";
+  panda.T_camera_base = setup.T_camera_base;
+  panda.T_flange_holder = setup.T_flange_holder;
+  const auto orbit = joint7_orbit(setup, views);
+  for (int v = 0; v < views; ++v) panda.joints.add(v, orbit[static_cast<std::size_t>(v)]);
+  scan.panda = panda;
+  scan.holder = reference_helix_holder();
+  panda.joints.write(dir / "joints.csv");
+  write_scan(scan, dir / "scan.json");
+  return dir / "scan.json";
+}
+
+// Rewrites scan.json after `edit` and expects read_scan to fail naming `key` in its message.
+template <typename Edit>
+void expect_error_naming(const std::filesystem::path& file, Edit edit, const std::string& key) {
+  nlohmann::json j = read_json_file(file);
+  edit(j);
+  testing::write_text(file, j.dump(2));
+  try {
+    read_scan(file);
+    FAIL() << "no error for a scan file that should be rejected (" << key << ")";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+  }
+}
+
+TEST(ScanFile, ValidFileRoundTrips) {
+  const auto file = write_valid_scan(testing::scratch_dir());
+  const ScanDescription scan = read_scan(file);
+  EXPECT_TRUE(scan.warnings.empty());
+  EXPECT_EQ(scan.projections.count, 12);
+  EXPECT_EQ(scan.projections.file_name(7), "proj_0007.tif");
+  EXPECT_EQ(scan.projection_path(7), file.parent_path() / "proj_0007.tif");
+  ASSERT_TRUE(scan.panda);
+  EXPECT_EQ(scan.panda->joints.rows().size(), 12u);
+  ASSERT_TRUE(scan.holder);
+  EXPECT_EQ(scan.holder->spheres_mm.size(), 50u);
+  EXPECT_EQ(scan_to_json(scan), read_json_file(file));
+}
+
+TEST(ScanFile, MissingKeyIsNamed) {
+  const auto file = write_valid_scan(testing::scratch_dir());
+  expect_error_naming(file, [](nlohmann::json& j) { j["detector"].erase("rows"); }, "detector.rows");
+}
+
+TEST(ScanFile, WrongTypeIsNamed) {
+  const auto file = write_valid_scan(testing::scratch_dir());
+  expect_error_naming(file, [](nlohmann::json& j) { j["source_to_detector_mm"] = "2150"; }, "source_to_detector_mm");
+  expect_error_naming(file, [](nlohmann::json& j) { j["detector"]["pixel_pitch_mm"] = {0.6}; }, "detector.pixel_pitch_mm");
+}
+
+TEST(ScanFile, NaNIsNamed) {
+  const auto dir = testing::scratch_dir();
+  const auto file = write_valid_scan(dir);
+  // NaN is not JSON (but Python's json module writes it): the error names the line and key.
+  std::string text = read_json_file(file).dump(2);
+  const std::string key = "\"source_to_detector_mm\": ";
+  const auto at = text.find(key) + key.size();
+  text.replace(at, text.find_first_of(",\n}", at) - at, "NaN");
+  testing::write_text(file, text);
+  try {
+    read_scan(file);
+    FAIL() << "NaN accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("source_to_detector_mm"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("line"), std::string::npos) << e.what();
+  }
+  // An infinite value that JSON does parse (1e999) is rejected too.
+  const auto file2 = write_valid_scan(dir);
+  text = read_json_file(file2).dump(2);
+  const auto at2 = text.find(key) + key.size();
+  text.replace(at2, text.find_first_of(",\n}", at2) - at2, "1e999");
+  testing::write_text(file2, text);
+  EXPECT_THROW(read_scan(file2), InputError);
+}
+
+TEST(ScanFile, RotationMustBeARotation) {
+  const auto file = write_valid_scan(testing::scratch_dir());
+  expect_error_naming(file, [](nlohmann::json& j) { j["pose_source"]["T_camera_base"]["R"][0][0] = 2.0; },
+                      "pose_source.T_camera_base.R");
+}
+
+TEST(ScanFile, UnreadablePathIsNamed) {
+  const auto file = write_valid_scan(testing::scratch_dir());
+  expect_error_naming(file, [](nlohmann::json& j) { j["pose_source"]["joints_csv"] = "nowhere.csv"; },
+                      "pose_source.joints_csv");
+  expect_error_naming(file, [](nlohmann::json& j) {
+    j["projections"]["kind"] = "counts";
+    j["projections"]["flat"] = "flat.tif";
+    j["projections"]["dark"] = "dark.tif";
+  }, "projections.flat");
+}
+
+TEST(ScanFile, CountsNeedFlatAndDark) {
+  const auto file = write_valid_scan(testing::scratch_dir());
+  expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["kind"] = "counts"; }, "projections.flat");
+  expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["kind"] = "photons"; }, "projections.kind");
+}
+
+TEST(ScanFile, ProjectionCountMustMatchJointRows) {
+  const auto file = write_valid_scan(testing::scratch_dir(), 12);
+  // Fewer projections than the log has rows: the log names a view the scan does not have.
+  try {
+    nlohmann::json j = read_json_file(file);
+    j["projections"]["count"] = 10;
+    testing::write_text(file, j.dump(2));
+    read_scan(file);
+    FAIL() << "count mismatch accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("joints.csv"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("projections.count"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ScanFile, AbsentJointRowsAreSkippedViewsNotErrors) {
+  const auto dir = testing::scratch_dir();
+  const auto file = write_valid_scan(dir, 12);
+  nlohmann::json j = read_json_file(file);
+  j["projections"]["count"] = 14;  // views 12 and 13 were not reached
+  testing::write_text(file, j.dump(2));
+  const auto scan = read_scan(file);
+  const auto g = nominal_geometry(scan);
+  ASSERT_EQ(g.views.size(), 14u);
+  EXPECT_EQ(g.views[13].status, ViewStatus::skipped);
+  EXPECT_NE(g.views[13].reason.find("no joints row"), std::string::npos);
+  EXPECT_EQ(g.ok_views().size(), 12u);
+}
+
+TEST(ScanFile, UnknownKeysWarn) {
+  const auto file = write_valid_scan(testing::scratch_dir());
+  nlohmann::json j = read_json_file(file);
+  j["operator"] = "someone";
+  testing::write_text(file, j.dump(2));
+  const auto scan = read_scan(file);
+  ASSERT_EQ(scan.warnings.size(), 1u);
+  EXPECT_NE(scan.warnings[0].find("operator"), std::string::npos);
+}
+
+TEST(JointLog, BadRowsAreNamedByLine) {
+  const auto dir = testing::scratch_dir();
+  const auto file = dir / "joints.csv";
+  testing::write_text(file, "view,q1,q2,q3,q4,q5,q6,q7\n0,0,0,0,-1,0,1,0\n1,0,0,zero,-1,0,1,0\n");
+  try {
+    JointLog::read(file, 5);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("line 3, column q3"), std::string::npos) << e.what();
+  }
+  testing::write_text(file, "view,q1,q2,q3,q4,q5,q6,q7\n0,0,0,0,-1,0,1,nan\n");
+  EXPECT_THROW(JointLog::read(file, 5), InputError);
+  testing::write_text(file, "view,q1,q2,q3,q4,q5,q6,q7\n0,0,0,0,-1,0,1,0\n0,0,0,0,-1,0,1,0\n");
+  EXPECT_THROW(JointLog::read(file, 5), InputError);  // duplicate view
+  testing::write_text(file, "view,a,b\n");
+  EXPECT_THROW(JointLog::read(file, 5), InputError);  // header
+}
+
+TEST(JointLog, OutOfLimitRowIsFlaggedAndSkipped) {
+  const auto dir = testing::scratch_dir();
+  const auto file = write_valid_scan(dir, 3);
+  testing::write_text(dir / "joints.csv",
+                      "view,q1,q2,q3,q4,q5,q6,q7\n0,0,-0.78,0,-2.35,0,1.57,0.78\n1,0,-0.78,0,0.5,0,1.57,0.78\n");
+  const auto scan = read_scan(file);
+  const auto g = nominal_geometry(scan);
+  EXPECT_EQ(g.views[0].status, ViewStatus::ok);
+  EXPECT_EQ(g.views[1].status, ViewStatus::skipped);
+  EXPECT_NE(g.views[1].reason.find("q4"), std::string::npos) << g.views[1].reason;
+}
+
+TEST(GeometryFile, RoundTripAndMatricesPoseSource) {
+  const auto dir = testing::scratch_dir();
+  const auto scan = read_scan(write_valid_scan(dir, 6));
+  const Geometry g = nominal_geometry(scan);
+  write_geometry(g, dir / "geometry.json");
+  const Geometry back = read_geometry(dir / "geometry.json");
+  ASSERT_EQ(back.views.size(), g.views.size());
+  for (std::size_t i = 0; i < g.views.size(); ++i) EXPECT_LT(max_abs_difference(*back.views[i].P, *g.views[i].P), 1e-12);
+
+  // The same views as a "matrices" pose source give the same nominal geometry.
+  nlohmann::json j = read_json_file(dir / "scan.json");
+  j["pose_source"] = {{"kind", "matrices"}, {"file", "geometry.json"}};
+  testing::write_text(dir / "scan_matrices.json", j.dump(2));
+  const auto g2 = nominal_geometry(read_scan(dir / "scan_matrices.json"));
+  for (std::size_t i = 0; i < g.views.size(); ++i) EXPECT_LT(max_abs_difference(*g2.views[i].P, *g.views[i].P), 1e-12);
+
+  // An ok view without P is an error naming the key.
+  nlohmann::json bad = read_json_file(dir / "geometry.json");
+  bad["views"][2].erase("P");
+  testing::write_text(dir / "bad.json", bad.dump());
+  try {
+    read_geometry(dir / "bad.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("views[2].P"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ReferenceSetup, HolderCentreSitsAtTheIsocentreOnTheBeam) {
+  const PandaSetup setup = reference_panda_setup({720, 720, 0.6, 0.6}, 2150, 1360);
+  for (const auto& q : joint7_orbit(setup, 9)) {
+    const Rigid T = setup.T_camera_base * panda::forward_kinematics(q) * setup.T_flange_holder;
+    EXPECT_LT((T.translation() - Eigen::Vector3d(0, 0, 1360)).norm(), 1e-9);
+    // The holder axis stays perpendicular to the beam while joint 7 turns the holder about it.
+    EXPECT_NEAR(T.linear().col(2).z(), 0.0, 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace ctk
