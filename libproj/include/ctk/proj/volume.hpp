@@ -1,0 +1,39 @@
+#pragma once
+// A float32 volume in the holder frame: voxel (i, j, k) has its centre at
+// origin_mm + (i sx, j sy, k sz); stored x fastest, then y, then z.
+#include <Eigen/Core>
+#include <array>
+#include <cstddef>
+#include <vector>
+
+namespace ctk {
+
+struct VolumeLayout {
+  std::array<int, 3> size{0, 0, 0};
+  Eigen::Vector3d voxel_mm{1, 1, 1};
+  Eigen::Vector3d origin_mm{0, 0, 0};  // centre of voxel (0, 0, 0)
+
+  /// A grid of `size` voxels centred on the holder origin.
+  static VolumeLayout centred(const std::array<int, 3>& size, const Eigen::Vector3d& voxel_mm);
+  std::size_t voxel_count() const {
+    return static_cast<std::size_t>(size[0]) * static_cast<std::size_t>(size[1]) * static_cast<std::size_t>(size[2]);
+  }
+  std::array<std::ptrdiff_t, 3> strides() const { return {1, size[0], static_cast<std::ptrdiff_t>(size[0]) * size[1]}; }
+  Eigen::Vector3d centre_of(int i, int j, int k) const;
+  bool operator==(const VolumeLayout&) const = default;
+};
+
+struct Volume {
+  VolumeLayout layout;
+  std::vector<float> data;
+
+  explicit Volume(const VolumeLayout& l = {}) : layout(l), data(l.voxel_count(), 0.0f) {}
+  float& at(int i, int j, int k) { return data[index(i, j, k)]; }
+  float at(int i, int j, int k) const { return data[index(i, j, k)]; }
+  std::size_t index(int i, int j, int k) const {
+    return static_cast<std::size_t>(i) + static_cast<std::size_t>(layout.size[0]) *
+                                             (static_cast<std::size_t>(j) + static_cast<std::size_t>(layout.size[1]) * static_cast<std::size_t>(k));
+  }
+};
+
+}  // namespace ctk

@@ -1,0 +1,156 @@
+// SIMD kernels of the fast Joseph projector, compiled once per x86 target by Highway and chosen
+// at run time. Lanes are neighbouring rays; each lane carries its own axis, strides and range.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "joseph_kernels.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+#include <algorithm>
+
+#include "ray_table.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace ctk::detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+// The four bilinear corners of the Joseph sample at slice k of N neighbouring rays: voxel
+// indices (clamped inside the volume) and weights (zero for corners outside it or lanes outside
+// their ray's range). Shared by both directions, so the two are adjoint sample by sample.
+template <class DF>
+struct Corners {
+  using DI = hn::RebindToSigned<DF>;
+  hn::Vec<DI> index[4];
+  hn::Vec<DF> weight[4];
+};
+
+template <class DF>
+HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k, hn::Mask<DF> lanes) {
+  const hn::RebindToSigned<DF> di;
+  using VI = hn::Vec<decltype(di)>;
+  const VI vk = hn::Set(di, k);
+  const VI k_first = hn::LoadU(di, t.k_first.data() + r), k_last = hn::LoadU(di, t.k_last.data() + r);
+  const VI minus_one = hn::Set(di, -1), one_i = hn::Set(di, 1);
+  // (Highway 1.0 compares signed lanes with Lt/Gt only.)
+  const auto in_range = hn::And(hn::Lt(k_first, hn::Add(vk, one_i)), hn::Lt(vk, hn::Add(k_last, one_i)));
+  const auto active = hn::And(lanes, hn::RebindMask(df, in_range));
+
+  const auto dk = hn::Sub(hn::Set(df, static_cast<float>(k)), hn::LoadU(df, t.k_mid.data() + r));
+  const auto pb = hn::MulAdd(dk, hn::LoadU(df, t.beta_b.data() + r), hn::LoadU(df, t.pb_mid.data() + r));
+  const auto pc = hn::MulAdd(dk, hn::LoadU(df, t.beta_c.data() + r), hn::LoadU(df, t.pc_mid.data() + r));
+  const auto fb0 = hn::Floor(pb), fc0 = hn::Floor(pc);
+  const VI ib = hn::ConvertTo(di, fb0), ic = hn::ConvertTo(di, fc0);
+  const auto fb = hn::Sub(pb, fb0), fc = hn::Sub(pc, fc0);
+  const auto one = hn::Set(df, 1.0f);
+  const auto gb = hn::Sub(one, fb), gc = hn::Sub(one, fc);
+
+  const VI nb = hn::LoadU(di, t.n_b.data() + r), nc = hn::LoadU(di, t.n_c.data() + r);
+  const VI zero = hn::Zero(di);
+  const VI nb1 = hn::Sub(nb, one_i), nc1 = hn::Sub(nc, one_i);
+  const VI ib1 = hn::Add(ib, one_i), ic1 = hn::Add(ic, one_i);
+  // Corner validity: -1 < index < n.
+  const auto vb0 = hn::RebindMask(df, hn::And(hn::Gt(ib, minus_one), hn::Lt(ib, nb)));
+  const auto vb1 = hn::RebindMask(df, hn::And(hn::Gt(ib1, minus_one), hn::Lt(ib1, nb)));
+  const auto vc0 = hn::RebindMask(df, hn::And(hn::Gt(ic, minus_one), hn::Lt(ic, nc)));
+  const auto vc1 = hn::RebindMask(df, hn::And(hn::Gt(ic1, minus_one), hn::Lt(ic1, nc)));
+
+  const VI sa = hn::LoadU(di, t.stride_a.data() + r), sb = hn::LoadU(di, t.stride_b.data() + r),
+           sc = hn::LoadU(di, t.stride_c.data() + r);
+  const VI base = hn::Mul(vk, sa);
+  const VI ob0 = hn::Mul(hn::Min(hn::Max(ib, zero), nb1), sb), ob1 = hn::Mul(hn::Min(hn::Max(ib1, zero), nb1), sb);
+  const VI oc0 = hn::Mul(hn::Min(hn::Max(ic, zero), nc1), sc), oc1 = hn::Mul(hn::Min(hn::Max(ic1, zero), nc1), sc);
+
+  Corners<DF> out;
+  out.index[0] = hn::Add(base, hn::Add(ob0, oc0));
+  out.index[1] = hn::Add(base, hn::Add(ob1, oc0));
+  out.index[2] = hn::Add(base, hn::Add(ob0, oc1));
+  out.index[3] = hn::Add(base, hn::Add(ob1, oc1));
+  out.weight[0] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc0)), hn::Mul(gb, gc));
+  out.weight[1] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc0)), hn::Mul(fb, gc));
+  out.weight[2] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc1)), hn::Mul(gb, fc));
+  out.weight[3] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc1)), hn::Mul(fb, fc));
+  return out;
+}
+
+// Slices any of the N rays starting at r visits.
+HWY_INLINE void slice_range(const RayTable& t, std::size_t r, std::size_t n, int& k_lo, int& k_hi) {
+  k_lo = 1 << 30;
+  k_hi = -(1 << 30);
+  for (std::size_t l = 0; l < n; ++l) {
+    if (t.k_last[r + l] < t.k_first[r + l]) continue;
+    k_lo = std::min(k_lo, t.k_first[r + l]);
+    k_hi = std::max(k_hi, t.k_last[r + l]);
+  }
+}
+
+void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY_RESTRICT out) {
+  const hn::ScalableTag<float> df;
+  const std::size_t N = hn::Lanes(df);
+  const auto all = hn::FirstN(df, N);
+  for (std::size_t r = 0; r < static_cast<std::size_t>(t.count); r += N) {
+    int k_lo, k_hi;
+    slice_range(t, r, N, k_lo, k_hi);
+    auto sum = hn::Zero(df);
+    for (int k = k_lo; k <= k_hi; ++k) {
+      const auto c = corners_at(df, t, r, k, all);
+      auto s = hn::Mul(hn::GatherIndex(df, volume, c.index[0]), c.weight[0]);
+      s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[1]), c.weight[1], s);
+      s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[2]), c.weight[2], s);
+      s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[3]), c.weight[3], s);
+      sum = hn::Add(sum, s);
+    }
+    hn::StoreU(hn::Mul(sum, hn::LoadU(df, t.weight.data() + r)), df, out + r);
+  }
+}
+
+void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RESTRICT volume) {
+  const hn::ScalableTag<float> df;
+  const hn::RebindToSigned<decltype(df)> di;
+  const std::size_t N = hn::Lanes(df);
+  HWY_ALIGN std::int32_t index[4][kMaxLanes];
+  HWY_ALIGN float weight[4][kMaxLanes];
+  for (std::size_t r = 0; r < static_cast<std::size_t>(t.count); r += N) {
+    const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(di, t.axis.data() + r), hn::Set(di, axis)));
+    if (hn::AllFalse(df, on_axis)) continue;
+    int k_lo, k_hi;
+    slice_range(t, r, N, k_lo, k_hi);
+    k_lo = std::max(k_lo, k_begin);
+    k_hi = std::min(k_hi, k_end - 1);
+    const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
+    for (int k = k_lo; k <= k_hi; ++k) {
+      const auto c = corners_at(df, t, r, k, on_axis);
+      for (int q = 0; q < 4; ++q) {
+        hn::Store(c.index[q], di, index[q]);
+        hn::Store(hn::Mul(c.weight[q], value), df, weight[q]);
+      }
+      // Scalar scatter: neighbouring lanes often share a voxel. A zero weight is skipped, which
+      // also keeps lanes of other axes from touching voxels outside this slab.
+      for (std::size_t l = 0; l < N; ++l)
+        for (int q = 0; q < 4; ++q)
+          if (weight[q][l] != 0.0f) volume[index[q][l]] += weight[q][l];
+    }
+  }
+}
+
+const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
+int FloatLanes() { return static_cast<int>(hn::Lanes(hn::ScalableTag<float>())); }
+
+}  // namespace HWY_NAMESPACE
+}  // namespace ctk::detail
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace ctk::detail {
+HWY_EXPORT(ForwardRays);
+HWY_EXPORT(BackRays);
+HWY_EXPORT(TargetName);
+HWY_EXPORT(FloatLanes);
+
+void forward_rays(const RayTable& t, const float* volume, float* out) { HWY_DYNAMIC_DISPATCH(ForwardRays)(t, volume, out); }
+void back_rays(const RayTable& t, int axis, int k_begin, int k_end, float* volume) {
+  HWY_DYNAMIC_DISPATCH(BackRays)(t, axis, k_begin, k_end, volume);
+}
+const char* simd_target_name() { return HWY_DYNAMIC_DISPATCH(TargetName)(); }
+int simd_float_lanes() { return HWY_DYNAMIC_DISPATCH(FloatLanes)(); }
+}  // namespace ctk::detail
+#endif

@@ -1,0 +1,91 @@
+#include "ctk/proj/joseph_projector.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "ray_table.hpp"
+
+namespace ctk {
+
+namespace {
+
+void check_sizes(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views) {
+  if (y.views != static_cast<int>(views.size()))
+    throw std::invalid_argument("projector: the stack has " + std::to_string(y.views) + " views but " +
+                                std::to_string(views.size()) + " matrices were given");
+  if (y.rows <= 0 || y.cols <= 0) throw std::invalid_argument("projector: empty detector");
+}
+
+}  // namespace
+
+JosephProjector::JosephProjector(ProjectorOptions options) : options_(options) {
+  if (options_.rows_per_block <= 0) throw std::invalid_argument("ProjectorOptions: rows_per_block must be positive");
+}
+
+int JosephProjector::threads() const { return options_.threads > 0 ? options_.threads : omp_get_max_threads(); }
+std::string JosephProjector::simd_target() { return detail::simd_target_name(); }
+int JosephProjector::simd_lanes() { return detail::simd_float_lanes(); }
+
+void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatrix>& views, ProjectionStack& y) const {
+  check_sizes(y, views);
+  const int rows_per_block = std::min(options_.rows_per_block, y.rows);
+  const int blocks = (y.rows + rows_per_block - 1) / rows_per_block;
+  const int items = y.views * blocks;
+#pragma omp parallel num_threads(threads())
+  {
+    detail::RayTable table;
+    table.resize(rows_per_block * y.cols);
+    std::vector<float> out(table.pb_mid.size());
+#pragma omp for schedule(dynamic, 1)
+    for (int item = 0; item < items; ++item) {
+      const int v = item / blocks, row_begin = (item % blocks) * rows_per_block;
+      const int rays = std::min(rows_per_block, y.rows - row_begin) * y.cols;
+      table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, row_begin, y.cols, 0, rays);
+      table.pad(rays);
+      detail::forward_rays(table, x.data.data(), out.data());
+      std::copy(out.begin(), out.begin() + rays, y.view(v) + static_cast<std::size_t>(row_begin) * static_cast<std::size_t>(y.cols));
+    }
+  }
+}
+
+void JosephProjector::back(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views, Volume& x) const {
+  check_sizes(y, views);
+  std::fill(x.data.begin(), x.data.end(), 0.0f);
+  const int rows_per_block = std::min(options_.rows_per_block, y.rows);
+  const int blocks = (y.rows + rows_per_block - 1) / rows_per_block;
+  const int n_threads = threads();
+  detail::RayTable table;  // shared: filled together, then read by every slab task
+  table.resize(rows_per_block * y.cols);
+#pragma omp parallel num_threads(n_threads)
+  {
+    for (int v = 0; v < y.views; ++v) {
+      const ViewRays rays = view_rays(views[static_cast<std::size_t>(v)], x.layout);
+      for (int block = 0; block < blocks; ++block) {
+        const int row_begin = block * rows_per_block;
+        const int count = std::min(rows_per_block, y.rows - row_begin) * y.cols;
+        const float* values = y.view(v) + static_cast<std::size_t>(row_begin) * static_cast<std::size_t>(y.cols);
+        const int per_thread = (count + n_threads - 1) / n_threads;
+#pragma omp for schedule(static)
+        for (int t = 0; t < n_threads; ++t) {
+          const int begin = std::min(count, t * per_thread), end = std::min(count, begin + per_thread);
+          table.fill(rays, x.layout, row_begin, y.cols, begin, end);
+          std::copy(values + begin, values + end, table.value.begin() + begin);
+        }
+#pragma omp single
+        table.pad(count);
+        // A sample at slice k writes only slice k of its dominant axis: slabs are disjoint.
+        for (int axis = 0; axis < 3; ++axis) {
+          const int n = x.layout.size[static_cast<std::size_t>(axis)];
+          const int slabs = std::min(n, 4 * n_threads);
+#pragma omp for schedule(dynamic, 1)
+          for (int s = 0; s < slabs; ++s)
+            detail::back_rays(table, axis, s * n / slabs, (s + 1) * n / slabs, x.data.data());
+        }
+      }
+    }
+  }
+}
+
+}  // namespace ctk

@@ -1,0 +1,47 @@
+#include "ray_table.hpp"
+
+namespace ctk::detail {
+
+void RayTable::resize(int capacity) {
+  const auto n = static_cast<std::size_t>((capacity + kMaxLanes - 1) / kMaxLanes * kMaxLanes);
+  for (auto* v : {&pb_mid, &beta_b, &pc_mid, &beta_c, &weight, &k_mid, &value}) v->assign(n, 0.0f);
+  for (auto* v : {&k_first, &k_last, &axis, &stride_a, &stride_b, &stride_c, &n_b, &n_c}) v->assign(n, 0);
+}
+
+void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int row_begin, int cols, int ray_begin, int ray_end) {
+  const auto strides = layout.strides();
+  for (int r = ray_begin; r < ray_end; ++r) {
+    const auto i = static_cast<std::size_t>(r);
+    const MarchedRay m = march_ray(rays, layout, r % cols, row_begin + r / cols);
+    const auto [b, c] = other_axes(m.axis);
+    pb_mid[i] = static_cast<float>(m.pb_mid);
+    beta_b[i] = static_cast<float>(m.beta_b);
+    pc_mid[i] = static_cast<float>(m.pc_mid);
+    beta_c[i] = static_cast<float>(m.beta_c);
+    weight[i] = static_cast<float>(m.weight_mm);
+    k_mid[i] = 0.5f * static_cast<float>(layout.size[static_cast<std::size_t>(m.axis)] - 1);
+    k_first[i] = m.k_first;
+    k_last[i] = m.k_last;
+    axis[i] = m.axis;
+    stride_a[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(m.axis)]);
+    stride_b[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(b)]);
+    stride_c[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(c)]);
+    n_b[i] = layout.size[static_cast<std::size_t>(b)];
+    n_c[i] = layout.size[static_cast<std::size_t>(c)];
+  }
+}
+
+void RayTable::pad(int used) {
+  count = (used + kMaxLanes - 1) / kMaxLanes * kMaxLanes;
+  for (int r = used; r < count; ++r) {
+    const auto i = static_cast<std::size_t>(r);
+    pb_mid[i] = beta_b[i] = pc_mid[i] = beta_c[i] = weight[i] = k_mid[i] = value[i] = 0.0f;
+    k_first[i] = 0;
+    k_last[i] = -1;
+    axis[i] = -1;
+    stride_a[i] = stride_b[i] = stride_c[i] = 0;
+    n_b[i] = n_c[i] = 1;
+  }
+}
+
+}  // namespace ctk::detail
