@@ -72,6 +72,67 @@ HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k
   return out;
 }
 
+// Same sample as corners_at for lanes known to be well inside the volume (all four corners
+// valid) and inside their ray's range: identical arithmetic, no masks.
+template <class DF>
+HWY_INLINE Corners<DF> interior_corners_at(DF df, const RayTable& t, std::size_t r, int k) {
+  const hn::RebindToSigned<DF> di;
+  using VI = hn::Vec<decltype(di)>;
+  const VI vk = hn::Set(di, k);
+  const auto dk = hn::Sub(hn::Set(df, static_cast<float>(k)), hn::LoadU(df, t.k_mid.data() + r));
+  const auto pb = hn::MulAdd(dk, hn::LoadU(df, t.beta_b.data() + r), hn::LoadU(df, t.pb_mid.data() + r));
+  const auto pc = hn::MulAdd(dk, hn::LoadU(df, t.beta_c.data() + r), hn::LoadU(df, t.pc_mid.data() + r));
+  const auto fb0 = hn::Floor(pb), fc0 = hn::Floor(pc);
+  const VI ib = hn::ConvertTo(di, fb0), ic = hn::ConvertTo(di, fc0);
+  const auto fb = hn::Sub(pb, fb0), fc = hn::Sub(pc, fc0);
+  const auto one = hn::Set(df, 1.0f);
+  const auto gb = hn::Sub(one, fb), gc = hn::Sub(one, fc);
+  const VI sb = hn::LoadU(di, t.stride_b.data() + r), sc = hn::LoadU(di, t.stride_c.data() + r);
+  const VI i00 = hn::Add(hn::Mul(vk, hn::LoadU(di, t.stride_a.data() + r)), hn::Add(hn::Mul(ib, sb), hn::Mul(ic, sc)));
+  Corners<DF> out;
+  out.index[0] = i00;
+  out.index[1] = hn::Add(i00, sb);
+  out.index[2] = hn::Add(i00, sc);
+  out.index[3] = hn::Add(out.index[1], sc);
+  out.weight[0] = hn::Mul(gb, gc);
+  out.weight[1] = hn::Mul(fb, gc);
+  out.weight[2] = hn::Mul(gb, fc);
+  out.weight[3] = hn::Mul(fb, fc);
+  return out;
+}
+
+// Slices where every lane of the bundle (those with `axis`, or all when axis < 0) is inside its
+// ray's range with all four corners at least 1e-3 voxel inside the volume: the fast path.
+// Empty (lo > hi) when any such lane has none.
+HWY_INLINE void interior_range(const RayTable& t, std::size_t r, std::size_t n, int axis, int& lo, int& hi) {
+  lo = -(1 << 30);
+  hi = 1 << 30;
+  for (std::size_t l = 0; l < n; ++l) {
+    const std::size_t i = r + l;
+    if (axis >= 0 && t.axis[i] != axis) continue;
+    if (t.k_last[i] < t.k_first[i]) {  // a ray that misses the volume: no fast path here
+      lo = 1 << 30;
+      return;
+    }
+    double k_lo = t.k_first[i], k_hi = t.k_last[i];
+    const double margin = 1e-3;
+    for (int q = 0; q < 2; ++q) {
+      const double p_mid = q == 0 ? t.pb_mid[i] : t.pc_mid[i], beta = q == 0 ? t.beta_b[i] : t.beta_c[i];
+      const double n_max = (q == 0 ? t.n_b[i] : t.n_c[i]) - 1 - margin;
+      if (beta == 0) {
+        if (!(p_mid >= margin && p_mid <= n_max)) k_lo = 1e9;
+        continue;
+      }
+      double a = t.k_mid[i] + (margin - p_mid) / beta, b = t.k_mid[i] + (n_max - p_mid) / beta;
+      if (a > b) std::swap(a, b);
+      k_lo = std::max(k_lo, std::ceil(a));
+      k_hi = std::min(k_hi, std::floor(b));
+    }
+    lo = std::max(lo, static_cast<int>(std::max(k_lo, -1e9)));
+    hi = std::min(hi, static_cast<int>(std::min(k_hi, 1e9)));
+  }
+}
+
 // Slices any of the N rays starting at r visits.
 HWY_INLINE void slice_range(const RayTable& t, std::size_t r, std::size_t n, int& k_lo, int& k_hi) {
   k_lo = 1 << 30;
@@ -90,14 +151,22 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
   for (std::size_t r = 0; r < static_cast<std::size_t>(t.count); r += N) {
     int k_lo, k_hi;
     slice_range(t, r, N, k_lo, k_hi);
+    int in_lo, in_hi;
+    interior_range(t, r, N, -1, in_lo, in_hi);
     auto sum = hn::Zero(df);
-    for (int k = k_lo; k <= k_hi; ++k) {
-      const auto c = corners_at(df, t, r, k, all);
+    auto accumulate = [&](const Corners<hn::ScalableTag<float>>& c) {
       auto s = hn::Mul(hn::GatherIndex(df, volume, c.index[0]), c.weight[0]);
       s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[1]), c.weight[1], s);
       s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[2]), c.weight[2], s);
       s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[3]), c.weight[3], s);
       sum = hn::Add(sum, s);
+    };
+    for (int k = k_lo; k <= k_hi; ++k) {
+      if (k == in_lo && in_lo <= in_hi) {
+        for (; k <= in_hi; ++k) accumulate(interior_corners_at(df, t, r, k));
+        if (k > k_hi) break;
+      }
+      accumulate(corners_at(df, t, r, k, all));
     }
     hn::StoreU(hn::Mul(sum, hn::LoadU(df, t.weight.data() + r)), df, out + r);
   }
@@ -117,8 +186,11 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
     k_lo = std::max(k_lo, k_begin);
     k_hi = std::min(k_hi, k_end - 1);
     const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
-    for (int k = k_lo; k <= k_hi; ++k) {
-      const auto c = corners_at(df, t, r, k, on_axis);
+    int in_lo, in_hi;
+    interior_range(t, r, N, axis, in_lo, in_hi);
+    // The fast path needs every lane on this axis (others would scatter outside the slab).
+    if (!hn::AllTrue(df, on_axis)) in_lo = 1 << 30;
+    auto scatter = [&](const Corners<hn::ScalableTag<float>>& c) {
       for (int q = 0; q < 4; ++q) {
         hn::Store(c.index[q], di, index[q]);
         hn::Store(hn::Mul(c.weight[q], value), df, weight[q]);
@@ -128,6 +200,13 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
       for (std::size_t l = 0; l < N; ++l)
         for (int q = 0; q < 4; ++q)
           if (weight[q][l] != 0.0f) volume[index[q][l]] += weight[q][l];
+    };
+    for (int k = k_lo; k <= k_hi; ++k) {
+      if (k >= in_lo && k <= in_hi) {
+        scatter(interior_corners_at(df, t, r, k));
+      } else {
+        scatter(corners_at(df, t, r, k, on_axis));
+      }
     }
   }
 }
