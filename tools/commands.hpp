@@ -6,5 +6,6 @@ namespace ctk::tools {
 
 void register_example(CLI::App& app);
 void register_geometry(CLI::App& app);
+void register_bench(CLI::App& app);
 
 }  // namespace ctk::tools
