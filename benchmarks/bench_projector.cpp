@@ -26,34 +26,29 @@ struct Fixture {
   }
 };
 
+// One benchmark body for all four: `project` runs one projection of the fixture.
+template <StandardTrajectory T, typename Project>
+void run(benchmark::State& state, Project project) {
+  Fixture f(T, static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  for (auto _ : state) project(f);
+  f.count(state);
+}
+
 template <StandardTrajectory T>
 void BM_FastForward(benchmark::State& state) {
-  Fixture f(T, static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
-  const JosephProjector A;
-  for (auto _ : state) A.forward(f.x, f.problem.views, f.y);
-  f.count(state);
+  run<T>(state, [](Fixture& f) { JosephProjector().forward(f.x, f.problem.views, f.y); });
 }
-
 template <StandardTrajectory T>
 void BM_FastBack(benchmark::State& state) {
-  Fixture f(T, static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
-  const JosephProjector A;
-  for (auto _ : state) A.back(f.y, f.problem.views, f.x);
-  f.count(state);
+  run<T>(state, [](Fixture& f) { JosephProjector().back(f.y, f.problem.views, f.x); });
 }
-
 template <StandardTrajectory T>
 void BM_ReferenceForward(benchmark::State& state) {
-  Fixture f(T, static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
-  for (auto _ : state) forward_project_reference(f.x, f.problem.views, f.y);
-  f.count(state);
+  run<T>(state, [](Fixture& f) { forward_project_reference(f.x, f.problem.views, f.y); });
 }
-
 template <StandardTrajectory T>
 void BM_ReferenceBack(benchmark::State& state) {
-  Fixture f(T, static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
-  for (auto _ : state) back_project_reference(f.y, f.problem.views, f.x);
-  f.count(state);
+  run<T>(state, [](Fixture& f) { back_project_reference(f.y, f.problem.views, f.x); });
 }
 
 // The fast projector on the full standard problem; the reference on 12 of its views (same

@@ -24,6 +24,33 @@ struct Corners {
   hn::Vec<DF> weight[4];
 };
 
+// Where the Joseph sample at slice k falls between voxels: lower corner (ib, ic) and the
+// bilinear fractions. Both corner computations below start here, so their weights agree bit
+// for bit (which keeps forward and back adjoint whichever path a sample takes).
+template <class DF>
+struct SamplePosition {
+  hn::Vec<hn::RebindToSigned<DF>> ib, ic;
+  hn::Vec<DF> fb, fc, gb, gc;  // g = 1 - f
+};
+
+template <class DF>
+HWY_INLINE SamplePosition<DF> position_at(DF df, const RayTable& t, std::size_t r, int k) {
+  const hn::RebindToSigned<DF> di;
+  const auto dk = hn::Sub(hn::Set(df, static_cast<float>(k)), hn::LoadU(df, t.k_mid.data() + r));
+  const auto pb = hn::MulAdd(dk, hn::LoadU(df, t.beta_b.data() + r), hn::LoadU(df, t.pb_mid.data() + r));
+  const auto pc = hn::MulAdd(dk, hn::LoadU(df, t.beta_c.data() + r), hn::LoadU(df, t.pc_mid.data() + r));
+  const auto fb0 = hn::Floor(pb), fc0 = hn::Floor(pc);
+  SamplePosition<DF> s;
+  s.ib = hn::ConvertTo(di, fb0);
+  s.ic = hn::ConvertTo(di, fc0);
+  s.fb = hn::Sub(pb, fb0);
+  s.fc = hn::Sub(pc, fc0);
+  const auto one = hn::Set(df, 1.0f);
+  s.gb = hn::Sub(one, s.fb);
+  s.gc = hn::Sub(one, s.fc);
+  return s;
+}
+
 template <class DF>
 HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k, hn::Mask<DF> lanes) {
   const hn::RebindToSigned<DF> di;
@@ -35,14 +62,8 @@ HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k
   const auto in_range = hn::And(hn::Lt(k_first, hn::Add(vk, one_i)), hn::Lt(vk, hn::Add(k_last, one_i)));
   const auto active = hn::And(lanes, hn::RebindMask(df, in_range));
 
-  const auto dk = hn::Sub(hn::Set(df, static_cast<float>(k)), hn::LoadU(df, t.k_mid.data() + r));
-  const auto pb = hn::MulAdd(dk, hn::LoadU(df, t.beta_b.data() + r), hn::LoadU(df, t.pb_mid.data() + r));
-  const auto pc = hn::MulAdd(dk, hn::LoadU(df, t.beta_c.data() + r), hn::LoadU(df, t.pc_mid.data() + r));
-  const auto fb0 = hn::Floor(pb), fc0 = hn::Floor(pc);
-  const VI ib = hn::ConvertTo(di, fb0), ic = hn::ConvertTo(di, fc0);
-  const auto fb = hn::Sub(pb, fb0), fc = hn::Sub(pc, fc0);
-  const auto one = hn::Set(df, 1.0f);
-  const auto gb = hn::Sub(one, fb), gc = hn::Sub(one, fc);
+  const SamplePosition<DF> p = position_at(df, t, r, k);
+  const VI ib = p.ib, ic = p.ic;
 
   const VI nb = hn::LoadU(di, t.n_b.data() + r), nc = hn::LoadU(di, t.n_c.data() + r);
   const VI zero = hn::Zero(di);
@@ -65,10 +86,10 @@ HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k
   out.index[1] = hn::Add(base, hn::Add(ob1, oc0));
   out.index[2] = hn::Add(base, hn::Add(ob0, oc1));
   out.index[3] = hn::Add(base, hn::Add(ob1, oc1));
-  out.weight[0] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc0)), hn::Mul(gb, gc));
-  out.weight[1] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc0)), hn::Mul(fb, gc));
-  out.weight[2] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc1)), hn::Mul(gb, fc));
-  out.weight[3] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc1)), hn::Mul(fb, fc));
+  out.weight[0] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc0)), hn::Mul(p.gb, p.gc));
+  out.weight[1] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc0)), hn::Mul(p.fb, p.gc));
+  out.weight[2] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc1)), hn::Mul(p.gb, p.fc));
+  out.weight[3] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc1)), hn::Mul(p.fb, p.fc));
   return out;
 }
 
@@ -79,25 +100,18 @@ HWY_INLINE Corners<DF> interior_corners_at(DF df, const RayTable& t, std::size_t
   const hn::RebindToSigned<DF> di;
   using VI = hn::Vec<decltype(di)>;
   const VI vk = hn::Set(di, k);
-  const auto dk = hn::Sub(hn::Set(df, static_cast<float>(k)), hn::LoadU(df, t.k_mid.data() + r));
-  const auto pb = hn::MulAdd(dk, hn::LoadU(df, t.beta_b.data() + r), hn::LoadU(df, t.pb_mid.data() + r));
-  const auto pc = hn::MulAdd(dk, hn::LoadU(df, t.beta_c.data() + r), hn::LoadU(df, t.pc_mid.data() + r));
-  const auto fb0 = hn::Floor(pb), fc0 = hn::Floor(pc);
-  const VI ib = hn::ConvertTo(di, fb0), ic = hn::ConvertTo(di, fc0);
-  const auto fb = hn::Sub(pb, fb0), fc = hn::Sub(pc, fc0);
-  const auto one = hn::Set(df, 1.0f);
-  const auto gb = hn::Sub(one, fb), gc = hn::Sub(one, fc);
+  const SamplePosition<DF> p = position_at(df, t, r, k);
   const VI sb = hn::LoadU(di, t.stride_b.data() + r), sc = hn::LoadU(di, t.stride_c.data() + r);
-  const VI i00 = hn::Add(hn::Mul(vk, hn::LoadU(di, t.stride_a.data() + r)), hn::Add(hn::Mul(ib, sb), hn::Mul(ic, sc)));
+  const VI i00 = hn::Add(hn::Mul(vk, hn::LoadU(di, t.stride_a.data() + r)), hn::Add(hn::Mul(p.ib, sb), hn::Mul(p.ic, sc)));
   Corners<DF> out;
   out.index[0] = i00;
   out.index[1] = hn::Add(i00, sb);
   out.index[2] = hn::Add(i00, sc);
   out.index[3] = hn::Add(out.index[1], sc);
-  out.weight[0] = hn::Mul(gb, gc);
-  out.weight[1] = hn::Mul(fb, gc);
-  out.weight[2] = hn::Mul(gb, fc);
-  out.weight[3] = hn::Mul(fb, fc);
+  out.weight[0] = hn::Mul(p.gb, p.gc);
+  out.weight[1] = hn::Mul(p.fb, p.gc);
+  out.weight[2] = hn::Mul(p.gb, p.fc);
+  out.weight[3] = hn::Mul(p.fb, p.fc);
   return out;
 }
 
