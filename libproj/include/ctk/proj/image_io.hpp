@@ -1,0 +1,34 @@
+#pragma once
+// Image and volume files through OpenImageIO: projections in (TIFF uint16/uint32/float, EXR),
+// volumes out as NRRD (detached header + raw, opens in 3D Slicer), multi-page float TIFF
+// (ImageJ/Fiji) and single slices as PNG. Every output is written atomically.
+#include <filesystem>
+#include <vector>
+
+#include "ctk/proj/projection_stack.hpp"
+#include "ctk/proj/volume.hpp"
+
+namespace ctk {
+
+struct Image {
+  int cols = 0, rows = 0;
+  std::vector<float> pixels;  // first channel, row-major, row 0 first
+};
+
+/// Reads the first channel of an image as float (integer types keep their count values).
+/// Throws InputError naming the file when it is missing, truncated or not an image.
+Image read_image(const std::filesystem::path& file);
+/// Same, and the size must be cols x rows (InputError otherwise).
+Image read_image(const std::filesystem::path& file, int cols, int rows);
+
+void write_image_float(const Image& image, const std::filesystem::path& file);  // TIFF/EXR by extension
+
+/// `name.nrrd` (header) and `name.raw` (little-endian float32, x fastest), spacing and origin in mm.
+void write_volume_nrrd(const Volume& volume, const std::filesystem::path& nrrd_file);
+/// One float32 page per z slice.
+void write_volume_tiff(const Volume& volume, const std::filesystem::path& file);
+/// Slice `index` across `axis` (0: x, 1: y, 2: z), grey levels linear from `low` to `high`.
+void write_slice_png(const Volume& volume, int axis, int index, float low, float high,
+                     const std::filesystem::path& file);
+
+}  // namespace ctk

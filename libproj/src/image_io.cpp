@@ -1,0 +1,112 @@
+#include "ctk/proj/image_io.hpp"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <fstream>
+
+#include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/error.hpp"
+
+namespace ctk {
+
+namespace fs = std::filesystem;
+using OIIO::ImageInput;
+using OIIO::ImageOutput;
+using OIIO::ImageSpec;
+using OIIO::TypeDesc;
+
+Image read_image(const fs::path& file) {
+  auto in = ImageInput::open(file.string());
+  if (!in) throw InputError(file.string(), "", "cannot read the image: " + OIIO::geterror());
+  const ImageSpec& spec = in->spec();
+  Image image;
+  image.cols = spec.width;
+  image.rows = spec.height;
+  image.pixels.resize(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height));
+  // A truncated file may read "successfully" with an error recorded: check both.
+  if (!in->read_image(0, 0, 0, 1, TypeDesc::FLOAT, image.pixels.data()) || in->has_error())
+    throw InputError(file.string(), "", "cannot read the pixels (truncated or damaged?): " + in->geterror());
+  // OIIO scales integer types to [0, 1] when converting to float; keep detector counts instead.
+  const double scale = spec.format == TypeDesc::UINT16 ? 65535.0
+                       : spec.format == TypeDesc::UINT8 ? 255.0
+                       : spec.format == TypeDesc::UINT32 ? 4294967295.0
+                                                        : 1.0;
+  if (scale != 1.0)
+    for (auto& p : image.pixels) p = static_cast<float>(std::round(p * scale));
+  return image;
+}
+
+Image read_image(const fs::path& file, int cols, int rows) {
+  Image image = read_image(file);
+  if (image.cols != cols || image.rows != rows)
+    throw InputError(file.string(), "", "image is " + std::to_string(image.cols) + " x " + std::to_string(image.rows) +
+                                            " pixels, the scan declares " + std::to_string(cols) + " x " + std::to_string(rows));
+  return image;
+}
+
+void write_image_float(const Image& image, const fs::path& file) {
+  write_path_atomically(file, [&](const fs::path& tmp) {
+    auto out = ImageOutput::create(file.string());
+    if (!out) throw std::runtime_error(file.string() + ": no writer for this format: " + OIIO::geterror());
+    const ImageSpec spec(image.cols, image.rows, 1, TypeDesc::FLOAT);
+    if (!out->open(tmp.string(), spec) || !out->write_image(TypeDesc::FLOAT, image.pixels.data()) || !out->close())
+      throw std::runtime_error(file.string() + ": write failed: " + out->geterror());
+  });
+}
+
+void write_volume_nrrd(const Volume& v, const fs::path& nrrd_file) {
+  fs::path raw = nrrd_file;
+  raw.replace_extension(".raw");
+  write_file_atomically(raw, [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(v.data.data()), static_cast<std::streamsize>(v.data.size() * sizeof(float)));
+  });
+  const auto& l = v.layout;
+  std::ostringstream h;
+  h.precision(17);
+  h << "NRRD0004\n# written by ctk: holder frame, millimetres\ntype: float\ndimension: 3\nspace: right-anterior-superior\n"
+    << "sizes: " << l.size[0] << " " << l.size[1] << " " << l.size[2] << "\n"
+    << "space directions: (" << l.voxel_mm.x() << ",0,0) (0," << l.voxel_mm.y() << ",0) (0,0," << l.voxel_mm.z() << ")\n"
+    << "space origin: (" << l.origin_mm.x() << "," << l.origin_mm.y() << "," << l.origin_mm.z() << ")\n"
+    << "kinds: domain domain domain\nendian: little\nencoding: raw\ndata file: " << raw.filename().string() << "\n";
+  write_text_atomically(nrrd_file, h.str());
+}
+
+void write_volume_tiff(const Volume& v, const fs::path& file) {
+  write_path_atomically(file, [&](const fs::path& tmp) {
+    auto out = ImageOutput::create(file.string());
+    if (!out || !out->supports("multiimage")) throw std::runtime_error(file.string() + ": cannot write multi-page TIFF");
+    const int nz = v.layout.size[2];
+    std::vector<ImageSpec> specs(static_cast<std::size_t>(nz), ImageSpec(v.layout.size[0], v.layout.size[1], 1, TypeDesc::FLOAT));
+    if (!out->open(tmp.string(), nz, specs.data())) throw std::runtime_error(file.string() + ": " + out->geterror());
+    const std::size_t slice = static_cast<std::size_t>(v.layout.size[0]) * static_cast<std::size_t>(v.layout.size[1]);
+    for (int z = 0; z < nz; ++z) {
+      if (z > 0 && !out->open(tmp.string(), specs[static_cast<std::size_t>(z)], ImageOutput::AppendSubimage))
+        throw std::runtime_error(file.string() + ": " + out->geterror());
+      if (!out->write_image(TypeDesc::FLOAT, v.data.data() + static_cast<std::size_t>(z) * slice))
+        throw std::runtime_error(file.string() + ": " + out->geterror());
+    }
+    out->close();
+  });
+}
+
+void write_slice_png(const Volume& v, int axis, int index, float low, float high, const fs::path& file) {
+  const auto& s = v.layout.size;
+  const int w = axis == 0 ? s[1] : s[0], h = axis == 2 ? s[1] : s[2];
+  std::vector<unsigned char> pixels(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
+  for (int r = 0; r < h; ++r)
+    for (int c = 0; c < w; ++c) {
+      const float value = axis == 0 ? v.at(index, c, r) : axis == 1 ? v.at(c, index, r) : v.at(c, r, index);
+      const float g = std::clamp((value - low) / std::max(high - low, 1e-30f), 0.0f, 1.0f);
+      pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(w) + static_cast<std::size_t>(c)] =
+          static_cast<unsigned char>(std::lround(255.0f * g));
+    }
+  write_path_atomically(file, [&](const fs::path& tmp) {
+    auto out = ImageOutput::create(file.string());
+    if (!out || !out->open(tmp.string(), ImageSpec(w, h, 1, TypeDesc::UINT8)) ||
+        !out->write_image(TypeDesc::UINT8, pixels.data()) || !out->close())
+      throw std::runtime_error(file.string() + ": cannot write PNG");
+  });
+}
+
+}  // namespace ctk

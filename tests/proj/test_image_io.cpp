@@ -1,0 +1,105 @@
+// Image and volume files: round trips, integer counts kept as counts, real TIFFs from the
+// measured data, and clear errors for missing, truncated or wrongly sized images.
+#include "ctk/proj/image_io.hpp"
+
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <fstream>
+
+#include "../test_support.hpp"
+#include "ctk/geom/error.hpp"
+
+namespace ctk {
+namespace {
+
+Image ramp(int cols, int rows) {
+  Image im{cols, rows, std::vector<float>(static_cast<std::size_t>(cols * rows))};
+  for (std::size_t i = 0; i < im.pixels.size(); ++i) im.pixels[i] = 0.25f * static_cast<float>(i) - 3.0f;
+  return im;
+}
+
+TEST(ImageIo, FloatTiffAndExrRoundTrip) {
+  const auto dir = testing::scratch_dir();
+  const Image im = ramp(13, 7);
+  for (const char* name : {"a.tif", "a.exr"}) {
+    write_image_float(im, dir / name);
+    const Image back = read_image(dir / name, 13, 7);
+    EXPECT_EQ(back.pixels, im.pixels) << name;
+  }
+}
+
+TEST(ImageIo, Uint16CountsStayCounts) {
+  const auto dir = testing::scratch_dir();
+  std::vector<std::uint16_t> counts{0, 1, 1000, 65535, 40000, 7};
+  auto out = OIIO::ImageOutput::create((dir / "c.tif").string());
+  ASSERT_TRUE(out->open((dir / "c.tif").string(), OIIO::ImageSpec(3, 2, 1, OIIO::TypeDesc::UINT16)));
+  ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT16, counts.data()));
+  out->close();
+  const Image im = read_image(dir / "c.tif");
+  for (std::size_t i = 0; i < counts.size(); ++i) EXPECT_EQ(im.pixels[i], counts[i]);
+}
+
+TEST(ImageIo, ReadsTheMeasuredPepperFlatAndDark) {
+  const auto dir = testing::shared_data_dir() / "flexray-pepper-cone";
+  // The README: 190 rows x 239 columns, dark ~1 320, flat ~46 900 counts.
+  const Image dark = read_image(dir / "di000000.tif", 239, 190), flat = read_image(dir / "io000000.tif", 239, 190);
+  double d = 0, f = 0;
+  for (float p : dark.pixels) d += p;
+  for (float p : flat.pixels) f += p;
+  d /= static_cast<double>(dark.pixels.size());
+  f /= static_cast<double>(flat.pixels.size());
+  EXPECT_NEAR(d, 1320, 200);
+  EXPECT_NEAR(f, 46900, 3000);
+}
+
+TEST(ImageIo, BadImagesAreClearErrors) {
+  const auto dir = testing::scratch_dir();
+  EXPECT_THROW(read_image(dir / "missing.tif"), InputError);
+  write_image_float(ramp(64, 64), dir / "full.tif");
+  const auto size = std::filesystem::file_size(dir / "full.tif");
+  std::filesystem::copy_file(dir / "full.tif", dir / "cut.tif");
+  std::filesystem::resize_file(dir / "cut.tif", size / 2);
+  EXPECT_THROW(read_image(dir / "cut.tif"), InputError);
+  try {
+    read_image(dir / "full.tif", 64, 63);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("full.tif"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("64 x 63"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ImageIo, VolumeOutputs) {
+  const auto dir = testing::scratch_dir();
+  Volume v(VolumeLayout::centred({5, 4, 3}, {0.5, 0.5, 0.75}));
+  for (std::size_t i = 0; i < v.data.size(); ++i) v.data[i] = static_cast<float>(i);
+  write_volume_nrrd(v, dir / "vol.nrrd");
+  EXPECT_EQ(std::filesystem::file_size(dir / "vol.raw"), 60u * sizeof(float));
+  std::ifstream header(dir / "vol.nrrd");
+  const std::string text((std::istreambuf_iterator<char>(header)), {});
+  EXPECT_NE(text.find("sizes: 5 4 3"), std::string::npos);
+  EXPECT_NE(text.find("space origin: (-1,-0.75,-0.75)"), std::string::npos) << text;
+
+  write_volume_tiff(v, dir / "vol.tif");
+  auto in = OIIO::ImageInput::open((dir / "vol.tif").string());
+  ASSERT_TRUE(in);
+  int pages = 0;
+  std::vector<float> page(20);
+  while (in->seek_subimage(pages, 0)) {
+    ASSERT_TRUE(in->read_image(pages, 0, 0, 1, OIIO::TypeDesc::FLOAT, page.data()));
+    EXPECT_EQ(page[0], static_cast<float>(20 * pages));
+    ++pages;
+  }
+  EXPECT_EQ(pages, 3);
+
+  write_slice_png(v, 2, 1, 0, 59, dir / "z1.png");
+  const Image png = read_image(dir / "z1.png");
+  EXPECT_EQ(png.cols, 5);
+  EXPECT_EQ(png.rows, 4);
+  EXPECT_EQ(png.pixels[0], std::round(255.0f * 20 / 59));
+}
+
+}  // namespace
+}  // namespace ctk
