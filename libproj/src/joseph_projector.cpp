@@ -9,17 +9,6 @@
 
 namespace ctk {
 
-namespace {
-
-void check_sizes(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views) {
-  if (y.views != static_cast<int>(views.size()))
-    throw std::invalid_argument("projector: the stack has " + std::to_string(y.views) + " views but " +
-                                std::to_string(views.size()) + " matrices were given");
-  if (y.rows <= 0 || y.cols <= 0) throw std::invalid_argument("projector: empty detector");
-}
-
-}  // namespace
-
 JosephProjector::JosephProjector(ProjectorOptions options) : options_(options) {
   if (options_.rows_per_block <= 0) throw std::invalid_argument("ProjectorOptions: rows_per_block must be positive");
 }
@@ -29,7 +18,7 @@ std::string JosephProjector::simd_target() { return detail::simd_target_name(); 
 int JosephProjector::simd_lanes() { return detail::simd_float_lanes(); }
 
 void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatrix>& views, ProjectionStack& y) const {
-  check_sizes(y, views);
+  check_stack_matches_views(y, views.size());
   const int rows_per_block = std::min(options_.rows_per_block, y.rows);
   const int blocks = (y.rows + rows_per_block - 1) / rows_per_block;
   const int items = y.views * blocks;
@@ -53,7 +42,7 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
 }
 
 void JosephProjector::back(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views, Volume& x) const {
-  check_sizes(y, views);
+  check_stack_matches_views(y, views.size());
   std::fill(x.data.begin(), x.data.end(), 0.0f);
   const int rows_per_block = std::min(options_.rows_per_block, y.rows);
   const int blocks = (y.rows + rows_per_block - 1) / rows_per_block;

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 namespace ctk {
 
@@ -57,6 +59,13 @@ MarchedRay march_ray(const ViewRays& rays, const VolumeLayout& layout, double u,
     m.k_last = static_cast<int>(k_hi);
   }
   return m;
+}
+
+void check_stack_matches_views(const ProjectionStack& y, std::size_t view_count) {
+  if (y.views != static_cast<int>(view_count))
+    throw std::invalid_argument("projector: the stack has " + std::to_string(y.views) + " views but " +
+                                std::to_string(view_count) + " matrices were given");
+  if (y.rows <= 0 || y.cols <= 0) throw std::invalid_argument("projector: empty detector");
 }
 
 }  // namespace ctk

@@ -36,16 +36,11 @@ void visit_ray(const MarchedRay& m, const VolumeLayout& layout, Visit&& visit) {
   }
 }
 
-void check_sizes(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views) {
-  if (y.views != static_cast<int>(views.size()))
-    throw std::invalid_argument("projector: the stack has " + std::to_string(y.views) + " views but " +
-                                std::to_string(views.size()) + " matrices were given");
-}
 
 }  // namespace
 
 void forward_project_reference(const Volume& x, const std::vector<ProjectionMatrix>& views, ProjectionStack& y) {
-  check_sizes(y, views);
+  check_stack_matches_views(y, views.size());
   for (int v = 0; v < y.views; ++v) {
     const ViewRays rays = view_rays(views[static_cast<std::size_t>(v)], x.layout);
     for (int row = 0; row < y.rows; ++row) {
@@ -60,7 +55,7 @@ void forward_project_reference(const Volume& x, const std::vector<ProjectionMatr
 }
 
 void back_project_reference(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views, Volume& x) {
-  check_sizes(y, views);
+  check_stack_matches_views(y, views.size());
   std::vector<double> acc(x.data.size(), 0.0);
   for (int v = 0; v < y.views; ++v) {
     const ViewRays rays = view_rays(views[static_cast<std::size_t>(v)], x.layout);

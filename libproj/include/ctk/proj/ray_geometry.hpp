@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "ctk/geom/projection_matrix.hpp"
+#include "ctk/proj/projection_stack.hpp"
 #include "ctk/proj/volume.hpp"
 
 namespace ctk {
@@ -30,6 +31,9 @@ struct MarchedRay {
 };
 
 MarchedRay march_ray(const ViewRays& rays, const VolumeLayout& layout, double u, double v);
+
+/// Every projector's precondition: one view of `y` per matrix, a non-empty detector.
+void check_stack_matches_views(const ProjectionStack& y, std::size_t view_count);
 
 /// The two non-dominant axes (b < c) of `axis`.
 inline std::array<int, 2> other_axes(int axis) {
