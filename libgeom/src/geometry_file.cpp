@@ -62,7 +62,7 @@ Geometry read_geometry(const std::filesystem::path& file) {
         P->fail(e.what());
       }
     } else if (view.status == ViewStatus::ok) {
-      v.at("P");  // throws: an ok view needs its matrix
+      throw InputError(file.string(), "key '" + v.path() + ".P'", "missing (required for a view with status \"ok\")");
     }
     if (auto r = v.find("rms_px")) view.rms_px = r->number();
     if (auto s = v.find("spheres_used")) view.spheres_used = s->integer();

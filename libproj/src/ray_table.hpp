@@ -16,8 +16,8 @@ struct RayTable {
   std::vector<std::int32_t> k_first, k_last, axis, stride_a, stride_b, stride_c, n_b, n_c;
 
   void resize(int capacity);
-  /// Rays of rows [row_begin, row_end) x cols; rays [ray_begin, ray_end) of them only (so
-  /// threads can fill one table together).
+  /// Rays numbered from pixel (0, row_begin), row by row over `cols` columns; fills entries
+  /// [ray_begin, ray_end) only, so threads can fill one table together.
   void fill(const ViewRays& rays, const VolumeLayout& layout, int row_begin, int cols, int ray_begin, int ray_end);
   /// Marks rays [used, padded) empty.
   void pad(int used);
@@ -26,8 +26,8 @@ struct RayTable {
 // Kernels (Highway, dispatched to the widest SIMD unit at run time).
 /// out[r] = line integral of ray r, for r in [0, table.count) (a multiple of kMaxLanes).
 void forward_rays(const RayTable& table, const float* volume, float* out);
-/// volume += A' restricted to rays of dominant `axis` and slices [k_begin, k_end), with
-/// table.value holding each ray's projection value times nothing else.
+/// volume += A' y for the rays of dominant `axis`, slices [k_begin, k_end) only; y is
+/// table.value (each ray's projection value).
 void back_rays(const RayTable& table, int axis, int k_begin, int k_end, float* volume);
 const char* simd_target_name();
 int simd_float_lanes();
