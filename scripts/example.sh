@@ -7,5 +7,9 @@ bash scripts/setup.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$(nproc)" --target ctk
 out=example-run
-./build/tools/ctk example --out "$out"
+rm -rf "$out"
+# A small robot scan of the helix holder around thesis sample 2, with Poisson noise and the
+# robot's pose noise: 90 views of 360 x 360 px at 1.2 mm.
+./build/tools/ctk simulate --out "$out" --phantom helix-holder --phantom sample-2 --views 90 \
+  --cols 360 --rows 360 --pitch 1.2
 ./build/tools/ctk geometry --scan "$out/scan.json" --out "$out/geometry.json" --astra "$out/cone_vec.txt"

@@ -4,8 +4,9 @@
 
 namespace ctk::tools {
 
-void register_example(CLI::App& app);
 void register_geometry(CLI::App& app);
 void register_bench(CLI::App& app);
+void register_simulate(CLI::App& app);
+void register_phantom(CLI::App& app);
 
 }  // namespace ctk::tools

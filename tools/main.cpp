@@ -7,7 +7,8 @@
 int main(int argc, char** argv) {
   CLI::App app{"ctk — calibrate and reconstruct cone-beam CT scans taken along arbitrary (robot) trajectories"};
   app.require_subcommand(1);
-  ctk::tools::register_example(app);
+  ctk::tools::register_simulate(app);
+  ctk::tools::register_phantom(app);
   ctk::tools::register_geometry(app);
   ctk::tools::register_bench(app);
   try {

@@ -46,4 +46,30 @@ Eigen::Matrix3d tilted_detector_matrix(const Intrinsics& nominal, double sdd_mm,
   return M;
 }
 
+Eigen::Matrix3d detector_matrix_for_source_at(const Eigen::Matrix3d& M, double sdd_mm, const Eigen::Vector3d& delta) {
+  // A point X (camera frame) seen from the source at delta meets the plane n.Y = d at
+  // Y = delta + lambda (X - delta), lambda = (d - n.delta) / n.(X - delta). Pixels are affine in
+  // Y on the plane, (M Y) / d; clearing the denominator leaves a matrix acting on X - delta.
+  const Eigen::Vector3d n = M.row(2).transpose();
+  const double d = n.z() * sdd_mm;
+  return (d - n.dot(delta)) * M + (M * delta) * n.transpose();
+}
+
+Eigen::Vector2d RadialDistortion::measured_from_ideal(const Eigen::Vector2d& x) const {
+  const Eigen::Vector2d r = x - centre_px;
+  return x + k1_per_px2 * r.squaredNorm() * r;
+}
+
+Eigen::Vector2d RadialDistortion::ideal_from_measured(const Eigen::Vector2d& m) const {
+  Eigen::Vector2d x = m;
+  for (int i = 0; i < 50; ++i) {
+    const Eigen::Vector2d r = x - centre_px;
+    const Eigen::Vector2d next = m - k1_per_px2 * r.squaredNorm() * r;
+    const bool converged = (next - x).squaredNorm() < 1e-24;
+    x = next;
+    if (converged) break;
+  }
+  return x;
+}
+
 }  // namespace ctk

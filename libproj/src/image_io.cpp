@@ -3,6 +3,8 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <fstream>
 
 #include "ctk/geom/atomic_write.hpp"
@@ -45,14 +47,30 @@ Image read_image(const fs::path& file, int cols, int rows) {
   return image;
 }
 
-void write_image_float(const Image& image, const fs::path& file) {
+namespace {
+
+void write_single_image(int cols, int rows, TypeDesc type, const void* pixels, const fs::path& file) {
   write_path_atomically(file, [&](const fs::path& tmp) {
     auto out = ImageOutput::create(file.string());
     if (!out) throw std::runtime_error(file.string() + ": no writer for this format: " + OIIO::geterror());
-    const ImageSpec spec(image.cols, image.rows, 1, TypeDesc::FLOAT);
-    if (!out->open(tmp.string(), spec) || !out->write_image(TypeDesc::FLOAT, image.pixels.data()) || !out->close())
+    const ImageSpec spec(cols, rows, 1, type);
+    if (!out->open(tmp.string(), spec) || !out->write_image(type, pixels) || !out->close())
       throw std::runtime_error(file.string() + ": write failed: " + out->geterror());
   });
+}
+
+}  // namespace
+
+void write_image_float(const Image& image, const fs::path& file) {
+  write_single_image(image.cols, image.rows, TypeDesc::FLOAT, image.pixels.data(), file);
+}
+
+void write_image_uint16(const Image& counts, const fs::path& file) {
+  std::vector<std::uint16_t> pixels(counts.pixels.size());
+  std::transform(counts.pixels.begin(), counts.pixels.end(), pixels.begin(), [](float c) {
+    return static_cast<std::uint16_t>(std::lround(std::clamp(c, 0.0f, 65535.0f)));
+  });
+  write_single_image(counts.cols, counts.rows, TypeDesc::UINT16, pixels.data(), file);
 }
 
 void write_volume_nrrd(const Volume& v, const fs::path& nrrd_file) {

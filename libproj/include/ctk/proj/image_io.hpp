@@ -22,6 +22,8 @@ Image read_image(const std::filesystem::path& file);
 Image read_image(const std::filesystem::path& file, int cols, int rows);
 
 void write_image_float(const Image& image, const std::filesystem::path& file);  // TIFF/EXR by extension
+/// Detector counts as a 16-bit TIFF: values rounded and clamped to 0 .. 65535.
+void write_image_uint16(const Image& counts, const std::filesystem::path& file);
 
 /// `name.nrrd` (header) and `name.raw` (little-endian float32, x fastest), spacing and origin in mm.
 void write_volume_nrrd(const Volume& volume, const std::filesystem::path& nrrd_file);

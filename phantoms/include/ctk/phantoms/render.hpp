@@ -1,0 +1,25 @@
+#pragma once
+// Exact projections of an analytic phantom: per detector pixel, rays from the source through
+// s x s sub-pixel points, each ray's line integral summed over the primitives in closed form.
+// The pixel reports what a detector measures: the mean transmitted intensity over its area,
+// as a line integral -log(mean(exp(-p))) (partial-volume effect included; s = 1 gives the
+// line integral through the pixel centre).
+#include <optional>
+
+#include "ctk/geom/detector.hpp"
+#include "ctk/geom/projection_matrix.hpp"
+#include "ctk/phantoms/phantom.hpp"
+#include "ctk/proj/image_io.hpp"
+
+namespace ctk {
+
+struct RenderOptions {
+  int supersampling = 2;                       // s: s x s rays per pixel
+  std::optional<RadialDistortion> distortion;  // the detector's, applied to where rays land
+};
+
+/// Line-integral image (cols x rows) of `phantom` for the view P (holder frame -> pixels).
+Image render_line_integrals(const Phantom& phantom, const ProjectionMatrix& P, const Detector& detector,
+                            const RenderOptions& options = {});
+
+}  // namespace ctk

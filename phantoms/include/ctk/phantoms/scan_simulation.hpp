@@ -1,0 +1,24 @@
+#pragma once
+// Writes a simulated scan folder: projections (16-bit counts with flat and dark, or float EXR
+// line integrals), joints.csv, scan.json declaring only the nominal setup (scan-format.md), and
+// the truth (truth.json, truth-geometry.json). Every file is written atomically and scan.json
+// last, so an interrupted run never leaves a scan that looks complete.
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+
+#include "ctk/phantoms/true_scan.hpp"
+
+namespace ctk {
+
+struct SimulationReport {
+  int views = 0;             // in the scan (acquired or not)
+  int views_acquired = 0;
+  std::size_t saturated_pixels = 0;
+};
+
+/// `progress(done, total)` is called as views are written (from one thread at a time).
+SimulationReport simulate_scan(const ScanSimulation& simulation, const std::filesystem::path& folder,
+                               const std::function<void(int, int)>& progress = {});
+
+}  // namespace ctk

@@ -1,0 +1,80 @@
+#pragma once
+// Everything a simulated scan is made from: the nominal setup the scan file will declare, what
+// is in the beam, the trajectory, the detector, and the effects that make the truth differ from
+// the declaration. Every effect is off unless set; each one set is written to truth.json.
+#include <cstdint>
+#include <optional>
+
+#include "ctk/geom/geometry_file.hpp"
+#include "ctk/geom/helix.hpp"
+#include "ctk/geom/panda_setup.hpp"
+#include "ctk/phantoms/detector_response.hpp"
+#include "ctk/phantoms/phantom.hpp"
+#include "ctk/phantoms/robot_trajectory.hpp"
+
+namespace ctk {
+
+/// A small rigid error: translation (mm) and rotation vector (degrees).
+struct RigidOffset {
+  Eigen::Vector3d translation_mm{0, 0, 0};
+  Eigen::Vector3d rotation_deg{0, 0, 0};
+  Rigid rigid() const;
+};
+
+struct DetectorIntrinsicsError {
+  double sdd_error_mm = 0;                          // true SDD = declared + error
+  Eigen::Vector2d principal_point_error_px{0, 0};   // true (u0, v0) = declared + error
+  Eigen::Vector2d tilt_deg{0, 0};                   // out-of-plane: about u, then about v
+};
+
+struct SphereDisplacement {
+  int count = 5;             // how many spheres (chosen at random) are off
+  double magnitude_mm = 0.2; // each by this much, in a random direction
+};
+
+struct BlurredViews {
+  double fraction = 0.05;  // of the acquired views, chosen at random
+  double sigma_px = 2.0;
+};
+
+/// Conventions (also written to truth.json): the true base pose is T_camera_base * offset (offset
+/// in base coordinates); the true mount is offset * T_flange_holder (offset in flange
+/// coordinates); the true joint angle is the logged one plus its offset; the focal spot moves
+/// linearly with the view index, starting at zero.
+struct SimulationEffects {
+  std::optional<DetectorIntrinsicsError> detector_intrinsics;
+  std::optional<RadialDistortion> detector_distortion;
+  std::optional<SphereDisplacement> sphere_positions;
+  std::optional<RigidOffset> robot_base_frame;
+  std::optional<RigidOffset> holder_mount;
+  std::optional<panda::Joints> joint_offsets_rad;
+  std::optional<Eigen::Vector2d> source_drift_mm_per_100_views;  // camera x, y
+  std::optional<BlurredViews> blurred_views;
+  std::optional<int> false_blobs_per_view;
+};
+
+/// Pose repeatability between the joints' forward kinematics and where the flange really is:
+/// RMS of the 3-D translation and of the rotation angle (each axis gets value / sqrt(3)).
+struct RobotNoise {
+  double translation_mm = 0.1;
+  double rotation_deg = 0.02;
+};
+
+enum class SimulatedOutput { counts, line_integrals };
+
+struct ScanSimulation {
+  PandaSetup setup;                     // the nominal setup the scan file declares
+  Holder holder;                        // the declared holder
+  bool with_holder = true;              // the helix holder in the beam (true spheres)
+  Phantom sample;                       // anything else in the beam, holder frame
+  std::vector<PlannedView> trajectory;  // a robot scan ...
+  std::optional<Geometry> poses;        // ... or given per-view matrices (no robot, no pose effects)
+  int supersampling = 2;
+  SimulatedOutput output = SimulatedOutput::counts;
+  CountsModel counts;
+  RobotNoise robot_noise;
+  SimulationEffects effects;
+  std::uint64_t seed = 1;
+};
+
+}  // namespace ctk

@@ -1,0 +1,122 @@
+#include "ctk/phantoms/phantom.hpp"
+
+#include <cmath>
+
+#include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/json_access.hpp"
+
+namespace ctk {
+
+double Phantom::line_integral(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const {
+  double sum = 0;
+  for (const auto& p : primitives) sum += p.line_integral(origin, direction);
+  return sum;
+}
+
+double Phantom::attenuation_at(const Eigen::Vector3d& point) const {
+  double sum = 0;
+  for (const auto& p : primitives)
+    if (p.contains(point)) sum += p.attenuation_per_mm;
+  return sum;
+}
+
+void Phantom::add(const Phantom& other, const Rigid& T_this_other) {
+  for (Primitive p : other.primitives) {
+    p.pose = T_this_other * p.pose;
+    primitives.push_back(std::move(p));
+  }
+}
+
+namespace {
+
+constexpr double kDegree = M_PI / 180.0;
+
+Primitive primitive_from_json(const JsonNode& node) {
+  const std::string type = node.at("type").string();
+  const Eigen::Vector3d centre = node.at("center_mm").vector3();
+  const double mu = node.at("attenuation_per_mm").number();
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  if (auto r = node.find("rotation_vector_deg")) R = rotation_from_vector(r->vector3() * kDegree);
+  std::string label;
+  if (auto l = node.find("label")) label = l->string();
+  if (type == "sphere") {
+    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "radius_mm"});
+    return Primitive::sphere(centre, node.at("radius_mm").positive_number(), mu, label);
+  }
+  auto positive3 = [&](const char* key) {
+    const JsonNode n = node.at(key);
+    const Eigen::Vector3d v = n.vector3();
+    if ((v.array() <= 0).any()) n.fail("expected three positive numbers");
+    return v;
+  };
+  if (type == "ellipsoid") {
+    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "rotation_vector_deg", "radii_mm"});
+    return Primitive::ellipsoid(centre, positive3("radii_mm"), R, mu, label);
+  }
+  if (type == "cylinder") {
+    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "rotation_vector_deg", "radius_mm",
+                            "height_mm"});
+    return Primitive::cylinder(centre, node.at("radius_mm").positive_number(), node.at("height_mm").positive_number(),
+                               R, mu, label);
+  }
+  if (type == "box") {
+    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "rotation_vector_deg", "size_mm"});
+    return Primitive::box(centre, positive3("size_mm"), R, mu, label);
+  }
+  node.at("type").fail("expected \"sphere\", \"ellipsoid\", \"cylinder\" or \"box\", got \"" + type + "\"");
+}
+
+nlohmann::json primitive_to_json(const Primitive& p) {
+  nlohmann::json j;
+  j["type"] = to_string(p.shape);
+  if (!p.label.empty()) j["label"] = p.label;
+  const Eigen::Vector3d c = p.pose.translation();
+  j["center_mm"] = {c.x(), c.y(), c.z()};
+  const Eigen::Vector3d h = p.half_size_mm;
+  switch (p.shape) {
+    case Shape::sphere: j["radius_mm"] = h.x(); break;
+    case Shape::ellipsoid: j["radii_mm"] = {h.x(), h.y(), h.z()}; break;
+    case Shape::cylinder:
+      j["radius_mm"] = h.x();
+      j["height_mm"] = 2 * h.z();
+      break;
+    case Shape::box: j["size_mm"] = {2 * h.x(), 2 * h.y(), 2 * h.z()}; break;
+  }
+  if (p.shape != Shape::sphere) {
+    const Eigen::Vector3d r = rotation_vector(p.pose.linear()) / kDegree;
+    if (r.norm() > 0) j["rotation_vector_deg"] = {r.x(), r.y(), r.z()};
+  }
+  j["attenuation_per_mm"] = p.attenuation_per_mm;
+  return j;
+}
+
+}  // namespace
+
+Phantom read_phantom(const std::filesystem::path& file, std::vector<std::string>* warnings) {
+  const nlohmann::json json = read_json_file(file);
+  const JsonNode root(json, file.string(), "", warnings);
+  if (root.at("format").string() != "ctk-phantom/1") root.at("format").fail("expected \"ctk-phantom/1\"");
+  root.warn_unknown_keys({"format", "name", "units", "primitives"});
+  Phantom phantom;
+  phantom.name = root.find("name") ? root.at("name").string() : file.stem().string();
+  const JsonNode list = root.at("primitives");
+  for (std::size_t i = 0; i < list.size(); ++i) phantom.primitives.push_back(primitive_from_json(list.at(i)));
+  if (phantom.primitives.empty()) list.fail("a phantom needs at least one primitive");
+  return phantom;
+}
+
+nlohmann::json phantom_to_json(const Phantom& phantom) {
+  nlohmann::json j;
+  j["format"] = "ctk-phantom/1";
+  j["name"] = phantom.name;
+  j["units"] = "lengths in mm (holder frame), attenuation in 1/mm, rotation vectors in degrees";
+  j["primitives"] = nlohmann::json::array();
+  for (const auto& p : phantom.primitives) j["primitives"].push_back(primitive_to_json(p));
+  return j;
+}
+
+void write_phantom(const Phantom& phantom, const std::filesystem::path& file) {
+  write_text_atomically(file, phantom_to_json(phantom).dump(2) + "\n");
+}
+
+}  // namespace ctk

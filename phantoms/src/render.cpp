@@ -1,0 +1,95 @@
+#include "ctk/phantoms/render.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace ctk {
+
+namespace {
+
+struct PixelRect {
+  int col0 = 0, col1 = -1, row0 = 0, row1 = -1;  // inclusive
+};
+
+// Pixels whose rays can meet the primitive: the projection of its bounding box, widened by a
+// pixel and by the largest shift distortion causes; the whole detector when the box reaches
+// behind the source.
+PixelRect pixels_covering(const Primitive& primitive, const ProjectionMatrix& P, const Detector& detector,
+                          double margin_px) {
+  double u_min = 1e300, u_max = -1e300, v_min = 1e300, v_max = -1e300;
+  for (const Eigen::Vector3d& corner : primitive.bounding_corners()) {
+    if (P.depth(corner) <= 1e-6) return {0, detector.cols - 1, 0, detector.rows - 1};
+    const Eigen::Vector2d uv = P.project(corner);
+    u_min = std::min(u_min, uv.x());
+    u_max = std::max(u_max, uv.x());
+    v_min = std::min(v_min, uv.y());
+    v_max = std::max(v_max, uv.y());
+  }
+  auto clamp_to = [](double x, int n) { return static_cast<int>(std::clamp(x, -1.0, static_cast<double>(n))); };
+  return {std::max(0, clamp_to(std::floor(u_min - margin_px), detector.cols)),
+          std::min(detector.cols - 1, clamp_to(std::ceil(u_max + margin_px), detector.cols)),
+          std::max(0, clamp_to(std::floor(v_min - margin_px), detector.rows)),
+          std::min(detector.rows - 1, clamp_to(std::ceil(v_max + margin_px), detector.rows))};
+}
+
+double largest_distortion_shift_px(const RenderOptions& options, const Detector& detector) {
+  if (!options.distortion) return 0;
+  double shift = 0;
+  for (int corner = 0; corner < 4; ++corner) {
+    const Eigen::Vector2d uv((corner & 1) ? detector.cols : -1, (corner & 2) ? detector.rows : -1);
+    shift = std::max(shift, (options.distortion->measured_from_ideal(uv) - uv).norm());
+  }
+  return shift;
+}
+
+}  // namespace
+
+Image render_line_integrals(const Phantom& phantom, const ProjectionMatrix& P, const Detector& detector,
+                            const RenderOptions& options) {
+  const int s = options.supersampling;
+  if (s < 1) throw std::invalid_argument("render_line_integrals: supersampling must be at least 1");
+  const std::size_t samples = static_cast<std::size_t>(s) * static_cast<std::size_t>(s);
+  const std::size_t pixels = static_cast<std::size_t>(detector.cols) * static_cast<std::size_t>(detector.rows);
+  std::vector<double> sub(pixels * samples, 0.0);  // line integral per sub-pixel ray
+  std::vector<unsigned char> touched(pixels, 0);
+
+  const Eigen::Matrix3d M_inverse = P.matrix().leftCols<3>().inverse();
+  const Eigen::Vector3d source = P.source_position();
+  const double margin = 1.0 + largest_distortion_shift_px(options, detector);
+
+  for (const Primitive& primitive : phantom.primitives) {
+    const PixelRect rect = pixels_covering(primitive, P, detector, margin);
+    for (int row = rect.row0; row <= rect.row1; ++row)
+      for (int col = rect.col0; col <= rect.col1; ++col) {
+        const std::size_t pixel = static_cast<std::size_t>(row) * static_cast<std::size_t>(detector.cols) +
+                                  static_cast<std::size_t>(col);
+        double* out = &sub[pixel * samples];
+        for (int b = 0; b < s; ++b)
+          for (int a = 0; a < s; ++a) {
+            Eigen::Vector2d uv(col + (a + 0.5) / s - 0.5, row + (b + 0.5) / s - 0.5);
+            if (options.distortion) uv = options.distortion->ideal_from_measured(uv);
+            // M d = (u, v, 1): depth grows along d, so d points away from the source.
+            const Eigen::Vector3d direction = (M_inverse * uv.homogeneous()).normalized();
+            out[b * s + a] += primitive.line_integral(source, direction);
+          }
+        touched[pixel] = 1;
+      }
+  }
+
+  Image image{detector.cols, detector.rows, std::vector<float>(pixels, 0.0f)};
+  for (std::size_t pixel = 0; pixel < pixels; ++pixel) {
+    if (!touched[pixel]) continue;
+    const double* p = &sub[pixel * samples];
+    if (samples == 1) {
+      image.pixels[pixel] = static_cast<float>(p[0]);
+      continue;
+    }
+    double transmitted = 0;
+    for (std::size_t k = 0; k < samples; ++k) transmitted += std::exp(-p[k]);
+    image.pixels[pixel] = static_cast<float>(-std::log(transmitted / static_cast<double>(samples)));
+  }
+  return image;
+}
+
+}  // namespace ctk

@@ -1,0 +1,114 @@
+#include "ctk/phantoms/scan_simulation.hpp"
+
+#include <atomic>
+#include <cstdio>
+#include <random>
+
+#include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/scan.hpp"
+#include "ctk/phantoms/builtin_phantoms.hpp"
+#include "ctk/phantoms/render.hpp"
+
+namespace ctk {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+ScanDescription declared_scan(const ScanSimulation& sim, const fs::path& folder, int view_count) {
+  ScanDescription scan;
+  scan.folder = folder;
+  scan.detector = sim.setup.detector;
+  scan.principal_point_px = sim.setup.principal_point_px;
+  scan.source_to_detector_mm = sim.setup.source_to_detector_mm;
+  const bool counts = sim.output == SimulatedOutput::counts;
+  scan.projections.files_pattern = counts ? "projections/proj_%04d.tif" : "projections/proj_%04d.exr";
+  scan.projections.count = view_count;
+  scan.projections.kind = counts ? ProjectionKind::counts : ProjectionKind::line_integrals;
+  if (counts) {
+    scan.projections.flat = "flat.tif";
+    scan.projections.dark = "dark.tif";
+  }
+  if (sim.poses) {
+    scan.matrices = MatricesPoseSource{"poses.json", *sim.poses};
+  } else {
+    PandaPoseSource panda;
+    panda.joints_csv = "joints.csv";
+    panda.T_camera_base = sim.setup.T_camera_base;
+    panda.T_flange_holder = sim.setup.T_flange_holder;
+    for (std::size_t v = 0; v < sim.trajectory.size(); ++v)
+      if (sim.trajectory[v].joints) panda.joints.add(static_cast<int>(v), *sim.trajectory[v].joints);
+    scan.panda = panda;
+  }
+  if (sim.with_holder) scan.holder = sim.holder;
+  return scan;
+}
+
+// One acquired view, from the phantom to the file.
+std::size_t write_projection(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view,
+                             const RenderOptions& render, const fs::path& file) {
+  Image image = render_line_integrals(phantom, *view.P, sim.setup.detector, render);
+  if (view.blur_sigma_px > 0) blur_image(image, view.blur_sigma_px);
+  for (const Blob& blob : view.blobs) add_blob(image, blob);
+  if (sim.output == SimulatedOutput::line_integrals) {
+    write_image_float(image, file);
+    return 0;
+  }
+  // Noise differs per view but not with the thread count: one stream per (seed, view).
+  std::seed_seq seq{static_cast<std::uint64_t>(sim.seed), static_cast<std::uint64_t>(view.index), std::uint64_t{0x5ca1ab1e}};
+  std::mt19937_64 rng(seq);
+  Image counts = expected_counts(image, sim.counts);
+  const std::size_t saturated = draw_counts(counts, sim.counts, rng);
+  write_image_uint16(counts, file);
+  return saturated;
+}
+
+void write_flat_and_dark(const ScanSimulation& sim, const fs::path& folder) {
+  const Detector& d = sim.setup.detector;
+  const std::size_t n = static_cast<std::size_t>(d.cols) * static_cast<std::size_t>(d.rows);
+  write_image_uint16({d.cols, d.rows, std::vector<float>(n, static_cast<float>(sim.counts.dark_counts + sim.counts.flat_counts))},
+                     folder / "flat.tif");
+  write_image_uint16({d.cols, d.rows, std::vector<float>(n, static_cast<float>(sim.counts.dark_counts))}, folder / "dark.tif");
+}
+
+}  // namespace
+
+SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder,
+                               const std::function<void(int, int)>& progress) {
+  const TrueScan truth = make_true_scan(sim);
+  const int view_count = static_cast<int>(truth.views.size());
+  const ScanDescription scan = declared_scan(sim, folder, view_count);
+  std::vector<std::string> names;
+  for (int v = 0; v < view_count; ++v) names.push_back(scan.projections.file_name(v));
+
+  Phantom phantom{sim.with_holder ? "helix-holder + " + sim.sample.name : sim.sample.name, {}};
+  if (sim.with_holder) phantom.add(helix_holder_phantom(truth.holder));
+  phantom.add(sim.sample);
+  RenderOptions render{sim.supersampling, sim.effects.detector_distortion};
+
+  fs::create_directories(folder / "projections");
+  std::vector<int> acquired;
+  for (const TrueView& v : truth.views)
+    if (v.P) acquired.push_back(v.index);
+  std::atomic<int> done{0};
+  std::size_t saturated = 0;
+  const int total = static_cast<int>(acquired.size());
+#pragma omp parallel for schedule(dynamic) reduction(+ : saturated)
+  for (int i = 0; i < total; ++i) {
+    const TrueView& view = truth.views[static_cast<std::size_t>(acquired[static_cast<std::size_t>(i)])];
+    saturated += write_projection(sim, phantom, view, render, scan.projection_path(view.index));
+    const int finished = ++done;
+#pragma omp critical(ctk_simulation_progress)
+    if (progress) progress(finished, total);
+  }
+
+  if (sim.output == SimulatedOutput::counts) write_flat_and_dark(sim, folder);
+  write_geometry(true_geometry(sim, truth, names), folder / "truth-geometry.json");
+  write_text_atomically(folder / "truth.json", truth_to_json(sim, truth, "truth-geometry.json").dump(2) + "\n");
+  if (scan.panda) scan.panda->joints.write(folder / scan.panda->joints_csv);
+  if (scan.matrices) write_geometry(scan.matrices->geometry, folder / scan.matrices->file);
+  write_scan(scan, folder / "scan.json");
+  return {view_count, total, saturated};
+}
+
+}  // namespace ctk
