@@ -8,6 +8,7 @@
 #include "ctk/geom/scan.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/render.hpp"
+#include "ctk/proj/parallel.hpp"
 
 namespace ctk {
 
@@ -91,16 +92,15 @@ SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder
   for (const TrueView& v : truth.views)
     if (v.P) acquired.push_back(v.index);
   std::atomic<int> done{0};
-  std::size_t saturated = 0;
   const int total = static_cast<int>(acquired.size());
-#pragma omp parallel for schedule(dynamic) reduction(+ : saturated)
-  for (int i = 0; i < total; ++i) {
+  std::atomic<std::size_t> saturated_total{0};
+  parallel_for_dynamic(total, [&](int i) {
     const TrueView& view = truth.views[static_cast<std::size_t>(acquired[static_cast<std::size_t>(i)])];
-    saturated += write_projection(sim, phantom, view, render, scan.projection_path(view.index));
+    saturated_total += write_projection(sim, phantom, view, render, scan.projection_path(view.index));
     const int finished = ++done;
 #pragma omp critical(ctk_simulation_progress)
     if (progress) progress(finished, total);
-  }
+  });
 
   if (sim.output == SimulatedOutput::counts) write_flat_and_dark(sim, folder);
   write_geometry(true_geometry(sim, truth, names), folder / "truth-geometry.json");
@@ -108,7 +108,7 @@ SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder
   if (scan.panda) scan.panda->joints.write(folder / scan.panda->joints_csv);
   if (scan.matrices) write_geometry(scan.matrices->geometry, folder / scan.matrices->file);
   write_scan(scan, folder / "scan.json");
-  return {view_count, total, saturated};
+  return {view_count, total, saturated_total.load()};
 }
 
 }  // namespace ctk

@@ -1,0 +1,43 @@
+#pragma once
+// From a scan and its geometry to what the solvers consume: the line integrals b of the views
+// that are "ok", their matrices, and statistical weights. Counts become line integrals
+// -log((I - dark) / (flat - dark)); non-positive or over-flat values are clamped and counted.
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ctk/geom/geometry_file.hpp"
+#include "ctk/geom/scan.hpp"
+#include "ctk/proj/image_io.hpp"
+#include "ctk/proj/projection_stack.hpp"
+
+namespace ctk {
+
+struct Measurements {
+  std::vector<int> view_indices;           // scan view index of each stack view
+  std::vector<ProjectionMatrix> matrices;  // one per stack view
+  ProjectionStack line_integrals;          // b
+  ProjectionStack weights;                 // W: empty (views == 0) when unit weights
+  std::size_t clamped_pixels = 0;          // counts at or below dark (or flat not above dark)
+  std::vector<std::string> notes;          // per-view findings worth a line in the log
+};
+
+/// Line integrals from raw counts; `clamped` counts pixels whose normalised transmission was not
+/// in (0, 1.5] and was clamped there. Weights (optional) are the detected counts relative to the
+/// open beam, (I - dark) / (flat - dark): Poisson statistics give var(p) ~ 1 / counts, and this
+/// scaling keeps open-beam weights at 1, so a regularisation weight means the same with or
+/// without statistical weights.
+void counts_to_line_integrals(const Image& counts, const Image& flat, const Image& dark, float* line_integrals,
+                              float* weights, std::size_t& clamped);
+
+struct MeasurementOptions {
+  bool statistical_weights = true;  // only for counts; line-integral scans always get unit weights
+};
+
+/// Reads every "ok" view of `geometry` (others are not used); throws InputError naming the image
+/// that cannot be read or has the wrong size. `progress(done, total)` after each image.
+Measurements load_measurements(const ScanDescription& scan, const Geometry& geometry, const MeasurementOptions& options = {},
+                               const std::function<void(int, int)>& progress = {});
+
+}  // namespace ctk

@@ -1,0 +1,20 @@
+#pragma once
+// SIRT, the robust baseline: x <- x + C A' R (b - A x), with R and C the inverse row and column
+// sums of A (rays and voxels no view sees are left alone); optionally kept non-negative.
+#include <vector>
+
+#include "ctk/proj/joseph_projector.hpp"
+#include "ctk/recon/iteration_log.hpp"
+
+namespace ctk {
+
+struct SirtOptions {
+  int iterations = 100;
+  double relaxation = 1.0;  // in (0, 2)
+  bool non_negative = true;
+};
+
+SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
+                        Volume& x, const SirtOptions& options, const IterationCallback& on_iteration = {});
+
+}  // namespace ctk

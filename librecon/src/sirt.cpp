@@ -1,0 +1,67 @@
+#include "ctk/recon/sirt.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include "vector_ops.hpp"
+
+namespace ctk {
+
+namespace {
+
+void invert_nonzero(std::vector<float>& v) {
+  for (float& x : v) x = x > 1e-12f ? 1.0f / x : 0.0f;
+}
+
+}  // namespace
+
+SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
+                        Volume& x, const SirtOptions& o, const IterationCallback& on_iteration) {
+  auto start = std::chrono::steady_clock::now();
+  ProjectionStack row_weight(b.views, b.rows, b.cols), residual(b.views, b.rows, b.cols);
+  Volume column_weight(x.layout), update(x.layout);
+  {
+    Volume ones(x.layout);
+    std::fill(ones.data.begin(), ones.data.end(), 1.0f);
+    A.forward(ones, views, row_weight);
+    std::fill(residual.data.begin(), residual.data.end(), 1.0f);
+    A.back(residual, views, column_weight);
+  }
+  invert_nonzero(row_weight.data);
+  invert_nonzero(column_weight.data);
+
+  SolverReport report;
+  const std::ptrdiff_t n_rays = static_cast<std::ptrdiff_t>(b.data.size());
+  const std::ptrdiff_t n_voxels = static_cast<std::ptrdiff_t>(x.data.size());
+  for (int it = 0; it <= o.iterations; ++it) {
+    A.forward(x, views, residual);  // residual = b - A x
+#pragma omp parallel for schedule(static)
+    for (std::ptrdiff_t i = 0; i < n_rays; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i);
+      residual.data[k] = b.data[k] - residual.data[k];
+    }
+    IterationLog log;
+    log.iteration = it;
+    log.data_term = 0.5 * detail::weighted_square_sum(residual.data, {});
+    log.cost = log.data_term;
+    log.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    start = std::chrono::steady_clock::now();
+    report.iterations.push_back(log);
+    if (on_iteration) on_iteration(log);
+    if (it == o.iterations) break;
+#pragma omp parallel for schedule(static)
+    for (std::ptrdiff_t i = 0; i < n_rays; ++i) residual.data[static_cast<std::size_t>(i)] *= row_weight.data[static_cast<std::size_t>(i)];
+    A.back(residual, views, update);
+    const float relax = static_cast<float>(o.relaxation);
+#pragma omp parallel for schedule(static)
+    for (std::ptrdiff_t i = 0; i < n_voxels; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i);
+      float v = x.data[k] + relax * column_weight.data[k] * update.data[k];
+      x.data[k] = o.non_negative ? std::max(v, 0.0f) : v;
+    }
+  }
+  report.stop_reason = "iteration limit (" + std::to_string(o.iterations) + ") reached";
+  return report;
+}
+
+}  // namespace ctk

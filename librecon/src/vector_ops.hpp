@@ -1,0 +1,49 @@
+#pragma once
+// Threaded reductions and updates on float arrays, accumulating in double (solver internals).
+#include <cstddef>
+#include <vector>
+
+namespace ctk::detail {
+
+inline double dot(const std::vector<float>& a, const std::vector<float>& b) {
+  double sum = 0;
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(a.size());
+#pragma omp parallel for reduction(+ : sum) schedule(static)
+  for (std::ptrdiff_t i = 0; i < n; ++i) sum += double(a[static_cast<std::size_t>(i)]) * double(b[static_cast<std::size_t>(i)]);
+  return sum;
+}
+
+/// sum_i w_i a_i^2 (w empty: unit weights).
+inline double weighted_square_sum(const std::vector<float>& a, const std::vector<float>& w) {
+  double sum = 0;
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(a.size());
+  const bool weighted = !w.empty();
+#pragma omp parallel for reduction(+ : sum) schedule(static)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    const double x = a[static_cast<std::size_t>(i)];
+    sum += (weighted ? double(w[static_cast<std::size_t>(i)]) : 1.0) * x * x;
+  }
+  return sum;
+}
+
+/// y += alpha * x
+inline void axpy(double alpha, const std::vector<float>& x, std::vector<float>& y) {
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(x.size());
+  const float a = static_cast<float>(alpha);
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < n; ++i) y[static_cast<std::size_t>(i)] += a * x[static_cast<std::size_t>(i)];
+}
+
+/// out = w * x elementwise (w empty: copy).
+inline void weighted_copy(const std::vector<float>& x, const std::vector<float>& w, std::vector<float>& out) {
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(x.size());
+  out.resize(x.size());
+  const bool weighted = !w.empty();
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    out[k] = weighted ? w[k] * x[k] : x[k];
+  }
+}
+
+}  // namespace ctk::detail

@@ -1,0 +1,105 @@
+#include "ctk/recon/wls_cg.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "vector_ops.hpp"
+
+namespace ctk {
+
+using detail::axpy;
+using detail::dot;
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+}  // namespace
+
+SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
+                          const ProjectionStack* weights, Volume& x, const WlsOptions& o,
+                          const IterationCallback& on_iteration) {
+  if (weights && weights->data.size() != b.data.size())
+    throw std::invalid_argument("solve_wls_cg: weights and line integrals differ in size");
+  static const std::vector<float> unit;
+  const std::vector<float>& w = weights ? weights->data : unit;
+  auto start = std::chrono::steady_clock::now();
+
+  // residual = A x - b, kept up to date so the cost needs no extra projection.
+  ProjectionStack residual(b.views, b.rows, b.cols);
+  const bool cold = std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; });
+  if (!cold) A.forward(x, views, residual);
+  axpy(-1.0, b.data, residual.data);
+
+  ProjectionStack scratch(b.views, b.rows, b.cols);  // W r, then A d, then W A d
+  Volume gradient(x.layout), direction(x.layout), H_direction(x.layout);
+  detail::weighted_copy(residual.data, w, scratch.data);
+  A.back(scratch, views, gradient);
+  add_regulariser_normal(o.regulariser, o.lambda, x, gradient);
+
+  auto log_point = [&](int iteration, double g_norm, double g0_norm) {
+    IterationLog log;
+    log.iteration = iteration;
+    log.data_term = 0.5 * detail::weighted_square_sum(residual.data, w);
+    log.regulariser_term = o.lambda > 0 ? o.lambda * regulariser_value(o.regulariser, x) : 0.0;
+    log.cost = log.data_term + log.regulariser_term;
+    log.relative_gradient = g0_norm > 0 ? g_norm / g0_norm : 0.0;
+    log.seconds = seconds_since(start);
+    start = std::chrono::steady_clock::now();
+    if (on_iteration) on_iteration(log);
+    return log;
+  };
+
+  SolverReport report;
+  double gg = dot(gradient.data, gradient.data);
+  const double g0 = std::sqrt(gg);
+  report.iterations.push_back(log_point(0, g0, g0));
+  if (gg == 0) {
+    report.stop_reason = "zero gradient at the start (nothing to fit)";
+    return report;
+  }
+  for (std::size_t i = 0; i < direction.data.size(); ++i) direction.data[i] = -gradient.data[i];
+
+  for (int it = 1; it <= o.iterations; ++it) {
+    // Scratch holds A d for the residual update; H d = A' W A d + lambda G'G d.
+    A.forward(direction, views, scratch);
+    const double dHd_data = detail::weighted_square_sum(scratch.data, w);
+    ProjectionStack& Ad = scratch;
+    // d'G'Gd = ||G d||^2 = 2 * (1/2 ||G d||^2): no extra volume needed.
+    const double alpha_denominator =
+        dHd_data + (o.lambda > 0 ? 2.0 * o.lambda * regulariser_value(o.regulariser, direction) : 0.0);
+    if (!(alpha_denominator > 0)) {
+      report.stop_reason = "the search direction has no curvature (all views miss the volume?)";
+      break;
+    }
+    const double alpha = gg / alpha_denominator;
+    axpy(alpha, direction.data, x.data);
+    axpy(alpha, Ad.data, residual.data);
+    detail::weighted_copy(Ad.data, w, scratch.data);
+    A.back(scratch, views, H_direction);
+    add_regulariser_normal(o.regulariser, o.lambda, direction, H_direction);
+    axpy(alpha, H_direction.data, gradient.data);
+    const double gg_new = dot(gradient.data, gradient.data);
+    report.iterations.push_back(log_point(it, std::sqrt(gg_new), g0));
+    if (std::sqrt(gg_new) <= o.tolerance * g0) {
+      report.stop_reason = "gradient fell below the tolerance after " + std::to_string(it) + " iterations";
+      return report;
+    }
+    const double beta = gg_new / gg;
+    gg = gg_new;
+    const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(direction.data.size());
+#pragma omp parallel for schedule(static)
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i);
+      direction.data[k] = static_cast<float>(-gradient.data[k] + beta * direction.data[k]);
+    }
+  }
+  if (report.stop_reason.empty()) report.stop_reason = "iteration limit (" + std::to_string(o.iterations) + ") reached";
+  return report;
+}
+
+}  // namespace ctk
