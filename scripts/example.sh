@@ -13,3 +13,7 @@ rm -rf "$out"
 ./build/tools/ctk simulate --out "$out" --phantom helix-holder --phantom sample-2 --views 90 \
   --cols 360 --rows 360 --pitch 1.2
 ./build/tools/ctk geometry --scan "$out/scan.json" --out "$out/geometry.json" --astra "$out/cone_vec.txt"
+# Reconstruct with the geometry the robot predicts (calibration from the spheres comes next and
+# will replace it); the truth the simulator kept is in $out/truth-geometry.json for comparison.
+./build/tools/ctk reconstruct --scan "$out/scan.json" --geometry "$out/geometry.json" --out "$out/volume.nrrd" \
+  --lambda 5 --regulariser gradient

@@ -8,5 +8,6 @@ void register_geometry(CLI::App& app);
 void register_bench(CLI::App& app);
 void register_simulate(CLI::App& app);
 void register_phantom(CLI::App& app);
+void register_reconstruct(CLI::App& app);
 
 }  // namespace ctk::tools

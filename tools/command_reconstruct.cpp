@@ -1,0 +1,176 @@
+// ctk reconstruct: a volume in the holder frame from a scan's projections and per-view matrices,
+// by weighted least squares (conjugate gradients) or SIRT. Prints the memory plan first and
+// refuses a run that cannot fit; writes the volume (NRRD + raw), PNG previews of the three
+// central slices and a JSON log, all atomically.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+
+#include "commands.hpp"
+#include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/nominal_geometry.hpp"
+#include "ctk/proj/image_io.hpp"
+#include "ctk/recon/measurements.hpp"
+#include "ctk/recon/memory_plan.hpp"
+#include "ctk/recon/sirt.hpp"
+#include "ctk/recon/wls_cg.hpp"
+#include "progress.hpp"
+
+namespace ctk::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ReconstructOptions {
+  fs::path scan, geometry, out;
+  std::string method = "wls-cg";
+  int iterations = 0;  // 0: the method's default
+  double lambda = 0, tolerance = 1e-4;
+  std::string regulariser = "identity";
+  bool unweighted = false;
+  std::vector<int> size;
+  double voxel_mm = 0;
+};
+
+// Median distance from the source to the holder origin: the scale of the default voxel.
+double median_source_distance(const std::vector<ProjectionMatrix>& views) {
+  std::vector<double> d;
+  for (const auto& P : views) d.push_back(P.source_position().norm());
+  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+  return d[d.size() / 2];
+}
+
+// Default grid: voxels the size of a detector pixel seen at the holder origin, covering the
+// helix holder (a 60 x 60 x 122 mm box) when the scan declares one, else the detector's field.
+VolumeLayout volume_layout(const ReconstructOptions& o, const ScanDescription& scan, const Measurements& m) {
+  const double sod = median_source_distance(m.matrices);
+  const double voxel = o.voxel_mm > 0 ? o.voxel_mm : scan.detector.pitch_u_mm * sod / scan.source_to_detector_mm;
+  std::array<int, 3> size{};
+  if (!o.size.empty()) {
+    for (std::size_t a = 0; a < 3; ++a) size[a] = o.size[std::min(a, o.size.size() - 1)];
+  } else if (scan.holder) {
+    const int across = static_cast<int>(std::ceil(60.0 / voxel)), along = static_cast<int>(std::ceil(122.0 / voxel));
+    size = {across, across, along};
+  } else {
+    const double field = std::max(scan.detector.cols * scan.detector.pitch_u_mm, scan.detector.rows * scan.detector.pitch_v_mm) *
+                         sod / scan.source_to_detector_mm;
+    const int n = static_cast<int>(std::ceil(field / voxel));
+    size = {n, n, static_cast<int>(std::ceil(scan.detector.rows * scan.detector.pitch_v_mm * sod / scan.source_to_detector_mm / voxel))};
+  }
+  return VolumeLayout::centred(size, Eigen::Vector3d::Constant(voxel));
+}
+
+void write_previews(const Volume& x, const fs::path& out) {
+  std::vector<float> sorted = x.data;
+  const std::size_t hi = static_cast<std::size_t>(0.999 * static_cast<double>(sorted.size() - 1));
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(hi), sorted.end());
+  const float high = std::max(sorted[hi], 1e-6f);
+  const auto& n = x.layout.size;
+  const std::string stem = (out.parent_path() / out.stem()).string();
+  write_slice_png(x, 2, n[2] / 2, 0.0f, high, stem + "_axial.png");
+  write_slice_png(x, 1, n[1] / 2, 0.0f, high, stem + "_coronal.png");
+  write_slice_png(x, 0, n[0] / 2, 0.0f, high, stem + "_sagittal.png");
+}
+
+void run_reconstruct(const ReconstructOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  const ScanDescription scan = read_scan(o.scan);
+  for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
+  const Geometry geometry = o.geometry.empty() ? nominal_geometry(scan) : read_geometry(o.geometry);
+  const ReconstructionMethod method = o.method == "sirt" ? ReconstructionMethod::sirt : ReconstructionMethod::wls_cg;
+  const bool weighted = method == ReconstructionMethod::wls_cg && !o.unweighted && scan.projections.kind == ProjectionKind::counts;
+  const int used = static_cast<int>(geometry.ok_views().size());
+  if (used == 0) throw InputError(o.geometry.empty() ? o.scan.string() : o.geometry.string(), "views", "no view is \"ok\": nothing to reconstruct");
+  std::cout << "geometry: " << (o.geometry.empty() ? "nominal (from the scan file)" : o.geometry.string()) << ", " << used
+            << " of " << geometry.views.size() << " views ok (the others are not used)\n";
+
+  // The plan needs the layout, which needs the source distance: take it from the matrices first.
+  Measurements probe;
+  for (int i : geometry.ok_views()) probe.matrices.push_back(*geometry.views[static_cast<std::size_t>(i)].P);
+  const VolumeLayout layout = volume_layout(o, scan, probe);
+  const MemoryPlan plan = plan_memory(method, layout, used, scan.detector.rows, scan.detector.cols, weighted);
+  const std::size_t available = available_memory_bytes();
+  std::cout << "volume " << layout.size[0] << " x " << layout.size[1] << " x " << layout.size[2] << " voxels of "
+            << layout.voxel_mm.x() << " mm (holder frame, centred on the holder origin)\n"
+            << "memory plan (" << to_string(method) << "): " << plan.describe() << "; available "
+            << static_cast<double>(available) / 1e9 << " GB\n";
+  if (plan.total_bytes() > available)
+    throw std::runtime_error("the run needs " + plan.describe() + " but only " + std::to_string(static_cast<double>(available) / 1e9) +
+                             " GB are available: use a coarser --voxel, a smaller --size or fewer views");
+
+  Progress reading("reading projections", "views");
+  const Measurements m = load_measurements(scan, geometry, {weighted}, std::ref(reading));
+  if (m.clamped_pixels > 0) std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
+
+  const JosephProjector A;
+  Volume x(layout);
+  const int iterations = o.iterations > 0 ? o.iterations : (method == ReconstructionMethod::sirt ? 100 : 30);
+  Progress solving(to_string(method), "iterations");
+  auto on_iteration = [&](const IterationLog& l) {
+    if (l.iteration > 0) solving(l.iteration, iterations);
+  };
+  SolverReport report;
+  if (method == ReconstructionMethod::sirt) {
+    report = solve_sirt(A, m.matrices, m.line_integrals, x, {iterations, 1.0, true}, on_iteration);
+  } else {
+    WlsOptions w;
+    w.iterations = iterations;
+    w.tolerance = o.tolerance;
+    w.lambda = o.lambda;
+    w.regulariser = o.regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
+    report = solve_wls_cg(A, m.matrices, m.line_integrals, weighted ? &m.weights : nullptr, x, w, on_iteration);
+  }
+  std::cout << report.stop_reason << "; cost " << report.iterations.front().cost << " -> " << report.iterations.back().cost << "\n";
+
+  write_volume_nrrd(x, o.out);
+  write_previews(x, o.out);
+  nlohmann::json log = {
+      {"format", "ctk-reconstruction-log/1"},
+      {"scan", o.scan.string()},
+      {"geometry", o.geometry.empty() ? "nominal" : o.geometry.string()},
+      {"method", to_string(method)},
+      {"weights", weighted ? "poisson" : "unit"},
+      {"lambda", o.lambda},
+      {"regulariser", o.regulariser},
+      {"volume", {{"size", layout.size}, {"voxel_mm", layout.voxel_mm.x()}, {"origin_mm", {layout.origin_mm.x(), layout.origin_mm.y(), layout.origin_mm.z()}}}},
+      {"views_used", m.view_indices},
+      {"clamped_pixels", m.clamped_pixels},
+      {"notes", m.notes},
+      {"memory_plan", plan.describe()},
+      {"solver", to_json(report)},
+      {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};
+  fs::path log_file = o.out;
+  log_file.replace_extension(".log.json");
+  write_text_atomically(log_file, log.dump(2) + "\n");
+  std::cout << "volume written to " << o.out.string() << " (+ .raw), previews *_axial/_coronal/_sagittal.png, log "
+            << log_file.string() << "\n";
+}
+
+}  // namespace
+
+void register_reconstruct(CLI::App& app) {
+  auto o = std::make_shared<ReconstructOptions>();
+  CLI::App* cmd = app.add_subcommand("reconstruct", "Reconstruct a volume (holder frame) from a scan and its per-view matrices");
+  cmd->add_option("--scan", o->scan, "scan.json (ctk-scan/1)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--geometry", o->geometry, "Per-view matrices (ctk-geometry/1); default: the scan's nominal geometry")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "Volume to write (.nrrd, with .raw beside it)")->required();
+  cmd->add_option("--method", o->method, "wls-cg or sirt")->check(CLI::IsMember({"wls-cg", "sirt"}))->capture_default_str();
+  cmd->add_option("--iterations", o->iterations, "Iterations (default: 30 for wls-cg, 100 for sirt)")->check(CLI::Range(1, 100000));
+  cmd->add_option("--lambda", o->lambda, "Regularisation weight")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--regulariser", o->regulariser, "identity (Tikhonov) or gradient")
+      ->check(CLI::IsMember({"identity", "gradient"}))
+      ->capture_default_str();
+  cmd->add_option("--tolerance", o->tolerance, "Stop when the gradient has fallen by this factor")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_flag("--unweighted", o->unweighted, "Unit weights even for counts (plain least squares)");
+  cmd->add_option("--size", o->size, "Voxels: n (cube) or nx ny nz (default: cover the holder, or the field of view)")
+      ->expected(1, 3)
+      ->check(CLI::Range(1, 100000));
+  cmd->add_option("--voxel", o->voxel_mm, "Voxel size in mm (default: a pixel seen at the holder origin)")->check(CLI::PositiveNumber);
+  cmd->callback([o] { run_reconstruct(*o); });
+}
+
+}  // namespace ctk::tools
