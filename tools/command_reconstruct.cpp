@@ -1,5 +1,5 @@
 // ctk reconstruct: a volume in the holder frame from a scan's projections and per-view matrices,
-// by weighted least squares (conjugate gradients) or SIRT. Prints the memory plan first and
+// by weighted least squares (conjugate gradients), SIRT, or FDK for circular scans. Prints the memory plan first and
 // refuses a run that cannot fit; writes the volume (NRRD + raw), PNG previews of the three
 // central slices and a JSON log, all atomically.
 #include <algorithm>
@@ -12,6 +12,7 @@
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/image_io.hpp"
+#include "ctk/recon/fdk.hpp"
 #include "ctk/recon/measurements.hpp"
 #include "ctk/recon/memory_plan.hpp"
 #include "ctk/recon/sirt.hpp"
@@ -80,7 +81,9 @@ void run_reconstruct(const ReconstructOptions& o) {
   const ScanDescription scan = read_scan(o.scan);
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   const Geometry geometry = o.geometry.empty() ? nominal_geometry(scan) : read_geometry(o.geometry);
-  const ReconstructionMethod method = o.method == "sirt" ? ReconstructionMethod::sirt : ReconstructionMethod::wls_cg;
+  const ReconstructionMethod method = o.method == "sirt"  ? ReconstructionMethod::sirt
+                                      : o.method == "fdk" ? ReconstructionMethod::fdk
+                                                          : ReconstructionMethod::wls_cg;
   const bool weighted = method == ReconstructionMethod::wls_cg && !o.unweighted && scan.projections.kind == ProjectionKind::counts;
   const int used = static_cast<int>(geometry.ok_views().size());
   if (used == 0) throw InputError(o.geometry.empty() ? o.scan.string() : o.geometry.string(), "views", "no view is \"ok\": nothing to reconstruct");
@@ -102,7 +105,7 @@ void run_reconstruct(const ReconstructOptions& o) {
                              " GB are available: use a coarser --voxel, a smaller --size or fewer views");
 
   Progress reading("reading projections", "views");
-  const Measurements m = load_measurements(scan, geometry, {weighted}, std::ref(reading));
+  Measurements m = load_measurements(scan, geometry, {weighted}, std::ref(reading));
   if (m.clamped_pixels > 0) std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
 
   const JosephProjector A;
@@ -113,7 +116,15 @@ void run_reconstruct(const ReconstructOptions& o) {
     if (l.iteration > 0) solving(l.iteration, iterations);
   };
   SolverReport report;
-  if (method == ReconstructionMethod::sirt) {
+  if (method == ReconstructionMethod::fdk) {
+    // Refuses non-circular scans before any work, with the deviation found.
+    const CircularTrajectory circle = fit_circular_trajectory(m.matrices);
+    std::cout << "circular trajectory: radius " << circle.radius_mm << " mm, arc " << circle.arc_rad * 180 / M_PI
+              << " deg" << (circle.arc_rad < 2 * M_PI - 1e-9 ? " (short scan: Parker weights)" : "") << "\n";
+    fdk_reconstruct(m.matrices, m.line_integrals, scan.detector, x);
+    report.stop_reason = "FDK (Hann-windowed ramp)";
+    report.iterations.push_back({});
+  } else if (method == ReconstructionMethod::sirt) {
     report = solve_sirt(A, m.matrices, m.line_integrals, x, {iterations, 1.0, true}, on_iteration);
   } else {
     WlsOptions w;
@@ -123,7 +134,8 @@ void run_reconstruct(const ReconstructOptions& o) {
     w.regulariser = o.regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
     report = solve_wls_cg(A, m.matrices, m.line_integrals, weighted ? &m.weights : nullptr, x, w, on_iteration);
   }
-  std::cout << report.stop_reason << "; cost " << report.iterations.front().cost << " -> " << report.iterations.back().cost << "\n";
+  if (method == ReconstructionMethod::fdk) std::cout << report.stop_reason << "\n";
+  else std::cout << report.stop_reason << "; cost " << report.iterations.front().cost << " -> " << report.iterations.back().cost << "\n";
 
   write_volume_nrrd(x, o.out);
   write_previews(x, o.out);
@@ -158,7 +170,7 @@ void register_reconstruct(CLI::App& app) {
   cmd->add_option("--geometry", o->geometry, "Per-view matrices (ctk-geometry/1); default: the scan's nominal geometry")
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "Volume to write (.nrrd, with .raw beside it)")->required();
-  cmd->add_option("--method", o->method, "wls-cg or sirt")->check(CLI::IsMember({"wls-cg", "sirt"}))->capture_default_str();
+  cmd->add_option("--method", o->method, "wls-cg, sirt or fdk (circular scans only)")->check(CLI::IsMember({"wls-cg", "sirt", "fdk"}))->capture_default_str();
   cmd->add_option("--iterations", o->iterations, "Iterations (default: 30 for wls-cg, 100 for sirt)")->check(CLI::Range(1, 100000));
   cmd->add_option("--lambda", o->lambda, "Regularisation weight")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--regulariser", o->regulariser, "identity (Tikhonov) or gradient")
