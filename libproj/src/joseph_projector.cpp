@@ -9,6 +9,10 @@
 
 namespace ctk {
 
+namespace {
+constexpr int kBackTableRays = 32768;  // rays per shared back-projection table (~2 MB)
+}  // namespace
+
 JosephProjector::JosephProjector(ProjectorOptions options) : options_(options) {
   if (options_.rows_per_block <= 0) throw std::invalid_argument("ProjectorOptions: rows_per_block must be positive");
 }
@@ -44,29 +48,36 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
 void JosephProjector::back(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views, Volume& x) const {
   check_stack_matches_views(y, views.size());
   std::fill(x.data.begin(), x.data.end(), 0.0f);
+  if (y.views == 0) return;
   const int rows_per_block = std::min(options_.rows_per_block, y.rows);
   const int blocks = (y.rows + rows_per_block - 1) / rows_per_block;
   const int n_threads = threads();
+  // Several views share one table, so the threads meet at a barrier once per batch rather than
+  // once per view (barriers dominate small problems, and cost dearly when cores are shared).
+  const int per_view = (rows_per_block * y.cols + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes;
+  const int batch = std::clamp(kBackTableRays / per_view, 1, y.views);
   detail::RayTable table;  // shared: filled together, then read by every slab task
-  table.resize(rows_per_block * y.cols);
+  table.resize(batch * per_view);
 #pragma omp parallel num_threads(n_threads)
   {
     // Views innermost, as in forward(): a band of the volume stays in cache across views.
     for (int block = 0; block < blocks; ++block) {
-      for (int v = 0; v < y.views; ++v) {
-        const ViewRays rays = view_rays(views[static_cast<std::size_t>(v)], x.layout);
-        const int row_begin = block * rows_per_block;
-        const int count = std::min(rows_per_block, y.rows - row_begin) * y.cols;
-        const float* values = y.view(v) + static_cast<std::size_t>(row_begin) * static_cast<std::size_t>(y.cols);
-        const int per_thread = (count + n_threads - 1) / n_threads;
+      const int row_begin = block * rows_per_block;
+      const int count = std::min(rows_per_block, y.rows - row_begin) * y.cols;
+      const int chunk = (count + n_threads - 1) / n_threads;
+      for (int v0 = 0; v0 < y.views; v0 += batch) {
+        const int in_batch = std::min(batch, y.views - v0);
 #pragma omp for schedule(static)
-        for (int t = 0; t < n_threads; ++t) {
-          const int begin = std::min(count, t * per_thread), end = std::min(count, begin + per_thread);
-          table.fill(rays, x.layout, row_begin, y.cols, begin, end);
-          std::copy(values + begin, values + end, table.value.begin() + begin);
+        for (int task = 0; task < in_batch * n_threads; ++task) {
+          const int slot = task / n_threads, part = task % n_threads, v = v0 + slot;
+          const int begin = std::min(count, part * chunk), end = std::min(count, begin + chunk);
+          const int offset = slot * per_view;
+          table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, row_begin, y.cols, begin, end, offset);
+          const float* values = y.view(v) + static_cast<std::size_t>(row_begin) * static_cast<std::size_t>(y.cols);
+          std::copy(values + begin, values + end, table.value.begin() + offset + begin);
+          if (part == n_threads - 1) table.empty(offset + count, offset + per_view);
+          if (task == 0) table.count = in_batch * per_view;
         }
-#pragma omp single
-        table.pad(count);
         // A sample at slice k writes only slice k of its dominant axis: slabs are disjoint.
         for (int axis = 0; axis < 3; ++axis) {
           const int n = x.layout.size[static_cast<std::size_t>(axis)];

@@ -8,10 +8,11 @@ void RayTable::resize(int capacity) {
   for (auto* v : {&k_first, &k_last, &axis, &stride_a, &stride_b, &stride_c, &n_b, &n_c}) v->assign(n, 0);
 }
 
-void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int row_begin, int cols, int ray_begin, int ray_end) {
+void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int row_begin, int cols, int ray_begin, int ray_end,
+                    int offset) {
   const auto strides = layout.strides();
   for (int r = ray_begin; r < ray_end; ++r) {
-    const auto i = static_cast<std::size_t>(r);
+    const auto i = static_cast<std::size_t>(offset + r);
     const MarchedRay m = march_ray(rays, layout, r % cols, row_begin + r / cols);
     const auto [b, c] = other_axes(m.axis);
     pb_mid[i] = static_cast<float>(m.pb_mid);
@@ -33,7 +34,11 @@ void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int row_be
 
 void RayTable::pad(int used) {
   count = (used + kMaxLanes - 1) / kMaxLanes * kMaxLanes;
-  for (int r = used; r < count; ++r) {
+  empty(used, count);
+}
+
+void RayTable::empty(int begin, int end) {
+  for (int r = begin; r < end; ++r) {
     const auto i = static_cast<std::size_t>(r);
     pb_mid[i] = beta_b[i] = pc_mid[i] = beta_c[i] = weight[i] = k_mid[i] = value[i] = 0.0f;
     k_first[i] = 0;

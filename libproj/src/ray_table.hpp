@@ -17,9 +17,13 @@ struct RayTable {
 
   void resize(int capacity);
   /// Rays numbered from pixel (0, row_begin), row by row over `cols` columns; fills entries
-  /// [ray_begin, ray_end) only, so threads can fill one table together.
-  void fill(const ViewRays& rays, const VolumeLayout& layout, int row_begin, int cols, int ray_begin, int ray_end);
-  /// Marks rays [used, padded) empty.
+  /// offset + [ray_begin, ray_end) only, so threads can fill one table together, and several
+  /// views can share a table (each at its own offset).
+  void fill(const ViewRays& rays, const VolumeLayout& layout, int row_begin, int cols, int ray_begin, int ray_end,
+            int offset = 0);
+  /// Marks entries [begin, end) empty.
+  void empty(int begin, int end);
+  /// Uses `used` rays: count becomes the next multiple of kMaxLanes, the rest marked empty.
   void pad(int used);
 };
 
