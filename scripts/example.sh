@@ -13,7 +13,8 @@ rm -rf "$out"
 ./build/tools/ctk simulate --out "$out" --phantom helix-holder --phantom sample-2 --views 90 \
   --cols 360 --rows 360 --pitch 1.2
 ./build/tools/ctk geometry --scan "$out/scan.json" --out "$out/geometry.json" --astra "$out/cone_vec.txt"
-# Reconstruct with the geometry the robot predicts (calibration from the spheres comes next and
-# will replace it); the truth the simulator kept is in $out/truth-geometry.json for comparison.
-./build/tools/ctk reconstruct --scan "$out/scan.json" --geometry "$out/geometry.json" --out "$out/volume.nrrd" \
+# Calibrate every view from the helix spheres (robot FK as the first guess), then reconstruct
+# with the calibrated matrices; the simulator's truth is in $out/truth-geometry.json to compare.
+./build/tools/ctk calibrate --scan "$out/scan.json" --out "$out/calibrated.json"
+./build/tools/ctk reconstruct --scan "$out/scan.json" --geometry "$out/calibrated.json" --out "$out/volume.nrrd" \
   --lambda 5 --regulariser gradient

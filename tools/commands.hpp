@@ -9,5 +9,6 @@ void register_bench(CLI::App& app);
 void register_simulate(CLI::App& app);
 void register_phantom(CLI::App& app);
 void register_reconstruct(CLI::App& app);
+void register_calibrate(CLI::App& app);
 
 }  // namespace ctk::tools

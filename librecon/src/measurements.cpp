@@ -1,29 +1,11 @@
 #include "ctk/recon/measurements.hpp"
 
 #include <algorithm>
-#include <cmath>
 
 #include "ctk/geom/error.hpp"
 #include "ctk/proj/parallel.hpp"
 
 namespace ctk {
-
-void counts_to_line_integrals(const Image& counts, const Image& flat, const Image& dark, float* p, float* w,
-                              std::size_t& clamped) {
-  // A transmission above 1.5 cannot come from attenuation: treat it like one at or below zero.
-  constexpr double kMinCounts = 0.5, kMaxTransmission = 1.5;
-  for (std::size_t i = 0; i < counts.pixels.size(); ++i) {
-    const double open = double(flat.pixels[i]) - double(dark.pixels[i]);
-    const double detected = double(counts.pixels[i]) - double(dark.pixels[i]);
-    double t = open > 0 ? std::max(detected, kMinCounts) / open : kMaxTransmission;
-    if (open <= 0 || detected < kMinCounts || t > kMaxTransmission) {
-      ++clamped;
-      t = std::clamp(t, kMinCounts / std::max(open, 1.0), kMaxTransmission);
-    }
-    p[i] = static_cast<float>(-std::log(t));
-    if (w) w[i] = static_cast<float>(open > 0 ? std::max(detected, kMinCounts) / open : 0.0);
-  }
-}
 
 Measurements load_measurements(const ScanDescription& scan, const Geometry& geometry, const MeasurementOptions& options,
                                const std::function<void(int, int)>& progress) {
@@ -46,23 +28,14 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
   const bool counts = scan.projections.kind == ProjectionKind::counts;
   m.line_integrals = ProjectionStack(n, d.rows, d.cols);
   if (counts && options.statistical_weights) m.weights = ProjectionStack(n, d.rows, d.cols);
-  Image flat, dark;
-  if (counts) {
-    flat = read_image(scan.resolve(scan.projections.flat), d.cols, d.rows);
-    dark = read_image(scan.resolve(scan.projections.dark), d.cols, d.rows);
-  }
+  const std::optional<FlatDark> flat_dark = read_flat_dark(scan);
   std::vector<std::size_t> clamped(static_cast<std::size_t>(n), 0);
   int done = 0;
   // Reading is I/O bound and OpenImageIO is thread safe: a few images at a time.
   parallel_for_dynamic(n, [&](int k) {
-    const Image image = read_image(scan.projection_path(m.view_indices[static_cast<std::size_t>(k)]), d.cols, d.rows);
-    float* p = m.line_integrals.view(k);
-    if (counts) {
-      counts_to_line_integrals(image, flat, dark, p, m.weights.views ? m.weights.view(k) : nullptr,
-                               clamped[static_cast<std::size_t>(k)]);
-    } else {
-      std::copy(image.pixels.begin(), image.pixels.end(), p);
-    }
+    const Image image = read_line_integrals(scan, m.view_indices[static_cast<std::size_t>(k)], flat_dark,
+                                            m.weights.views ? m.weights.view(k) : nullptr, &clamped[static_cast<std::size_t>(k)]);
+    std::copy(image.pixels.begin(), image.pixels.end(), m.line_integrals.view(k));
 #pragma omp critical(ctk_measurements_progress)
     if (progress) progress(++done, n);
   });

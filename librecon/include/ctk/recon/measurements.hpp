@@ -9,7 +9,7 @@
 
 #include "ctk/geom/geometry_file.hpp"
 #include "ctk/geom/scan.hpp"
-#include "ctk/proj/image_io.hpp"
+#include "ctk/proj/projection_reading.hpp"
 #include "ctk/proj/projection_stack.hpp"
 
 namespace ctk {
@@ -22,14 +22,6 @@ struct Measurements {
   std::size_t clamped_pixels = 0;          // counts at or below dark (or flat not above dark)
   std::vector<std::string> notes;          // per-view findings worth a line in the log
 };
-
-/// Line integrals from raw counts; `clamped` counts pixels whose normalised transmission was not
-/// in (0, 1.5] and was clamped there. Weights (optional) are the detected counts relative to the
-/// open beam, (I - dark) / (flat - dark): Poisson statistics give var(p) ~ 1 / counts, and this
-/// scaling keeps open-beam weights at 1, so a regularisation weight means the same with or
-/// without statistical weights.
-void counts_to_line_integrals(const Image& counts, const Image& flat, const Image& dark, float* line_integrals,
-                              float* weights, std::size_t& clamped);
 
 struct MeasurementOptions {
   bool statistical_weights = true;  // only for counts; line-integral scans always get unit weights

@@ -1,0 +1,24 @@
+#pragma once
+// A whole scan in batch: every view in parallel from its image and the first-guess pose the scan
+// predicts (robot FK, or given matrices); a view that fails never stops the batch, it is
+// rejected or skipped with its reason (no pose, unreadable image, too few spheres, residual).
+#include <functional>
+#include <vector>
+
+#include "ctk/calib/view_calibration.hpp"
+#include "ctk/geom/scan.hpp"
+
+namespace ctk {
+
+struct ScanCalibration {
+  Geometry geometry;                    // ctk-geometry/1, one entry per projection
+  std::vector<ViewCalibration> views;   // details, same order
+  double seconds = 0;
+};
+
+/// Throws InputError for problems of the scan as a whole (no holder, fewer than 6 spheres,
+/// unreadable flat or dark); per-view problems end up in the views.
+ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
+                               const std::function<void(int, int)>& progress = {});
+
+}  // namespace ctk

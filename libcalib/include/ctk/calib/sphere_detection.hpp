@@ -1,0 +1,35 @@
+#pragma once
+// Finding the holder's spheres in one line-integral image: candidates are the local maxima of a
+// difference-of-Gaussians tuned to the projected sphere size, kept when the image curves down in
+// every direction there (a sphere is a bump; the tube's silhouette edges are ridges), each refined to a sub-pixel centre by an
+// intensity-weighted centroid after removing a plane fitted to the surrounding ring.
+#include <Eigen/Core>
+#include <vector>
+
+#include "ctk/proj/image_io.hpp"
+
+namespace ctk {
+
+struct SphereDetection {
+  Eigen::Vector2d uv{0, 0};  // sub-pixel centre (pixel-centre convention of scan-format.md)
+  double strength = 0;       // background-free line integral summed over the blob (mm * px^2)
+  double response = 0;       // filter response at the candidate
+};
+
+struct DetectionOptions {
+  double radius_px = 2.6;         // projected sphere radius
+  double noise_sigmas = 5.0;      // response threshold, in robust noise deviations
+  double min_roundness = 0.3;     // smaller / larger curvature: below, a ridge (a wall's edge)
+  int max_candidates = 400;
+};
+
+/// `line_integrals` is one view's image; returns the detections, strongest first.
+std::vector<SphereDetection> detect_spheres(const Image& line_integrals, const DetectionOptions& options);
+
+/// The sub-pixel centre of a blob near `guess`: background plane from the ring between
+/// radius + 2 and radius + 4, centroid of the positive remainder within radius + 1.5.
+/// Returns false when the window leaves the image or holds no signal.
+bool refine_centroid(const Image& line_integrals, const Eigen::Vector2d& guess, double radius_px,
+                     SphereDetection& out);
+
+}  // namespace ctk

@@ -1,0 +1,41 @@
+#pragma once
+// One view, from its image and a first-guess pose to a calibrated projection matrix or a
+// rejection with its reason: detect, predict, match (shift + optimal assignment), fit the pose,
+// then predict again from the fitted pose, rematch tightly and refit.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ctk/calib/sphere_detection.hpp"
+#include "ctk/geom/geometry_file.hpp"
+#include "ctk/geom/helix.hpp"
+
+namespace ctk {
+
+struct CalibrationOptions {
+  int min_spheres = 6;        // fewer matched spheres: rejected
+  double max_rms_px = 0.5;    // larger reprojection RMS: rejected
+  double search_px = 40;      // how far the first guess may put the pattern (5 mm / 3 deg here)
+  double robust_px = 1.0;     // Cauchy scale of the pose fit
+  double max_first_guess_error_deg = 6.0;  // a fitted pose turned further from the guess is refused
+};
+
+struct ViewCalibration {
+  ViewStatus status = ViewStatus::rejected;
+  std::string reason;
+  std::optional<ProjectionMatrix> P;
+  std::optional<Rigid> T_camera_holder;
+  double rms_px = 0;
+  int spheres_used = 0;
+  int detections = 0;
+  double translation_sigma_mm[3] = {0, 0, 0};  // camera x, y, z (z along the beam)
+  double rotation_sigma_deg = 0;
+  std::vector<Eigen::Vector2d> detected_px, fitted_px;  // the used pairs, for pictures
+  std::vector<int> spheres;                              // their sphere indices
+};
+
+/// `K`: the scan's detector matrix; `initial`: first-guess T_camera_holder (robot FK).
+ViewCalibration calibrate_view(const Image& line_integrals, const Eigen::Matrix3d& K, const Rigid& initial,
+                               const Holder& holder, const Detector& detector, const CalibrationOptions& options);
+
+}  // namespace ctk

@@ -1,0 +1,102 @@
+#include "ctk/calib/sphere_detection.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+namespace ctk {
+
+bool refine_centroid(const Image& im, const Eigen::Vector2d& guess, double radius, SphereDetection& out) {
+  Eigen::Vector2d centre = guess;
+  // Two passes: the second is centred on the first estimate.
+  for (int pass = 0; pass < 2; ++pass) {
+    const double inner = radius + 1.5, ring0 = radius + 2.0, ring1 = radius + 4.0;
+    const int c0 = static_cast<int>(std::floor(centre.x() - ring1)), c1 = static_cast<int>(std::ceil(centre.x() + ring1));
+    const int r0 = static_cast<int>(std::floor(centre.y() - ring1)), r1 = static_cast<int>(std::ceil(centre.y() + ring1));
+    if (c0 < 0 || r0 < 0 || c1 >= im.cols || r1 >= im.rows) return false;
+    // Background plane a + b du + c dv by least squares over the ring.
+    Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d Atb = Eigen::Vector3d::Zero();
+    for (int r = r0; r <= r1; ++r)
+      for (int c = c0; c <= c1; ++c) {
+        const double du = c - centre.x(), dv = r - centre.y(), d = std::hypot(du, dv);
+        if (d < ring0 || d > ring1) continue;
+        const Eigen::Vector3d a(1, du, dv);
+        AtA += a * a.transpose();
+        Atb += a * im.pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c)];
+      }
+    const Eigen::Vector3d plane = AtA.ldlt().solve(Atb);
+    Eigen::Vector2d sum(0, 0);
+    double weight = 0;
+    for (int r = r0; r <= r1; ++r)
+      for (int c = c0; c <= c1; ++c) {
+        const double du = c - centre.x(), dv = r - centre.y();
+        if (std::hypot(du, dv) > inner) continue;
+        const double w = im.pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c)] -
+                         (plane(0) + plane(1) * du + plane(2) * dv);
+        if (w <= 0) continue;
+        sum += w * Eigen::Vector2d(c, r);
+        weight += w;
+      }
+    if (!(weight > 0)) return false;
+    centre = sum / weight;
+    out.strength = weight;
+  }
+  out.uv = centre;
+  return true;
+}
+
+std::vector<SphereDetection> detect_spheres(const Image& im, const DetectionOptions& o) {
+  // Difference of Gaussians matched to a disc of radius R: sigma R / sqrt(2) against 2x that.
+  const cv::Mat image(im.rows, im.cols, CV_32F, const_cast<float*>(im.pixels.data()));
+  const double s = std::max(0.7, o.radius_px / std::sqrt(2.0));
+  cv::Mat narrow, wide, dog;
+  cv::GaussianBlur(image, narrow, cv::Size(0, 0), s, s, cv::BORDER_REPLICATE);
+  cv::GaussianBlur(image, wide, cv::Size(0, 0), 2 * s, 2 * s, cv::BORDER_REPLICATE);
+  cv::subtract(narrow, wide, dog);
+  // Local maxima over a window the size of a sphere, above a noise-scaled threshold.
+  cv::Mat dilated;
+  const int k = 2 * static_cast<int>(std::ceil(o.radius_px)) + 1;
+  cv::dilate(dog, dilated, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
+  // Threshold from the noise: a robust spread (median absolute deviation) of the response, so
+  // the strong walls do not raise it.
+  std::vector<float> sample;
+  sample.reserve(static_cast<std::size_t>(im.rows * im.cols / 16 + 1));
+  for (int r = 0; r < im.rows; r += 4)
+    for (int c = 0; c < im.cols; c += 4) sample.push_back(dog.at<float>(r, c));
+  auto median_of = [](std::vector<float>& v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const float centre = median_of(sample);
+  for (float& x : sample) x = std::abs(x - centre);
+  const float threshold = centre + o.noise_sigmas * 1.4826f * std::max(median_of(sample), 1e-12f);
+  std::vector<SphereDetection> candidates;
+  for (int r = 1; r + 1 < im.rows; ++r) {
+    const float* d = dog.ptr<float>(r);
+    const float* m = dilated.ptr<float>(r);
+    for (int c = 1; c + 1 < im.cols; ++c) {
+      if (d[c] <= threshold || d[c] < m[c]) continue;
+      // A sphere is a bump (both curvatures strongly negative); a wall's edge is a ridge.
+      const double dxx = narrow.at<float>(r, c + 1) - 2.0 * narrow.at<float>(r, c) + narrow.at<float>(r, c - 1);
+      const double dyy = narrow.at<float>(r + 1, c) - 2.0 * narrow.at<float>(r, c) + narrow.at<float>(r - 1, c);
+      const double dxy = 0.25 * (narrow.at<float>(r + 1, c + 1) - narrow.at<float>(r + 1, c - 1) -
+                                 narrow.at<float>(r - 1, c + 1) + narrow.at<float>(r - 1, c - 1));
+      const double mean_curvature = 0.5 * (dxx + dyy), spread = std::sqrt(0.25 * (dxx - dyy) * (dxx - dyy) + dxy * dxy);
+      const double l_large = mean_curvature - spread, l_small = mean_curvature + spread;  // both < 0 for a bump
+      if (!(l_small < 0) || l_small > o.min_roundness * l_large) continue;
+      candidates.push_back({Eigen::Vector2d(c, r), 0.0, d[c]});
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.response > b.response; });
+  if (static_cast<int>(candidates.size()) > o.max_candidates) candidates.resize(static_cast<std::size_t>(o.max_candidates));
+  std::vector<SphereDetection> detections;
+  for (const auto& cand : candidates) {
+    SphereDetection d = cand;
+    if (refine_centroid(im, cand.uv, o.radius_px, d)) detections.push_back(d);
+  }
+  return detections;
+}
+
+}  // namespace ctk

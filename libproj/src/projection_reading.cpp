@@ -1,0 +1,44 @@
+#include "ctk/proj/projection_reading.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace ctk {
+
+std::optional<FlatDark> read_flat_dark(const ScanDescription& scan) {
+  if (scan.projections.kind != ProjectionKind::counts) return std::nullopt;
+  const Detector& d = scan.detector;
+  return FlatDark{read_image(scan.resolve(scan.projections.flat), d.cols, d.rows),
+                  read_image(scan.resolve(scan.projections.dark), d.cols, d.rows)};
+}
+
+void counts_to_line_integrals(const Image& counts, const Image& flat, const Image& dark, float* p, float* w,
+                              std::size_t& clamped) {
+  // A transmission above 1.5 cannot come from attenuation: treat it like one at or below zero.
+  constexpr double kMinCounts = 0.5, kMaxTransmission = 1.5;
+  for (std::size_t i = 0; i < counts.pixels.size(); ++i) {
+    const double open = double(flat.pixels[i]) - double(dark.pixels[i]);
+    const double detected = double(counts.pixels[i]) - double(dark.pixels[i]);
+    double t = open > 0 ? std::max(detected, kMinCounts) / open : kMaxTransmission;
+    if (open <= 0 || detected < kMinCounts || t > kMaxTransmission) {
+      ++clamped;
+      t = std::clamp(t, kMinCounts / std::max(open, 1.0), kMaxTransmission);
+    }
+    p[i] = static_cast<float>(-std::log(t));
+    if (w) w[i] = static_cast<float>(open > 0 ? std::max(detected, kMinCounts) / open : 0.0);
+  }
+}
+
+Image read_line_integrals(const ScanDescription& scan, int view, const std::optional<FlatDark>& flat_dark, float* weights,
+                          std::size_t* clamped) {
+  Image image = read_image(scan.projection_path(view), scan.detector.cols, scan.detector.rows);
+  if (scan.projections.kind == ProjectionKind::line_integrals) return image;
+  if (!flat_dark) throw std::invalid_argument("read_line_integrals: a counts scan needs its flat and dark");
+  std::size_t count = 0;
+  counts_to_line_integrals(image, flat_dark->flat, flat_dark->dark, image.pixels.data(), weights, count);
+  if (clamped) *clamped += count;
+  return image;
+}
+
+}  // namespace ctk

@@ -1,0 +1,113 @@
+// ctk calibrate: every view's projection matrix from the helix spheres in its image, the robot's
+// forward kinematics (or given matrices) as the first guess; writes ctk-geometry/1 and a report.
+#include <algorithm>
+#include <filesystem>
+#include <iostream>
+
+#include "commands.hpp"
+#include "ctk/calib/scan_calibration.hpp"
+#include "ctk/geom/atomic_write.hpp"
+#include "progress.hpp"
+
+namespace ctk::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CalibrateOptions {
+  fs::path scan, out = "geometry.json", report;
+  CalibrationOptions calibration;
+};
+
+double median(std::vector<double> x) {
+  if (x.empty()) return 0;
+  std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2), x.end());
+  return x[x.size() / 2];
+}
+
+nlohmann::json report_json(const ScanCalibration& c, const CalibrateOptions& o) {
+  nlohmann::json views = nlohmann::json::array();
+  std::vector<double> rms, depth_sigma, across_sigma;
+  int ok = 0, rejected = 0, skipped = 0;
+  for (std::size_t v = 0; v < c.views.size(); ++v) {
+    const ViewCalibration& r = c.views[v];
+    nlohmann::json j = {{"index", v}, {"status", to_string(r.status)}, {"detections", r.detections}, {"spheres_used", r.spheres_used}};
+    if (!r.reason.empty()) j["reason"] = r.reason;
+    if (r.P) {
+      j["rms_px"] = r.rms_px;
+      j["translation_sigma_mm"] = {r.translation_sigma_mm[0], r.translation_sigma_mm[1], r.translation_sigma_mm[2]};
+      j["rotation_sigma_deg"] = r.rotation_sigma_deg;
+    }
+    views.push_back(j);
+    if (r.status == ViewStatus::ok) {
+      ++ok;
+      rms.push_back(r.rms_px);
+      depth_sigma.push_back(r.translation_sigma_mm[2]);
+      across_sigma.push_back(std::max(r.translation_sigma_mm[0], r.translation_sigma_mm[1]));
+    } else if (r.status == ViewStatus::rejected) {
+      ++rejected;
+    } else {
+      ++skipped;
+    }
+  }
+  return {{"format", "ctk-calibration-report/1"},
+          {"scan", o.scan.string()},
+          {"geometry", o.out.string()},
+          {"summary",
+           {{"views", c.views.size()},
+            {"ok", ok},
+            {"rejected", rejected},
+            {"skipped", skipped},
+            {"median_rms_px", median(rms)},
+            {"median_translation_sigma_across_beam_mm", median(across_sigma)},
+            {"median_translation_sigma_along_beam_mm", median(depth_sigma)},
+            {"seconds", c.seconds},
+            {"views_per_second", c.seconds > 0 ? static_cast<double>(c.views.size()) / c.seconds : 0.0}}},
+          {"options",
+           {{"min_spheres", o.calibration.min_spheres},
+            {"max_rms_px", o.calibration.max_rms_px},
+            {"search_px", o.calibration.search_px}}},
+          {"views", views}};
+}
+
+void run_calibrate(const CalibrateOptions& o) {
+  const ScanDescription scan = read_scan(o.scan);
+  for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
+  Progress progress("calibrate", "views");
+  const ScanCalibration c = calibrate_scan(scan, o.calibration, std::ref(progress));
+  write_geometry(c.geometry, o.out);
+  const fs::path report = o.report.empty() ? fs::path(o.out).replace_extension(".report.json") : o.report;
+  const nlohmann::json j = report_json(c, o);
+  write_text_atomically(report, j.dump(2) + "\n");
+  const auto& s = j.at("summary");
+  std::cout << "calibrated " << s.at("ok") << " of " << s.at("views") << " views (" << s.at("rejected") << " rejected, "
+            << s.at("skipped") << " skipped) in " << c.seconds << " s (" << s.at("views_per_second").get<double>()
+            << " views/s); median reprojection RMS " << s.at("median_rms_px").get<double>()
+            << " px; median pose uncertainty " << s.at("median_translation_sigma_across_beam_mm").get<double>() * 1000
+            << " um across the beam, " << s.at("median_translation_sigma_along_beam_mm").get<double>() * 1000
+            << " um along it\n";
+  int listed = 0;
+  for (std::size_t v = 0; v < c.views.size() && listed < 20; ++v)
+    if (c.views[v].status != ViewStatus::ok) {
+      std::cout << "  view " << v << ": " << to_string(c.views[v].status) << " — " << c.views[v].reason << "\n";
+      ++listed;
+    }
+  std::cout << "geometry written to " << o.out.string() << ", report to " << report.string() << "\n";
+}
+
+}  // namespace
+
+void register_calibrate(CLI::App& app) {
+  auto o = std::make_shared<CalibrateOptions>();
+  CLI::App* cmd = app.add_subcommand("calibrate", "Calibrate every view of a scan from the helix spheres in its image");
+  cmd->add_option("--scan", o->scan, "scan.json (ctk-scan/1) with a holder section")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "Geometry to write (ctk-geometry/1)")->capture_default_str();
+  cmd->add_option("--report", o->report, "Report (JSON; default: <out>.report.json)");
+  cmd->add_option("--min-spheres", o->calibration.min_spheres, "Fewer matched spheres: view rejected")->check(CLI::Range(6, 1000))->capture_default_str();
+  cmd->add_option("--max-rms", o->calibration.max_rms_px, "Larger reprojection RMS (px): view rejected")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--search", o->calibration.search_px, "How far (px) the first guess may misplace the sphere pattern")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->callback([o] { run_calibrate(*o); });
+}
+
+}  // namespace ctk::tools
