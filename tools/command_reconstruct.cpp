@@ -46,8 +46,8 @@ double median_source_distance(const std::vector<ProjectionMatrix>& views) {
 
 // Default grid: voxels the size of a detector pixel seen at the holder origin, covering the
 // helix holder (a 60 x 60 x 122 mm box) when the scan declares one, else the detector's field.
-VolumeLayout volume_layout(const ReconstructOptions& o, const ScanDescription& scan, const Measurements& m) {
-  const double sod = median_source_distance(m.matrices);
+VolumeLayout volume_layout(const ReconstructOptions& o, const ScanDescription& scan, const std::vector<ProjectionMatrix>& views) {
+  const double sod = median_source_distance(views);
   const double voxel = o.voxel_mm > 0 ? o.voxel_mm : scan.detector.pitch_u_mm * sod / scan.source_to_detector_mm;
   std::array<int, 3> size{};
   if (!o.size.empty()) {
@@ -90,10 +90,10 @@ void run_reconstruct(const ReconstructOptions& o) {
   std::cout << "geometry: " << (o.geometry.empty() ? "nominal (from the scan file)" : o.geometry.string()) << ", " << used
             << " of " << geometry.views.size() << " views ok (the others are not used)\n";
 
-  // The plan needs the layout, which needs the source distance: take it from the matrices first.
-  Measurements probe;
-  for (int i : geometry.ok_views()) probe.matrices.push_back(*geometry.views[static_cast<std::size_t>(i)].P);
-  const VolumeLayout layout = volume_layout(o, scan, probe);
+  // The plan needs the layout, which needs the source distance: from the matrices, before any image.
+  std::vector<ProjectionMatrix> ok_matrices;
+  for (int i : geometry.ok_views()) ok_matrices.push_back(*geometry.views[static_cast<std::size_t>(i)].P);
+  const VolumeLayout layout = volume_layout(o, scan, ok_matrices);
   const MemoryPlan plan = plan_memory(method, layout, used, scan.detector.rows, scan.detector.cols, weighted);
   const std::size_t available = available_memory_bytes();
   std::cout << "volume " << layout.size[0] << " x " << layout.size[1] << " x " << layout.size[2] << " voxels of "

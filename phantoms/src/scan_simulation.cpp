@@ -1,7 +1,6 @@
 #include "ctk/phantoms/scan_simulation.hpp"
 
 #include <atomic>
-#include <cstdio>
 #include <random>
 
 #include "ctk/geom/atomic_write.hpp"
