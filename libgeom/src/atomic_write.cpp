@@ -10,8 +10,14 @@ namespace fs = std::filesystem;
 
 static fs::path temporary_beside(const fs::path& path) {
   // Same folder (so rename is atomic), same extension (so format-by-extension writers work).
+  // Appended piece by piece: GCC 12 misreads "." + std::string as an overlapping copy (-Wrestrict).
+  std::string name = ".";
+  name += path.stem().string();
+  name += ".tmp";
+  name += std::to_string(::getpid());
+  name += path.extension().string();
   fs::path tmp = path;
-  tmp.replace_filename("." + path.stem().string() + ".tmp" + std::to_string(::getpid()) + path.extension().string());
+  tmp.replace_filename(name);
   return tmp;
 }
 
