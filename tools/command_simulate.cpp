@@ -76,7 +76,6 @@ void run_simulate(const SimulateOptions& o) {
   sim.setup = reference_panda_setup(detector, o.sdd_mm, o.sod_mm);
   sim.holder = reference_helix_holder();
   sim.with_holder = false;
-  sim.sample.name = "";
   for (const std::string& name : o.phantoms) {
     if (name == "helix-holder") {
       sim.with_holder = true;

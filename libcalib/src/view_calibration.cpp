@@ -54,62 +54,55 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   out.detections = static_cast<int>(detections.size());
 
   // Each candidate shift of the predicted pattern is tried: match, fit, then match again from the
-  // fitted pose with a tight gate and refit. The candidate leaving the most matched spheres
-  // wins; zero shift (the first guess as it is) is tried first and kept when it matches most
-  // of what is visible.
+  // fitted pose with a tight gate and refit, then drop outliers and refit once.
   struct Attempt {
     std::vector<SphereMatch> matches;
     PoseFit fit;
   };
+  auto fit_matches = [&](const Rigid& start, const std::vector<SphereMatch>& matches) {
+    std::vector<Eigen::Vector3d> X;
+    std::vector<Eigen::Vector2d> uv;
+    for (const auto& m : matches) {
+      X.push_back(holder.spheres_mm[static_cast<std::size_t>(m.sphere)]);
+      uv.push_back(detections[static_cast<std::size_t>(m.detection)].uv);
+    }
+    return fit_pose(K, start, X, uv, o.robust_px);
+  };
+  const Prediction first = predict(K, initial, holder, detector, radius_px);
   auto attempt = [&](const Eigen::Vector2d& shift) {
     Attempt a;
     Rigid pose = initial;
     Eigen::Vector2d s = shift;
     double gate = 4.0;
     for (int round = 0; round < 3; ++round) {
-      const Prediction p = predict(K, pose, holder, detector, radius_px);
+      const Prediction p = round == 0 ? first : predict(K, pose, holder, detector, radius_px);
       a.matches = match_spheres(p.uv, p.usable, detections, s, gate);
       if (static_cast<int>(a.matches.size()) < o.min_spheres) return Attempt{};
-      std::vector<Eigen::Vector3d> X;
-      std::vector<Eigen::Vector2d> uv;
-      for (const auto& m : a.matches) {
-        X.push_back(holder.spheres_mm[static_cast<std::size_t>(m.sphere)]);
-        uv.push_back(detections[static_cast<std::size_t>(m.detection)].uv);
-      }
-      a.fit = fit_pose(K, pose, X, uv, o.robust_px);
+      a.fit = fit_matches(pose, a.matches);
       pose = a.fit.T_camera_holder;
       s = Eigen::Vector2d::Zero();
       gate = 1.5;
     }
-    // Spheres whose centre a nearby edge of the sample has pulled (background not planar) leave
-    // residuals far beyond the rest: drop those beyond 3 robust deviations (at least 0.25 px) and
-    // refit once.
     // A uniform helix maps onto itself under a screw by one sphere (14.4 deg about its axis with a
     // slide along it): such a solution matches almost every sphere. The first guess tells them
     // apart, so a pose turned further from it than the guess can be wrong is refused.
     if (rotation_angle_deg(a.fit.T_camera_holder.linear() * initial.linear().transpose()) > o.max_first_guess_error_deg)
       return Attempt{};
-    {
-      std::vector<double> r = a.fit.residual_px;
-      std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
-      const double limit = std::max(0.25, 3 * 1.4826 * r[r.size() / 2]);
-      std::vector<SphereMatch> kept;
-      std::vector<Eigen::Vector3d> X;
-      std::vector<Eigen::Vector2d> uv;
-      for (std::size_t i = 0; i < a.matches.size(); ++i)
-        if (a.fit.residual_px[i] <= limit) {
-          kept.push_back(a.matches[i]);
-          X.push_back(holder.spheres_mm[static_cast<std::size_t>(a.matches[i].sphere)]);
-          uv.push_back(detections[static_cast<std::size_t>(a.matches[i].detection)].uv);
-        }
-      if (kept.size() < a.matches.size() && static_cast<int>(kept.size()) >= o.min_spheres) {
-        a.matches = std::move(kept);
-        a.fit = fit_pose(K, pose, X, uv, o.robust_px);
-      }
+    // Spheres whose centre a nearby edge of the sample has pulled (background not planar) leave
+    // residuals far beyond the rest: drop those beyond 3 robust deviations (at least 0.25 px) and
+    // refit once.
+    std::vector<double> r = a.fit.residual_px;
+    std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
+    const double limit = std::max(0.25, 3 * 1.4826 * r[r.size() / 2]);
+    std::vector<SphereMatch> kept;
+    for (std::size_t i = 0; i < a.matches.size(); ++i)
+      if (a.fit.residual_px[i] <= limit) kept.push_back(a.matches[i]);
+    if (kept.size() < a.matches.size() && static_cast<int>(kept.size()) >= o.min_spheres) {
+      a.matches = std::move(kept);
+      a.fit = fit_matches(pose, a.matches);
     }
     return a;
   };
-  const Prediction first = predict(K, initial, holder, detector, radius_px);
   const int visible = static_cast<int>(std::count(first.usable.begin(), first.usable.end(), true));
   Attempt best = attempt(Eigen::Vector2d::Zero());
   const bool first_guess_holds = static_cast<int>(best.matches.size()) >= std::max(o.min_spheres, visible / 2) &&

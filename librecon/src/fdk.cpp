@@ -154,10 +154,13 @@ void fdk_reconstruct(const std::vector<ProjectionMatrix>& views, ProjectionStack
     const double da = detector.pitch_u_mm * c.radius_mm / std::abs(sdd);
     const std::vector<float> gain = ramp_filter_spectrum(n_fft, da, window);
 
+    // Pixel rays: M^-1 (u, v, 1) has depth 1 along the principal ray (P is normalised), so it
+    // points away from the source; inverted once per view, not per pixel.
+    const Eigen::Matrix3d M_inverse = P.matrix().leftCols<3>().inverse();
     cv::Mat padded(rows, n_fft, CV_32F, cv::Scalar(0));
     for (int r = 0; r < rows; ++r)
       for (int col = 0; col < cols; ++col) {
-        const Eigen::Vector3d ray = P.ray_direction(Eigen::Vector2d(col, r));
+        const Eigen::Vector3d ray = (M_inverse * Eigen::Vector3d(col, r, 1.0)).normalized();
         // Cosine pre-weight; redundancy weight (1/2 for a full turn, Parker otherwise).
         double w = std::abs(ray.dot(principal));
         if (full_turn) {
