@@ -5,8 +5,11 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "ctk/calib/calibration_pictures.hpp"
 #include "ctk/calib/scan_calibration.hpp"
 #include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/nominal_geometry.hpp"
+#include "ctk/proj/projection_reading.hpp"
 #include "progress.hpp"
 
 namespace ctk::tools {
@@ -71,6 +74,47 @@ nlohmann::json report_json(const ScanCalibration& c, const CalibrateOptions& o) 
           {"views", views}};
 }
 
+// The pictures beside the geometry: residual per view, view directions, and three views drawn
+// (the median and the worst calibrated view, the first rejected one). Returns their names.
+std::vector<std::string> write_pictures(const ScanDescription& scan, const ScanCalibration& c, const CalibrateOptions& o) {
+  const fs::path stem = fs::path(o.out).replace_extension("");
+  auto named = [&](const std::string& what) { return fs::path(stem.string() + "." + what + ".png"); };
+  std::vector<std::string> written;
+  write_residual_per_view_png(c.views, o.calibration.max_rms_px, named("residuals"));
+  written.push_back(named("residuals").filename().string());
+
+  const std::vector<NominalView> nominal = nominal_views(scan);
+  std::vector<ViewDirection> directions;
+  for (std::size_t v = 0; v < c.views.size(); ++v) {
+    const ViewCalibration& r = c.views[v];
+    std::optional<Rigid> T = r.T_camera_holder ? r.T_camera_holder : nominal[v].T_camera_holder;
+    if (!T && nominal[v].P) T = nominal[v].P->decompose().T_camera_frame;
+    if (T) directions.push_back({source_direction_in_holder(*T), r.status, r.rms_px});
+  }
+  write_view_directions_png(directions, o.calibration.max_rms_px, named("directions"));
+  written.push_back(named("directions").filename().string());
+
+  std::vector<std::size_t> ok, shown;
+  for (std::size_t v = 0; v < c.views.size(); ++v)
+    if (c.views[v].status == ViewStatus::ok) ok.push_back(v);
+  std::sort(ok.begin(), ok.end(), [&](std::size_t a, std::size_t b) { return c.views[a].rms_px < c.views[b].rms_px; });
+  if (!ok.empty()) shown = {ok[ok.size() / 2], ok.back()};
+  for (std::size_t v = 0; v < c.views.size(); ++v)
+    if (c.views[v].status == ViewStatus::rejected && c.views[v].radius_px > 0) {
+      shown.push_back(v);
+      break;
+    }
+  const std::optional<FlatDark> flat_dark = read_flat_dark(scan);
+  for (std::size_t v : shown) {
+    char what[32];
+    std::snprintf(what, sizeof what, "view-%04zu", v);
+    if (std::find(written.begin(), written.end(), named(what).filename().string()) != written.end()) continue;
+    write_detections_png(read_line_integrals(scan, static_cast<int>(v), flat_dark), c.views[v], named(what));
+    written.push_back(named(what).filename().string());
+  }
+  return written;
+}
+
 void run_calibrate(const CalibrateOptions& o) {
   const ScanDescription scan = read_scan(o.scan);
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
@@ -78,7 +122,8 @@ void run_calibrate(const CalibrateOptions& o) {
   const ScanCalibration c = calibrate_scan(scan, o.calibration, std::ref(progress));
   write_geometry(c.geometry, o.out);
   const fs::path report = o.report.empty() ? fs::path(o.out).replace_extension(".report.json") : o.report;
-  const nlohmann::json j = report_json(c, o);
+  nlohmann::json j = report_json(c, o);
+  j["pictures"] = write_pictures(scan, c, o);
   write_text_atomically(report, j.dump(2) + "\n");
   const auto& s = j.at("summary");
   std::cout << "calibrated " << s.at("ok") << " of " << s.at("views") << " views (" << s.at("rejected") << " rejected, "

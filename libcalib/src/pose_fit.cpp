@@ -39,6 +39,7 @@ PoseFit fit_pose(const Eigen::Matrix3d& K, const Rigid& initial, const std::vect
   problem.SetManifold(q.coeffs().data(), new ceres::EigenQuaternionManifold);
   ceres::Solver::Options options;
   options.max_num_iterations = 50;
+  options.linear_solver_type = ceres::DENSE_QR;  // 7 unknowns: sparse machinery only costs
   options.function_tolerance = 1e-12;
   options.parameter_tolerance = 1e-12;
   options.logging_type = ceres::SILENT;

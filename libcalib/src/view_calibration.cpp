@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "ctk/calib/pose_fit.hpp"
+#include "ctk/calib/sphere_profile_fit.hpp"
 #include "ctk/calib/sphere_matching.hpp"
 
 namespace ctk {
@@ -48,9 +49,10 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   // Projected sphere radius at the holder's depth.
   const double depth = (K.row(2) * initial.translation())(0);
   const double radius_px = 0.5 * holder.sphere_diameter_mm * K(0, 0) / std::max(depth, 1e-9);
+  out.radius_px = radius_px;
   DetectionOptions detection;
   detection.radius_px = radius_px;
-  const std::vector<SphereDetection> detections = detect_spheres(image, detection);
+  std::vector<SphereDetection> detections = detect_spheres(image, detection);
   out.detections = static_cast<int>(detections.size());
 
   // Each candidate shift of the predicted pattern is tried: match, fit, then match again from the
@@ -122,6 +124,10 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
                  " detections near the first-guess pose (at least " + std::to_string(o.min_spheres) + " spheres needed)";
     return out;
   }
+  // The matched spheres' centres from their whole profiles, then the final fit. A sphere whose
+  // profile fit fails keeps its centroid.
+  for (const auto& m : best.matches) refine_by_profile_fit(image, radius_px, detections[static_cast<std::size_t>(m.detection)]);
+  best.fit = fit_matches(best.fit.T_camera_holder, best.matches);
   const std::vector<SphereMatch>& matches = best.matches;
   const PoseFit& fit = best.fit;
   out.spheres_used = static_cast<int>(matches.size());

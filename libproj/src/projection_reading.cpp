@@ -25,7 +25,7 @@ void counts_to_line_integrals(const Image& counts, const Image& flat, const Imag
       ++clamped;
       t = std::clamp(t, kMinCounts / std::max(open, 1.0), kMaxTransmission);
     }
-    p[i] = static_cast<float>(-std::log(t));
+    p[i] = -std::log(static_cast<float>(t));  // single precision: the result is a float anyway
     if (w) w[i] = static_cast<float>(open > 0 ? std::max(detected, kMinCounts) / open : 0.0);
   }
 }

@@ -71,16 +71,32 @@ TEST(Calibration, RecoversEveryPoseToMicrometresAcrossTheBeam) {
             << " um), rotation RMS " << e.rotation_rms_deg << " deg (max " << e.rotation_max_deg << "); " << c.views.size() / c.seconds << " views/s\n";
   EXPECT_LE(rms[rms.size() / 2], 0.10);
   EXPECT_LE(e.across_rms_mm, 0.01);
-  // The issue asks 0.01 deg; centroids of ~0.09 px leave 0.02 deg RMS, mostly in the weakly seen
-  // rotations about axes across the beam. Held at the measured level until profile fitting lands.
-  EXPECT_LE(e.rotation_rms_deg, 0.03);
+  // The issue asks 0.01 deg. At 10^4 counts the 2 mm aluminium spheres' centres scatter by
+  // ~0.045 px per axis (photon noise; the noise-free floor is 0.02 px), which leaves ~0.013 deg in
+  // the rotations about axes across the beam; the next test shows 0.01 deg once the data allows.
+  EXPECT_LE(e.rotation_rms_deg, 0.016);
   // Depth is weakly observable: its reported uncertainty is much larger than across the beam.
   EXPECT_GT(c.views[0].translation_sigma_mm[2], 10 * c.views[0].translation_sigma_mm[0]);
 }
 
-TEST(Calibration, SurvivesAPoorFirstGuessFalseBlobsAndBlur) {
+TEST(Calibration, RotationReachesAHundredthOfADegreeWhenPhotonsAllow) {
+  // Six times the flat-field counts (near the 16-bit ceiling): the centres' scatter falls by ~sqrt(6), and the rotation
+  // error with it, down to the model's own floor.
   const auto dir = testing::scratch_dir();
   ScanSimulation sim = issue_scan(24);
+  sim.counts.flat_counts = 6e4;
+  simulate_scan(sim, dir);
+  const ScanCalibration c = calibrate_scan(read_scan(dir / "scan.json"), {});
+  const PoseErrors e = compare_with_truth(c, dir);
+  std::cout << "6 x 10^4 counts: across " << e.across_rms_mm * 1000 << " um RMS, rotation RMS " << e.rotation_rms_deg
+            << " deg (max " << e.rotation_max_deg << ")\n";
+  EXPECT_LE(e.across_rms_mm, 0.005);
+  EXPECT_LE(e.rotation_rms_deg, 0.01);
+}
+
+TEST(Calibration, SurvivesAPoorFirstGuessFalseBlobsAndBlur) {
+  const auto dir = testing::scratch_dir();
+  ScanSimulation sim = issue_scan(100);
   // The robot's base is 5 mm and 3 deg away from where the scan file says.
   sim.effects.robot_base_frame = RigidOffset{{3.0, -4.0, 0.0}, {0.0, 0.0, 3.0}};
   sim.effects.false_blobs_per_view = 10;
@@ -94,8 +110,29 @@ TEST(Calibration, SurvivesAPoorFirstGuessFalseBlobsAndBlur) {
   }
   const PoseErrors e = compare_with_truth(c, dir);
   std::cout << ok << " of " << c.views.size() << " views; across " << e.across_rms_mm * 1000 << " um, rotation "
-            << e.rotation_max_deg << " deg\n";
-  EXPECT_EQ(ok, 24);
+            << e.rotation_rms_deg << " deg RMS\n";
+  EXPECT_GE(ok, 99);
+  EXPECT_LE(e.across_rms_mm, 0.01);
+}
+
+TEST(Calibration, KeepsItsAccuracyWithASampleInTheBeam) {
+  // Thesis sample 1 (plastic block with aluminium parts) inside the holder: spheres seen through
+  // its edges sit on a background that is not planar; the profile fit and the outlier drop cope.
+  const auto dir = testing::scratch_dir();
+  ScanSimulation sim = issue_scan(24);
+  sim.sample = builtin_phantom("sample-1");
+  simulate_scan(sim, dir);
+  const ScanCalibration c = calibrate_scan(read_scan(dir / "scan.json"), {});
+  std::vector<double> rms;
+  for (const auto& v : c.views) {
+    EXPECT_EQ(v.status, ViewStatus::ok) << v.reason;
+    rms.push_back(v.rms_px);
+  }
+  std::sort(rms.begin(), rms.end());
+  const PoseErrors e = compare_with_truth(c, dir);
+  std::cout << "with sample 1: median RMS " << rms[rms.size() / 2] << " px, across " << e.across_rms_mm * 1000
+            << " um RMS, rotation " << e.rotation_rms_deg << " deg RMS\n";
+  EXPECT_LE(rms[rms.size() / 2], 0.15);
   EXPECT_LE(e.across_rms_mm, 0.01);
 }
 
@@ -115,6 +152,29 @@ TEST(Calibration, BadInputIsARejectionOrAClearError) {
   EXPECT_EQ(c.views[1].status, ViewStatus::rejected);
   EXPECT_NE(c.views[1].reason.find("unreadable image"), std::string::npos) << c.views[1].reason;
   EXPECT_NE(c.views[2].reason.find("proj_0002"), std::string::npos) << c.views[2].reason;
+  // An image of the wrong size is that view's rejection, naming the sizes.
+  write_image_uint16(Image{90, 90, std::vector<float>(90 * 90, 1000.0f)}, scan.projection_path(3));
+  // The joint log and the projections disagree: a view without a row has no pose...
+  ScanDescription fewer_rows = scan;
+  fewer_rows.panda->joints = JointLog{};
+  for (int v = 1; v < 4; ++v) fewer_rows.panda->joints.add(v, scan.panda->joints.find(v)->q);
+  const ScanCalibration c2 = calibrate_scan(fewer_rows, {});
+  EXPECT_EQ(c2.views[0].status, ViewStatus::skipped);
+  EXPECT_NE(c2.views[0].reason.find("no joints row"), std::string::npos) << c2.views[0].reason;
+  EXPECT_EQ(c2.views[3].status, ViewStatus::rejected);
+  EXPECT_NE(c2.views[3].reason.find("90"), std::string::npos) << c2.views[3].reason;
+  // ... and a row for a view the scan does not have is an error naming the file and line.
+  {
+    std::ofstream extra(dir / "joints.csv", std::ios::app);
+    extra << "7,0,0,0,-1.5,0,1.5,0\n";
+  }
+  try {
+    read_scan(dir / "scan.json");
+    ADD_FAILURE() << "a joints row beyond the projections was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("joints.csv"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("outside"), std::string::npos) << e.what();
+  }
   // A holder with fewer than 6 spheres cannot fix a pose.
   scan.holder->spheres_mm.resize(5);
   EXPECT_THROW(calibrate_scan(scan, {}), InputError);

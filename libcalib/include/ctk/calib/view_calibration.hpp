@@ -28,6 +28,7 @@ struct ViewCalibration {
   double rms_px = 0;
   int spheres_used = 0;
   int detections = 0;
+  double radius_px = 0;                        // projected sphere radius the detection looked for
   double translation_sigma_mm[3] = {0, 0, 0};  // camera x, y, z (z along the beam)
   double rotation_sigma_deg = 0;
   std::vector<Eigen::Vector2d> detected_px, fitted_px;  // the used pairs, for pictures
