@@ -9,8 +9,16 @@
 
 namespace ctk {
 
-ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
-                               const std::function<void(int, int)>& progress) {
+namespace {
+
+// The first guess of each view: a pose, or why there is none.
+struct FirstGuess {
+  std::optional<Rigid> T_camera_holder;
+  std::string reason;
+};
+
+ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<FirstGuess>& guesses, const CalibrationOptions& options,
+                                const std::function<void(int, int)>& progress) {
   const auto start = std::chrono::steady_clock::now();
   if (!scan.holder) throw InputError("scan", "holder", "calibration needs the holder's spheres (missing)");
   if (static_cast<int>(scan.holder->spheres_mm.size()) < options.min_spheres)
@@ -18,7 +26,6 @@ ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOpt
                      "has " + std::to_string(scan.holder->spheres_mm.size()) + " spheres; a pose needs at least " +
                          std::to_string(options.min_spheres));
   const std::optional<FlatDark> flat_dark = read_flat_dark(scan);
-  const std::vector<NominalView> nominal = nominal_views(scan);
   const Eigen::Matrix3d K = scan.intrinsics().K();
   const int n = scan.projections.count;
 
@@ -27,16 +34,14 @@ ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOpt
   int done = 0;
   parallel_for_dynamic(n, [&](int v) {
     ViewCalibration& out = result.views[static_cast<std::size_t>(v)];
-    const NominalView& first_guess = nominal[static_cast<std::size_t>(v)];
-    std::optional<Rigid> initial = first_guess.T_camera_holder;
-    if (!initial && first_guess.P) initial = first_guess.P->decompose().T_camera_frame;
-    if (!initial) {
+    const FirstGuess& guess = guesses[static_cast<std::size_t>(v)];
+    if (!guess.T_camera_holder) {
       out.status = ViewStatus::skipped;
-      out.reason = "no pose: " + first_guess.reason;
+      out.reason = "no pose: " + guess.reason;
     } else {
       try {
         const Image image = read_line_integrals(scan, v, flat_dark);
-        out = calibrate_view(image, K, *initial, *scan.holder, scan.detector, options);
+        out = calibrate_view(image, K, *guess.T_camera_holder, *scan.holder, scan.detector, options);
       } catch (const InputError& e) {
         out.status = ViewStatus::rejected;
         out.reason = std::string("unreadable image: ") + e.what();
@@ -63,6 +68,35 @@ ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOpt
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+}  // namespace
+
+ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
+                               const std::function<void(int, int)>& progress) {
+  std::vector<FirstGuess> guesses;
+  for (const NominalView& nominal : nominal_views(scan)) {
+    FirstGuess g{nominal.T_camera_holder, nominal.reason};
+    if (!g.T_camera_holder && nominal.P) g.T_camera_holder = nominal.P->decompose().T_camera_frame;
+    guesses.push_back(g);
+  }
+  return calibrate_views(scan, guesses, options, progress);
+}
+
+ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& calibrated, const CalibrationOptions& options,
+                                 const std::function<void(int, int)>& progress) {
+  if (static_cast<int>(calibrated.views.size()) != scan.projections.count)
+    throw InputError("geometry", "views",
+                     "has " + std::to_string(calibrated.views.size()) + " views; the scan has " +
+                         std::to_string(scan.projections.count) + " projections");
+  std::vector<FirstGuess> guesses;
+  for (const GeometryView& v : calibrated.views) {
+    FirstGuess g;
+    if (v.status == ViewStatus::ok && v.P) g.T_camera_holder = v.P->decompose().T_camera_frame;
+    else g.reason = "not calibrated in the given geometry" + (v.reason.empty() ? std::string() : ": " + v.reason);
+    guesses.push_back(g);
+  }
+  return calibrate_views(scan, guesses, options, progress);
 }
 
 }  // namespace ctk

@@ -27,7 +27,9 @@ std::vector<NominalView> nominal_views(const ScanDescription& scan) {
       nv.reason = "joints out of limits: " + row->limit_violation;
       continue;
     }
-    nv.T_camera_holder = panda.T_camera_base * panda::forward_kinematics(row->q) * panda.T_flange_holder;
+    panda::Joints q = row->q;
+    for (std::size_t j = 0; j < q.size(); ++j) q[j] += panda.joint_offsets_rad[j];
+    nv.T_camera_holder = panda.T_camera_base * panda::forward_kinematics(q) * panda.T_flange_holder;
     nv.P = ProjectionMatrix::compose(K, *nv.T_camera_holder);
   }
   return out;

@@ -126,13 +126,17 @@ ScanDescription read_scan(const fs::path& file) {
   const JsonNode pose = top.at("pose_source");
   const std::string kind = pose.at("kind").string();
   if (kind == "panda") {
-    pose.warn_unknown_keys({"kind", "joints_csv", "T_camera_base", "T_flange_holder"});
+    pose.warn_unknown_keys({"kind", "joints_csv", "T_camera_base", "T_flange_holder", "joint_offsets_rad"});
     PandaPoseSource panda;
     panda.joints_csv = pose.at("joints_csv").string();
     require_readable(scan, pose.at("joints_csv"), panda.joints_csv);
     panda.T_camera_base = rigid_from_json(pose.at("T_camera_base"));
     panda.T_flange_holder = rigid_from_json(pose.at("T_flange_holder"));
     panda.joints = JointLog::read(scan.resolve(panda.joints_csv), scan.projections.count);
+    if (const auto offsets = pose.find("joint_offsets_rad")) {
+      const std::vector<double> q = offsets->numbers(panda::kJointCount);
+      std::copy(q.begin(), q.end(), panda.joint_offsets_rad.begin());
+    }
     scan.panda = std::move(panda);
   } else if (kind == "matrices") {
     pose.warn_unknown_keys({"kind", "file"});
@@ -177,6 +181,7 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
                         {"joints_csv", scan.panda->joints_csv},
                         {"T_camera_base", rigid_to_json(scan.panda->T_camera_base)},
                         {"T_flange_holder", rigid_to_json(scan.panda->T_flange_holder)}};
+    if (scan.panda->joint_offsets_rad != panda::Joints{}) j["pose_source"]["joint_offsets_rad"] = scan.panda->joint_offsets_rad;
   } else if (scan.matrices) {
     j["pose_source"] = {{"kind", "matrices"}, {"file", scan.matrices->file}};
   }

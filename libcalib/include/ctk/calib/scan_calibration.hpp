@@ -21,4 +21,9 @@ struct ScanCalibration {
 ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
                                const std::function<void(int, int)>& progress = {});
 
+/// Same, starting each view from a calibrated geometry's pose instead of the robot's (views not
+/// ok there are skipped): the detections and matches behind an existing calibration.
+ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& calibrated, const CalibrationOptions& options,
+                                 const std::function<void(int, int)>& progress = {});
+
 }  // namespace ctk

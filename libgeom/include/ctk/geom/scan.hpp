@@ -33,6 +33,8 @@ struct PandaPoseSource {
   Rigid T_camera_base = Rigid::Identity();
   Rigid T_flange_holder = Rigid::Identity();
   JointLog joints;  // loaded and checked against projections.count by read_scan
+  /// Optional key (an extension of ctk-scan/1): encoder zero offsets, true angle = logged + offset.
+  panda::Joints joint_offsets_rad{};
 };
 
 struct MatricesPoseSource {

@@ -1,0 +1,85 @@
+#pragma once
+// Closing the loop on a calibrated scan (diagnosis-report.md): which named effect does the
+// residual the declared model leaves point to, how large is it, and how much better does the
+// model explain the data with it?
+//
+// Acceptance criterion (the same for every effect): the views are split in two interleaved
+// halves; the effect is fitted on one half and judged on the other, where each view's pose is
+// refitted with the model fixed and its cost (image chi-square plus robot prior) is compared
+// with the cost under the model without the effect. The effect is accepted when the mean
+// per-view improvement exceeds `z_accept` (3) standard errors of those paired differences: a
+// one-sided test at p ~ 0.001, so chance alone accepts an effect about once in a thousand.
+// Effects are added one at a time, the best first; candidates whose held-out cost is within the
+// same 3 standard errors of the best explain the same residual and are listed in
+// `confounded_with`; among them the one earliest in kEffects is reported (robot frames before
+// detector parameters: the robot's base is never where the setup says, the detector is measured
+// separately).
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "ctk/calib/scan_calibration.hpp"
+#include "ctk/calib/scan_model_fit.hpp"
+#include "ctk/geom/scan.hpp"
+
+namespace ctk {
+
+struct DiagnosisOptions {
+  double z_accept = 3.0;
+  double robot_sigma_mm = 0.1;   // repeatability the robot prior assumes (3-D RMS)
+  double robot_sigma_deg = 0.02;
+  int max_effects = 4;
+};
+
+/// How well a model explains the scan: image RMS (px, per sphere), held-out RMS, and how far the
+/// robot's prediction is from the best estimate of the actual pose (mm, deg): the per-view pose
+/// fitted to image and robot prior together under the final model, the same reference for every
+/// figure of a report.
+struct ModelError {
+  double rms_px = 0, heldout_rms_px = 0;
+  double fk_translation_rms_mm = 0, fk_rotation_rms_deg = 0;
+};
+
+struct EffectFinding {
+  Effect effect;
+  bool accepted = false;
+  double z = 0;                    // held-out improvement in standard errors
+  EffectParameters parameters;     // fitted on all views with the effects accepted before it
+  EffectParameters model_before;   // the model it was tested against
+  Eigen::MatrixXd covariance;      // of this effect's parameters (may be empty)
+  std::vector<Effect> confounded_with;
+  ModelError before, after;
+};
+
+struct StructureFinding {
+  std::string where;  // "by sphere", "by detector region", "by view order", "robot prior"
+  std::string what;
+};
+
+struct Diagnosis {
+  int views_ok = 0;
+  ModelError baseline, final_error;
+  std::vector<EffectFinding> effects;   // every candidate, accepted ones first in order of acceptance
+  EffectParameters model;               // all accepted effects
+  std::vector<Effect> accepted;
+  std::vector<StructureFinding> unexplained;
+  ScanModelFit before_fit, after_fit;   // all views, for pictures
+};
+
+/// The observations behind a calibration: matched centres, poses, joints, noise levels.
+ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration& calibration,
+                              const DiagnosisOptions& options);
+
+Diagnosis diagnose(const ScanObservations& observations, const DiagnosisOptions& options,
+                   const std::function<void(const std::string&)>& log = {});
+
+/// The report in the ctk-diagnosis/1 format.
+nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& observations);
+
+/// The scan with the accepted effects written into its setup (frames, joint offsets, detector,
+/// sphere list). Effects the scan format cannot carry yet (distortion, source drift) are listed
+/// in `not_carried`.
+ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d, std::vector<std::string>* not_carried);
+
+}  // namespace ctk

@@ -1,0 +1,86 @@
+#pragma once
+// The physical model of a whole scan that the diagnosis refits: the declared setup plus the
+// named effects of the diagnosis contract (diagnosis-report.md), each a small set of parameters
+// that is zero when the effect is absent, and the observations the model must explain (every
+// calibrated view's matched sphere centres and, for robot scans, its logged joints).
+#include <Eigen/Core>
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ctk/geom/detector.hpp"
+#include "ctk/geom/helix.hpp"
+#include "ctk/geom/panda.hpp"
+#include "ctk/geom/rigid.hpp"
+
+namespace ctk {
+
+enum class Effect {
+  robot_base_frame,
+  holder_mount,
+  joint_offsets,
+  source_drift,
+  sphere_positions,
+  detector_distortion,
+  detector_intrinsics
+};
+/// In the order used to choose among effects that explain the same residual equally well: the
+/// robot's frames first (they are never where the setup says), the detector last (a lab measures
+/// it separately and it rarely changes).
+inline constexpr std::array<Effect, 7> kEffects{Effect::robot_base_frame,    Effect::holder_mount,
+                                                Effect::joint_offsets,       Effect::source_drift,
+                                                Effect::sphere_positions,    Effect::detector_distortion,
+                                                Effect::detector_intrinsics};
+const char* effect_name(Effect e);
+/// Effects that act through the robot's kinematics need a robot pose source.
+bool needs_robot(Effect e);
+
+/// Every effect's parameters; all zero is the declared setup.
+struct EffectParameters {
+  double base[6] = {0, 0, 0, 0, 0, 0};   // rotation vector (rad), translation (mm); base coordinates
+  double mount[6] = {0, 0, 0, 0, 0, 0};  // same, flange coordinates
+  double joints[7] = {0, 0, 0, 0, 0, 0, 0};  // true angle = logged + offset (rad)
+  double drift[2] = {0, 0};              // focal spot offset per 100 views, camera x and y (mm)
+  double intrinsics[3] = {0, 0, 0};      // principal point shift u, v (px); focal length change (px, on fu and fv alike)
+  double distortion[3] = {0, 0, 0};      // radial shift at 360 px from the centre (px); centre offset from the principal point (px)
+  std::vector<Eigen::Vector3d> spheres;  // offset of each sphere (mm, holder frame)
+};
+
+/// The kinematic chain and detector the scan declares.
+struct DeclaredSetup {
+  Intrinsics K;
+  Detector detector;
+  double sdd_mm = 0;
+  Holder holder;
+  bool robot = false;
+  Rigid T_camera_base = Rigid::Identity(), T_flange_holder = Rigid::Identity();
+};
+
+struct ViewObservations {
+  int view = 0;                      // projection index (time order)
+  std::optional<panda::Joints> joints;
+  Rigid T_calibrated;                // the per-view calibrated pose (start of every fit)
+  Eigen::Vector3d calibrated_sigma_mm{0, 0, 0};  // its uncertainty, camera x, y, z
+  std::vector<int> spheres;
+  std::vector<Eigen::Vector2d> measured_px;
+};
+
+struct ScanObservations {
+  DeclaredSetup setup;
+  std::vector<ViewObservations> views;
+  double centre_sigma_px = 0.05;     // detection noise per axis, from the calibration residuals
+  double robot_sigma_mm = 0.1;       // robot repeatability (per view, total over the 3 axes)
+  double robot_sigma_deg = 0.02;
+};
+
+/// Where the robot puts the holder under the model (camera frame of the declared source).
+Rigid robot_predicted_pose(const DeclaredSetup& setup, const EffectParameters& p, const panda::Joints& q);
+
+/// Radial distortion and intrinsics in the contract's terms.
+RadialDistortion distortion_of(const DeclaredSetup& setup, const EffectParameters& p);
+Intrinsics intrinsics_of(const DeclaredSetup& setup, const EffectParameters& p);
+/// The focal spot's offset at `view` (camera frame, mm).
+Eigen::Vector3d source_offset_at(const EffectParameters& p, int view);
+
+}  // namespace ctk

@@ -1,0 +1,494 @@
+#include "ctk/calib/diagnosis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+namespace ctk {
+
+namespace {
+
+constexpr double kDegree = M_PI / 180.0;
+
+bool contains(const std::vector<Effect>& set, Effect e) { return std::find(set.begin(), set.end(), e) != set.end(); }
+
+std::vector<std::size_t> all_views(const ScanObservations& o) {
+  std::vector<std::size_t> v(o.views.size());
+  std::iota(v.begin(), v.end(), std::size_t{0});
+  return v;
+}
+
+double image_rms(const ScanModelFit& f) {
+  double sq = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < f.image_sq_px.size(); ++i) {
+    sq += f.image_sq_px[i];
+    n += f.residual_count[i] / 2;
+  }
+  return n > 0 ? std::sqrt(sq / n) : 0.0;
+}
+
+// Held out: each half fitted on the other, every held-out view's pose refitted with the model
+// fixed. Returns per-view costs (all views, in order) and the held-out image RMS.
+struct HeldOut {
+  std::vector<double> cost;
+  double rms_px = 0;
+};
+
+HeldOut held_out(const ScanObservations& o, const std::vector<Effect>& active, const EffectParameters& start) {
+  HeldOut h;
+  h.cost.assign(o.views.size(), 0.0);
+  double sq = 0;
+  int n = 0;
+  for (int fold = 0; fold < 2; ++fold) {
+    std::vector<std::size_t> train, test;
+    for (std::size_t i = 0; i < o.views.size(); ++i) (static_cast<int>(i % 2) == fold ? test : train).push_back(i);
+    const EffectParameters model = active.empty() ? start : fit_scan_model(o, active, train, start).parameters;
+    const ScanModelFit f = fit_view_poses(o, model, test, true);
+    for (std::size_t k = 0; k < test.size(); ++k) {
+      h.cost[test[k]] = f.cost[k];
+      sq += f.image_sq_px[k];
+      n += f.residual_count[k] / 2;
+    }
+  }
+  h.rms_px = n > 0 ? std::sqrt(sq / n) : 0.0;
+  return h;
+}
+
+// Mean of a - b over views in standard errors (paired).
+double paired_z(const std::vector<double>& a, const std::vector<double>& b) {
+  const std::size_t n = a.size();
+  double mean = 0;
+  for (std::size_t i = 0; i < n; ++i) mean += a[i] - b[i];
+  mean /= static_cast<double>(n);
+  double var = 0;
+  for (std::size_t i = 0; i < n; ++i) var += (a[i] - b[i] - mean) * (a[i] - b[i] - mean);
+  var /= static_cast<double>(std::max<std::size_t>(n - 1, 1));
+  const double se = std::sqrt(var / static_cast<double>(n));
+  return se > 0 ? mean / se : (mean > 0 ? 1e9 : 0.0);
+}
+
+// The robot's prediction under `model` against reference poses: the best estimate of where the
+// holder was (image and robot repeatability combined under the final model). An image-only pose
+// would add its own depth noise (~0.15 mm per view at the setup) to every figure.
+void fk_error(const ScanObservations& o, const std::vector<Rigid>& reference, const EffectParameters& model, ModelError& e) {
+  if (!o.setup.robot) return;
+  double t2 = 0, r2 = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < o.views.size(); ++i) {
+    if (!o.views[i].joints) continue;
+    const Rigid predicted = robot_predicted_pose(o.setup, model, *o.views[i].joints);
+    t2 += (reference[i].translation() - predicted.translation()).squaredNorm();
+    const double angle = rotation_angle_deg(reference[i].linear() * predicted.linear().transpose());
+    r2 += angle * angle;
+    ++n;
+  }
+  if (n == 0) return;
+  e.fk_translation_rms_mm = std::sqrt(t2 / n);
+  e.fk_rotation_rms_deg = std::sqrt(r2 / n);
+}
+
+ModelError model_error(const ScanObservations&, const ScanModelFit& all, const HeldOut& h, const EffectParameters&) {
+  ModelError e;
+  e.rms_px = image_rms(all);
+  e.heldout_rms_px = h.rms_px;
+  return e;
+}
+
+// Residual structure the final model leaves, tested against the noise (Bonferroni over cells).
+std::vector<StructureFinding> find_structure(const ScanObservations& o, const ScanModelFit& f) {
+  std::vector<StructureFinding> out;
+  std::vector<double> components;
+  for (const auto& view : f.residual_px)
+    for (const auto& r : view) {
+      components.push_back(std::abs(r.x()));
+      components.push_back(std::abs(r.y()));
+    }
+  if (components.size() < 20) return out;
+  std::nth_element(components.begin(), components.begin() + static_cast<std::ptrdiff_t>(components.size() / 2), components.end());
+  const double sigma = 1.4826 * components[components.size() / 2];
+  // Mean residual vectors in groups; chi-square with 2 dof against a Bonferroni threshold.
+  auto test_groups = [&](const std::string& where, int groups, auto&& group_of, auto&& name_of) {
+    std::vector<Eigen::Vector2d> sum(static_cast<std::size_t>(groups), Eigen::Vector2d::Zero());
+    std::vector<int> count(static_cast<std::size_t>(groups), 0);
+    for (std::size_t i = 0; i < o.views.size(); ++i)
+      for (std::size_t k = 0; k < f.residual_px[i].size(); ++k) {
+        const int g = group_of(i, k);
+        if (g < 0) continue;
+        sum[static_cast<std::size_t>(g)] += f.residual_px[i][k];
+        ++count[static_cast<std::size_t>(g)];
+      }
+    const double threshold = -2.0 * std::log(1e-3 / groups);
+    std::ostringstream what;
+    int flagged = 0;
+    for (int g = 0; g < groups; ++g) {
+      const auto n = count[static_cast<std::size_t>(g)];
+      if (n < 5) continue;
+      const Eigen::Vector2d mean = sum[static_cast<std::size_t>(g)] / n;
+      const double chi2 = n * mean.squaredNorm() / (sigma * sigma);
+      if (chi2 > threshold) {
+        if (flagged < 6) what << (flagged ? "; " : "") << name_of(g) << " mean " << mean.norm() << " px over " << n;
+        ++flagged;
+      }
+    }
+    if (flagged) {
+      std::ostringstream s;
+      s << flagged << " of " << groups << " with a mean residual beyond noise (" << what.str() << (flagged > 6 ? "; ..." : "") << ")";
+      out.push_back({where, s.str()});
+    }
+  };
+  const auto spheres = static_cast<int>(o.setup.holder.spheres_mm.size());
+  test_groups("by sphere", spheres, [&](std::size_t i, std::size_t k) { return o.views[i].spheres[k]; },
+              [](int g) { return "sphere " + std::to_string(g); });
+  constexpr int kCells = 6;
+  test_groups(
+      "by detector region", kCells * kCells,
+      [&](std::size_t i, std::size_t k) {
+        const Eigen::Vector2d& m = o.views[i].measured_px[k];
+        const int cu = std::clamp(static_cast<int>(m.x() / o.setup.detector.cols * kCells), 0, kCells - 1);
+        const int cv = std::clamp(static_cast<int>(m.y() / o.setup.detector.rows * kCells), 0, kCells - 1);
+        return cv * kCells + cu;
+      },
+      [](int g) { return "cell (" + std::to_string(g % kCells) + ", " + std::to_string(g / kCells) + ")"; });
+
+  // The robot channel: each view's pose relative to the model's prediction, in units of the
+  // repeatability. Independent noise has no memory from one view to the next and a mean square of
+  // about 1 per component; a slowly varying unmodelled effect has both.
+  if (o.setup.robot) {
+    std::vector<Eigen::Matrix<double, 6, 1>> d;
+    for (std::size_t i = 0; i < o.views.size(); ++i) {
+      if (!o.views[i].joints) continue;
+      const Rigid predicted = robot_predicted_pose(o.setup, f.parameters, *o.views[i].joints);
+      const Rigid delta = predicted.inverse() * f.poses[i];
+      Eigen::Matrix<double, 6, 1> x;
+      x << rotation_vector(delta.linear()) / (o.robot_sigma_deg * kDegree / std::sqrt(3.0)),
+          delta.translation() / (o.robot_sigma_mm / std::sqrt(3.0));
+      d.push_back(x);
+    }
+    const auto n = static_cast<double>(d.size());
+    if (n >= 20) {
+      for (int c = 0; c < 6; ++c) {
+        double mean = 0, var = 0, lag = 0;
+        for (const auto& x : d) mean += x(c) / n;
+        for (const auto& x : d) var += (x(c) - mean) * (x(c) - mean) / n;
+        for (std::size_t i = 1; i < d.size(); ++i) lag += (d[i](c) - mean) * (d[i - 1](c) - mean) / n;
+        const double r = var > 0 ? lag / var : 0;
+        if (r * std::sqrt(n) > 4.0) {
+          std::ostringstream s;
+          s << "the pose's deviation from the robot model (" << (c < 3 ? "rotation " : "translation ") << "xyz"[c % 3]
+            << ", camera frame of the flange) changes smoothly from view to view (lag-1 correlation " << r
+            << ", noise would give |r| < " << 4.0 / std::sqrt(n) << ")";
+          out.push_back({"by view order", s.str()});
+        }
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration& c, const DiagnosisOptions& options) {
+  ScanObservations o;
+  DeclaredSetup& s = o.setup;
+  s.K = scan.intrinsics();
+  s.detector = scan.detector;
+  s.sdd_mm = scan.source_to_detector_mm;
+  s.holder = *scan.holder;
+  s.robot = scan.panda.has_value();
+  if (scan.panda) {
+    s.T_camera_base = scan.panda->T_camera_base;
+    s.T_flange_holder = scan.panda->T_flange_holder;
+  }
+  o.robot_sigma_mm = options.robot_sigma_mm;
+  o.robot_sigma_deg = options.robot_sigma_deg;
+  double sq = 0;
+  int dof = 0;
+  for (std::size_t v = 0; v < c.views.size(); ++v) {
+    const ViewCalibration& r = c.views[v];
+    if (r.status != ViewStatus::ok) continue;
+    ViewObservations view;
+    view.view = static_cast<int>(v);
+    if (scan.panda)
+      if (const JointRow* row = scan.panda->joints.find(static_cast<int>(v))) {
+        view.joints = row->q;
+        for (std::size_t j = 0; j < row->q.size(); ++j) (*view.joints)[j] += scan.panda->joint_offsets_rad[j];
+      }
+    view.T_calibrated = *r.T_camera_holder;
+    view.calibrated_sigma_mm = Eigen::Vector3d(r.translation_sigma_mm[0], r.translation_sigma_mm[1], r.translation_sigma_mm[2]);
+    view.spheres = r.spheres;
+    view.measured_px = r.detected_px;
+    for (std::size_t k = 0; k < r.detected_px.size(); ++k) sq += (r.detected_px[k] - r.fitted_px[k]).squaredNorm();
+    dof += 2 * static_cast<int>(r.detected_px.size()) - 6;
+    o.views.push_back(std::move(view));
+  }
+  if (dof > 0) o.centre_sigma_px = std::sqrt(sq / dof);
+  return o;
+}
+
+Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, const std::function<void(const std::string&)>& log) {
+  Diagnosis d;
+  d.views_ok = static_cast<int>(o.views.size());
+  auto say = [&](const std::string& s) {
+    if (log) log(s);
+  };
+  std::vector<Effect> candidates;
+  for (Effect e : kEffects)
+    if (o.setup.robot || !needs_robot(e)) candidates.push_back(e);
+
+  EffectParameters current;
+  current.spheres.assign(o.setup.holder.spheres_mm.size(), Eigen::Vector3d::Zero());
+  HeldOut current_held = held_out(o, {}, current);
+  ScanModelFit current_fit = fit_view_poses(o, current, all_views(o), true);
+  d.before_fit = current_fit;
+  d.baseline = model_error(o, current_fit, current_held, current);
+  say("baseline: " + std::to_string(d.baseline.rms_px) + " px RMS, held out " + std::to_string(d.baseline.heldout_rms_px));
+
+  std::vector<EffectFinding> rejected_last;
+  while (static_cast<int>(d.accepted.size()) < options.max_effects && !candidates.empty()) {
+    struct Trial {
+      Effect effect;
+      HeldOut held;
+      double z;
+    };
+    std::vector<Trial> trials;
+    for (Effect e : candidates) {
+      std::vector<Effect> active = d.accepted;
+      active.push_back(e);
+      Trial t{e, held_out(o, active, current), 0};
+      t.z = paired_z(current_held.cost, t.held.cost);
+      say(std::string("  ") + effect_name(e) + ": held-out improvement " + std::to_string(t.z) + " standard errors");
+      trials.push_back(std::move(t));
+    }
+    // The best held-out cost among those that pass; the equivalents of the best are confounded.
+    const Trial* best = nullptr;
+    auto total = [](const Trial& t) { return std::accumulate(t.held.cost.begin(), t.held.cost.end(), 0.0); };
+    for (const Trial& t : trials)
+      if (t.z > options.z_accept && (!best || total(t) < total(*best))) best = &t;
+    if (!best) {
+      for (const Trial& t : trials) {
+        EffectFinding f;
+        f.effect = t.effect;
+        f.z = t.z;
+        f.before = d.effects.empty() ? d.baseline : d.final_error;
+        f.before.heldout_rms_px = current_held.rms_px;
+        f.after = f.before;
+        f.after.heldout_rms_px = t.held.rms_px;
+        f.model_before = current;
+        rejected_last.push_back(f);
+      }
+      break;
+    }
+    std::vector<Effect> equivalent;
+    for (const Trial& t : trials)
+      if (t.z > options.z_accept && paired_z(t.held.cost, best->held.cost) < options.z_accept) equivalent.push_back(t.effect);
+    const Effect chosen = *std::min_element(equivalent.begin(), equivalent.end(), [](Effect a, Effect b) {
+      return std::find(kEffects.begin(), kEffects.end(), a) < std::find(kEffects.begin(), kEffects.end(), b);
+    });
+    const Trial& t = *std::find_if(trials.begin(), trials.end(), [&](const Trial& x) { return x.effect == chosen; });
+
+    EffectFinding f;
+    f.effect = chosen;
+    f.accepted = true;
+    f.z = t.z;
+    for (Effect e : equivalent)
+      if (e != chosen) f.confounded_with.push_back(e);
+    f.before = d.accepted.empty() ? d.baseline : d.final_error;
+    f.model_before = current;
+    d.accepted.push_back(chosen);
+    const ScanModelFit all = fit_scan_model(o, d.accepted, all_views(o), current, true);
+    current = all.parameters;
+    current_held = t.held;
+    current_fit = all;
+    f.parameters = current;
+    const auto slot = static_cast<std::size_t>(std::find(d.accepted.begin(), d.accepted.end(), chosen) - d.accepted.begin());
+    if (all.covariance.size() > 0) {
+      const int start = all.covariance_offsets[slot], size = parameter_count(chosen, o);
+      f.covariance = all.covariance.block(start, start, size, size);
+    }
+    f.after = model_error(o, all, current_held, current);
+    d.final_error = f.after;
+    say(std::string("accepted ") + effect_name(chosen) + ": " + std::to_string(f.before.rms_px) + " -> " +
+        std::to_string(f.after.rms_px) + " px");
+    d.effects.push_back(f);
+    // Effects that explain the same residual, and the accepted one, leave the candidates.
+    candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
+                                    [&](Effect e) { return e == chosen || contains(f.confounded_with, e); }),
+                     candidates.end());
+  }
+  if (d.accepted.empty()) d.final_error = d.baseline;
+  for (auto& f : rejected_last) d.effects.push_back(f);
+  d.model = current;
+  d.after_fit = d.accepted.empty() ? d.before_fit : current_fit;
+  // The robot channel's figures, all against the same reference poses.
+  const std::vector<Rigid>& reference = d.after_fit.poses;
+  fk_error(o, reference, EffectParameters{}, d.baseline);
+  fk_error(o, reference, d.model, d.final_error);
+  for (EffectFinding& f : d.effects) {
+    fk_error(o, reference, f.model_before, f.before);
+    fk_error(o, reference, f.accepted ? f.parameters : f.model_before, f.after);
+  }
+  d.unexplained = find_structure(o, d.after_fit);
+  return d;
+}
+
+}  // namespace ctk
+
+namespace ctk {
+
+namespace {
+
+nlohmann::json vec(const double* p, int n, double scale = 1.0) {
+  nlohmann::json a = nlohmann::json::array();
+  for (int i = 0; i < n; ++i) a.push_back(p[i] * scale);
+  return a;
+}
+
+// The contract's parameters and their uncertainties for one effect.
+void effect_parameters_json(const EffectFinding& f, const ScanObservations& o, nlohmann::json& parameters, nlohmann::json& uncertainty) {
+  const EffectParameters& p = f.parameters;
+  const Eigen::MatrixXd& C = f.covariance;
+  std::vector<double> sd;
+  for (Eigen::Index i = 0; i < C.rows(); ++i) sd.push_back(std::sqrt(std::max(0.0, C(i, i))));
+  const double deg = 1.0 / kDegree;
+  auto rigid = [&](const double* x) {
+    parameters = {{"translation_mm", vec(x + 3, 3)}, {"rotation_deg", vec(x, 3, deg)}};
+    if (sd.size() == 6) uncertainty = {{"translation_mm", vec(sd.data() + 3, 3)}, {"rotation_deg", vec(sd.data(), 3, deg)}};
+  };
+  switch (f.effect) {
+    case Effect::robot_base_frame: rigid(p.base); break;
+    case Effect::holder_mount: rigid(p.mount); break;
+    case Effect::joint_offsets:
+      parameters = {{"offsets_deg", vec(p.joints, 7, deg)}};
+      if (sd.size() == 7) uncertainty = {{"offsets_deg", vec(sd.data(), 7, deg)}};
+      break;
+    case Effect::source_drift: {
+      const double px[2] = {p.drift[0] / o.setup.detector.pitch_u_mm, p.drift[1] / o.setup.detector.pitch_v_mm};
+      parameters = {{"drift_px_per_100_views", vec(px, 2)}, {"drift_mm_per_100_views", vec(p.drift, 2)}};
+      if (sd.size() == 2)
+        uncertainty = {{"drift_px_per_100_views", {sd[0] / o.setup.detector.pitch_u_mm, sd[1] / o.setup.detector.pitch_v_mm}}};
+      break;
+    }
+    case Effect::detector_intrinsics: {
+      const Intrinsics K = intrinsics_of(o.setup, p);
+      parameters = {{"fu_px", K.fu_px}, {"fv_px", K.fv_px}, {"skew_px", K.skew_px}, {"u0_px", K.u0_px}, {"v0_px", K.v0_px},
+                    {"source_to_detector_mm", K.fu_px * o.setup.detector.pitch_u_mm}};
+      if (sd.size() == 3) uncertainty = {{"u0_px", sd[0]}, {"v0_px", sd[1]}, {"fu_px", sd[2]}};
+      break;
+    }
+    case Effect::detector_distortion: {
+      const RadialDistortion r = distortion_of(o.setup, p);
+      parameters = {{"k1_per_px2", r.k1_per_px2}, {"center_px", {r.centre_px.x(), r.centre_px.y()}}};
+      if (sd.size() == 3) uncertainty = {{"k1_per_px2", sd[0] / (360.0 * 360.0 * 360.0)}, {"center_px", {sd[1], sd[2]}}};
+      break;
+    }
+    case Effect::sphere_positions: {
+      // Only the spheres whose offset is significant (chi-square, 3 dof, p < 0.001 each).
+      nlohmann::json spheres = nlohmann::json::array(), sigmas = nlohmann::json::array();
+      for (std::size_t k = 0; k < p.spheres.size(); ++k) {
+        const Eigen::Vector3d& x = p.spheres[k];
+        bool significant = false;
+        Eigen::Vector3d s(0, 0, 0);
+        if (C.rows() >= static_cast<Eigen::Index>(3 * (k + 1))) {
+          const Eigen::Matrix3d Ck = C.block(static_cast<Eigen::Index>(3 * k), static_cast<Eigen::Index>(3 * k), 3, 3);
+          s = Ck.diagonal().cwiseMax(0.0).cwiseSqrt();
+          const Eigen::Matrix3d inv = Ck.completeOrthogonalDecomposition().pseudoInverse();
+          significant = x.dot(inv * x) > 16.27;
+        } else {
+          significant = x.norm() > 0.03;
+        }
+        if (!significant) continue;
+        spheres.push_back({{"index", k}, {"offset_mm", {x.x(), x.y(), x.z()}}});
+        sigmas.push_back({{"index", k}, {"offset_mm", {s.x(), s.y(), s.z()}}});
+      }
+      parameters = {{"spheres", spheres}};
+      uncertainty = {{"spheres", sigmas}};
+      break;
+    }
+  }
+}
+
+void error_json(nlohmann::json& j, const ModelError& before, const ModelError& after, bool robot) {
+  j["rms_px_before"] = before.rms_px;
+  j["rms_px_after"] = after.rms_px;
+  j["heldout_rms_px_before"] = before.heldout_rms_px;
+  j["heldout_rms_px_after"] = after.heldout_rms_px;
+  if (robot) {
+    j["fk_translation_rms_mm_before"] = before.fk_translation_rms_mm;
+    j["fk_translation_rms_mm_after"] = after.fk_translation_rms_mm;
+    j["fk_rotation_rms_deg_before"] = before.fk_rotation_rms_deg;
+    j["fk_rotation_rms_deg_after"] = after.fk_rotation_rms_deg;
+  }
+}
+
+}  // namespace
+
+nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& o) {
+  nlohmann::json baseline = {{"rms_px", d.baseline.rms_px}, {"heldout_rms_px", d.baseline.heldout_rms_px}, {"views_ok", d.views_ok}};
+  if (o.setup.robot) {
+    baseline["fk_translation_rms_mm"] = d.baseline.fk_translation_rms_mm;
+    baseline["fk_rotation_rms_deg"] = d.baseline.fk_rotation_rms_deg;
+  }
+  nlohmann::json effects = nlohmann::json::array();
+  for (const EffectFinding& f : d.effects) {
+    nlohmann::json j = {{"name", effect_name(f.effect)}, {"accepted", f.accepted}, {"heldout_improvement_z", f.z}};
+    nlohmann::json parameters = nlohmann::json::object(), uncertainty = nlohmann::json::object();
+    if (f.accepted) effect_parameters_json(f, o, parameters, uncertainty);
+    j["parameters"] = parameters;
+    j["uncertainty"] = uncertainty;
+    nlohmann::json confounded = nlohmann::json::array();
+    for (Effect e : f.confounded_with) confounded.push_back(effect_name(e));
+    j["confounded_with"] = confounded;
+    error_json(j, f.before, f.after, o.setup.robot);
+    effects.push_back(j);
+  }
+  std::string note;
+  for (const auto& s : d.unexplained) note += (note.empty() ? "" : " | ") + s.where + ": " + s.what;
+  if (note.empty()) note = "residuals consistent with detection noise and robot repeatability";
+  nlohmann::json after = {{"rms_px", d.final_error.rms_px}, {"heldout_rms_px", d.final_error.heldout_rms_px}};
+  if (o.setup.robot) {
+    after["fk_translation_rms_mm"] = d.final_error.fk_translation_rms_mm;
+    after["fk_rotation_rms_deg"] = d.final_error.fk_rotation_rms_deg;
+  }
+  return {{"format", "ctk-diagnosis/1"},
+          {"baseline", baseline},
+          {"final", after},
+          {"effects", effects},
+          {"unexplained", {{"structured", !d.unexplained.empty()}, {"note", note}}},
+          {"noise", {{"centre_sigma_px", o.centre_sigma_px}, {"robot_sigma_mm", o.robot_sigma_mm}, {"robot_sigma_deg", o.robot_sigma_deg}}},
+          {"criterion",
+           "an effect is accepted when, fitted on one half of the views (interleaved) and judged on the other, the mean per-view "
+           "improvement of the held-out cost exceeds 3 standard errors (one-sided p ~ 0.001)"}};
+}
+
+ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d, std::vector<std::string>* not_carried) {
+  ScanDescription out = scan;
+  const EffectParameters& p = d.model;
+  auto offset = [](const double* x) {
+    return make_rigid(rotation_from_vector(Eigen::Vector3d(x[0], x[1], x[2])), Eigen::Vector3d(x[3], x[4], x[5]));
+  };
+  for (Effect e : d.accepted) {
+    switch (e) {
+      case Effect::robot_base_frame: out.panda->T_camera_base = scan.panda->T_camera_base * offset(p.base); break;
+      case Effect::holder_mount: out.panda->T_flange_holder = offset(p.mount) * scan.panda->T_flange_holder; break;
+      case Effect::joint_offsets:
+        for (int j = 0; j < panda::kJointCount; ++j) out.panda->joint_offsets_rad[static_cast<std::size_t>(j)] += p.joints[j];
+        break;
+      case Effect::sphere_positions:
+        for (std::size_t k = 0; k < out.holder->spheres_mm.size(); ++k) out.holder->spheres_mm[k] += p.spheres[k];
+        break;
+      case Effect::detector_intrinsics:
+        out.principal_point_px += Eigen::Vector2d(p.intrinsics[0], p.intrinsics[1]);
+        out.source_to_detector_mm *= 1.0 + p.intrinsics[2] / scan.intrinsics().fu_px;
+        break;
+      case Effect::source_drift:
+      case Effect::detector_distortion:
+        if (not_carried) not_carried->push_back(effect_name(e));
+        break;
+    }
+  }
+  return out;
+}
+
+}  // namespace ctk

@@ -1,0 +1,168 @@
+// The diagnosis on simulated scans that each carry one undeclared effect (or none, or one
+// outside the vocabulary): the right effect accepted with its size, nothing else.
+#include <gtest/gtest.h>
+
+#include "../test_support.hpp"
+#include "ctk/calib/diagnosis.hpp"
+#include "ctk/geom/trajectory.hpp"
+#include "ctk/phantoms/scan_simulation.hpp"
+
+namespace ctk {
+namespace {
+
+ScanSimulation scan_with(int views, bool spherical) {
+  ScanSimulation sim;
+  sim.setup = reference_panda_setup({720, 720, 0.6, 0.6}, 2150, 1360);
+  sim.holder = reference_helix_holder();
+  sim.trajectory = spherical ? spherical_robot_trajectory(sim.setup, random_directions(views, 11))
+                             : circular_robot_trajectory(sim.setup, views);
+  sim.counts = {1e4, 100};
+  return sim;
+}
+
+struct Outcome {
+  Diagnosis diagnosis;
+  ScanObservations observations;
+  nlohmann::json report;
+};
+
+Outcome run(const ScanSimulation& sim, const DiagnosisOptions& options = {}) {
+  const auto dir = testing::scratch_dir();
+  simulate_scan(sim, dir);
+  const ScanDescription scan = read_scan(dir / "scan.json");
+  const ScanCalibration c = calibrate_scan(scan, {});
+  Outcome o;
+  o.observations = observe_scan(scan, c, options);
+  o.diagnosis = diagnose(o.observations, options, [](const std::string& s) { std::cout << s << "\n"; });
+  o.report = diagnosis_to_json(o.diagnosis, o.observations);
+  return o;
+}
+
+std::vector<std::string> accepted_names(const Outcome& o) {
+  std::vector<std::string> names;
+  for (const auto& e : o.report.at("effects"))
+    if (e.at("accepted").get<bool>()) names.push_back(e.at("name").get<std::string>());
+  return names;
+}
+
+const nlohmann::json& accepted_effect(const Outcome& o) {
+  for (const auto& e : o.report.at("effects"))
+    if (e.at("accepted").get<bool>()) return e;
+  throw std::runtime_error("nothing accepted");
+}
+
+std::vector<double> numbers(const nlohmann::json& j) { return j.get<std::vector<double>>(); }
+
+void expect_within(const std::vector<double>& found, const std::vector<double>& truth, double relative, double absolute) {
+  ASSERT_EQ(found.size(), truth.size());
+  for (std::size_t i = 0; i < truth.size(); ++i)
+    EXPECT_NEAR(found[i], truth[i], std::max(relative * std::abs(truth[i]), absolute)) << "component " << i;
+}
+
+// The thesis' case: the robot's base 1.3 mm off along the beam, 0.05 mm repeatability.
+TEST(Diagnosis, RobotBaseOffAlongTheBeam) {
+  ScanSimulation sim = scan_with(60, false);
+  sim.effects.robot_base_frame = RigidOffset{{0.0, 0.0, 1.3}, {0.0, 0.0, 0.0}};
+  sim.robot_noise = {0.05, 0.01};
+  DiagnosisOptions options;
+  options.robot_sigma_mm = 0.05;
+  options.robot_sigma_deg = 0.01;
+  const Outcome o = run(sim, options);
+  ASSERT_EQ(accepted_names(o), std::vector<std::string>{"robot_base_frame"});
+  const auto& e = accepted_effect(o);
+  expect_within(numbers(e.at("parameters").at("translation_mm")), {0, 0, 1.3}, 0.1, 0.13);
+  // On a joint-7 orbit a mount or joint offset explains the same residual: listed, not guessed.
+  EXPECT_FALSE(e.at("confounded_with").empty());
+  std::cout << "FK error " << e.at("fk_translation_rms_mm_before") << " -> " << e.at("fk_translation_rms_mm_after") << " mm\n";
+  EXPECT_GT(e.at("fk_translation_rms_mm_before").get<double>(), 1.2);
+  EXPECT_LE(e.at("fk_translation_rms_mm_after").get<double>(), 0.1);
+  EXPECT_FALSE(o.report.at("unexplained").at("structured").get<bool>());
+}
+
+TEST(Diagnosis, NothingAcceptedWithoutAnEffect) {
+  const Outcome o = run(scan_with(60, false));
+  EXPECT_TRUE(accepted_names(o).empty());
+  EXPECT_FALSE(o.report.at("unexplained").at("structured").get<bool>());
+}
+
+TEST(Diagnosis, DisplacedSpheres) {
+  ScanSimulation sim = scan_with(60, false);
+  sim.effects.sphere_positions = SphereDisplacement{5, 0.2};
+  const auto o = run(sim);
+  ASSERT_EQ(accepted_names(o), std::vector<std::string>{"sphere_positions"});
+  const auto& e = accepted_effect(o);
+  // Every significant sphere is one of the displaced ones, each found to within 0.06 mm of its
+  // 0.2 mm (the gauge, which keeps the list's centroid, orientation and scale, takes a share).
+  const auto spheres = e.at("parameters").at("spheres");
+  EXPECT_EQ(spheres.size(), 5u);
+  for (const auto& s : spheres) {
+    const Eigen::Vector3d d(numbers(s.at("offset_mm")).data());
+    EXPECT_NEAR(d.norm(), 0.2, 0.06) << s.dump();
+  }
+  EXPECT_LT(e.at("rms_px_after").get<double>(), 0.8 * e.at("rms_px_before").get<double>());
+}
+
+TEST(Diagnosis, DetectorIntrinsicsFromTheImagesAndTheRobot) {
+  ScanSimulation sim = scan_with(60, false);
+  DetectorIntrinsicsError d;
+  d.principal_point_error_px = {5, -3};
+  d.sdd_error_mm = 20;
+  sim.effects.detector_intrinsics = d;
+  const Outcome o = run(sim);
+  const auto names = accepted_names(o);
+  ASSERT_EQ(names.size(), 1u);
+  const auto& e = accepted_effect(o);
+  if (names[0] == "detector_intrinsics") {
+    EXPECT_NEAR(e.at("parameters").at("u0_px").get<double>(), 364.5, 0.5);
+    EXPECT_NEAR(e.at("parameters").at("v0_px").get<double>(), 356.5, 0.5);
+    EXPECT_NEAR(e.at("parameters").at("source_to_detector_mm").get<double>(), 2170, 2.0);
+  } else {
+    // Reported as a robot frame only when the detector's own reading is confounded with it.
+    EXPECT_NE(e.at("confounded_with").dump().find("detector_intrinsics"), std::string::npos);
+  }
+}
+
+TEST(Diagnosis, SourceDrift) {
+  ScanSimulation sim = scan_with(60, false);
+  sim.effects.source_drift_mm_per_100_views = Eigen::Vector2d(1.0, -0.6);
+  const auto o = run(sim);
+  ASSERT_EQ(accepted_names(o), std::vector<std::string>{"source_drift"});
+  expect_within(numbers(accepted_effect(o).at("parameters").at("drift_mm_per_100_views")), {1.0, -0.6}, 0.1, 0.0);
+}
+
+TEST(Diagnosis, JointOffsetsOnASphericalTrajectory) {
+  ScanSimulation sim = scan_with(60, true);
+  const panda::Joints offsets{0.002, -0.003, 0.001, 0.004, -0.002, 0.003, 0.002};
+  sim.effects.joint_offsets_rad = offsets;
+  const auto o = run(sim);
+  ASSERT_EQ(accepted_names(o), std::vector<std::string>{"joint_offsets"});
+  std::vector<double> deg;
+  for (double q : offsets) deg.push_back(q * 180 / M_PI);
+  expect_within(numbers(accepted_effect(o).at("parameters").at("offsets_deg")), deg, 0.1, 0.0);
+}
+
+TEST(Diagnosis, HolderMountOnASphericalTrajectory) {
+  ScanSimulation sim = scan_with(60, true);
+  sim.effects.holder_mount = RigidOffset{{0.5, -0.3, 0.8}, {0.1, 0.2, -0.1}};
+  const auto o = run(sim);
+  ASSERT_EQ(accepted_names(o), std::vector<std::string>{"holder_mount"});
+  const auto& p = accepted_effect(o).at("parameters");
+  expect_within(numbers(p.at("translation_mm")), {0.5, -0.3, 0.8}, 0.1, 0.0);
+  expect_within(numbers(p.at("rotation_deg")), {0.1, 0.2, -0.1}, 0.1, 0.0);
+}
+
+TEST(Diagnosis, RadialDistortion) {
+  ScanSimulation sim = scan_with(60, false);
+  sim.effects.detector_distortion = RadialDistortion{2e-8, {380, 340}};
+  const auto o = run(sim);
+  ASSERT_EQ(accepted_names(o), std::vector<std::string>{"detector_distortion"});
+  const auto& e = accepted_effect(o);
+  // The holder covers the middle of the detector, where a per-view pose absorbs most of a radial
+  // distortion; what is left fixes k1 only loosely: within 30 % here, with its uncertainty.
+  const double k1 = e.at("parameters").at("k1_per_px2").get<double>();
+  std::cout << "k1 " << k1 << " +- " << e.at("uncertainty").dump() << "\n";
+  EXPECT_NEAR(k1, 2e-8, 0.6e-8);
+}
+
+}  // namespace
+}  // namespace ctk
