@@ -10,5 +10,6 @@ void register_simulate(CLI::App& app);
 void register_phantom(CLI::App& app);
 void register_reconstruct(CLI::App& app);
 void register_calibrate(CLI::App& app);
+void register_diagnose(CLI::App& app);
 
 }  // namespace ctk::tools

@@ -59,13 +59,16 @@ void Chart::text(double x, double y, const std::string& s, const cv::Scalar& c) 
 void Chart::ticks(double x_step, double y_step) {
   char label[32];
   const auto font = cv::FONT_HERSHEY_SIMPLEX;
-  for (double x = std::ceil(axes_.x0 / x_step) * x_step; x <= axes_.x1 + 1e-9 * x_step; x += x_step) {
+  // Either axis may run backwards (detector rows grow downwards).
+  const double x_lo = std::min(axes_.x0, axes_.x1), x_hi = std::max(axes_.x0, axes_.x1);
+  const double y_lo = std::min(axes_.y0, axes_.y1), y_hi = std::max(axes_.y0, axes_.y1);
+  for (double x = std::ceil(x_lo / x_step) * x_step; x <= x_hi + 1e-9 * x_step; x += x_step) {
     const cv::Point p = at(x, axes_.y0);
     cv::line(canvas_, p, p + cv::Point(0, 4), colour::black);
     std::snprintf(label, sizeof label, "%g", x);
     cv::putText(canvas_, label, p + cv::Point(-8, 18), font, 0.4, colour::black, 1, cv::LINE_AA);
   }
-  for (double y = std::ceil(axes_.y0 / y_step) * y_step; y <= axes_.y1 + 1e-9 * y_step; y += y_step) {
+  for (double y = std::ceil(y_lo / y_step) * y_step; y <= y_hi + 1e-9 * y_step; y += y_step) {
     const cv::Point p = at(axes_.x0, y);
     cv::line(canvas_, p, p - cv::Point(4, 0), colour::black);
     std::snprintf(label, sizeof label, "%g", y);

@@ -264,8 +264,17 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, c
     // The best held-out cost among those that pass; the equivalents of the best are confounded.
     const Trial* best = nullptr;
     auto total = [](const Trial& t) { return std::accumulate(t.held.cost.begin(), t.held.cost.end(), 0.0); };
+    // Effects seen only in the image must also explain more than the detector's own systematic
+    // floor (centres are biased by ~0.02 px RMS even without noise): a longer scan makes such a
+    // bias "significant" without making it a physical effect.
+    auto passes = [&](const Trial& t) {
+      if (!(t.z > options.z_accept)) return false;
+      if (t.effect != Effect::detector_distortion && t.effect != Effect::sphere_positions) return true;
+      const double explained2 = current_held.rms_px * current_held.rms_px - t.held.rms_px * t.held.rms_px;
+      return explained2 > options.min_image_effect_px * options.min_image_effect_px;
+    };
     for (const Trial& t : trials)
-      if (t.z > options.z_accept && (!best || total(t) < total(*best))) best = &t;
+      if (passes(t) && (!best || total(t) < total(*best))) best = &t;
     if (!best) {
       for (const Trial& t : trials) {
         EffectFinding f;
@@ -282,7 +291,7 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, c
     }
     std::vector<Effect> equivalent;
     for (const Trial& t : trials)
-      if (t.z > options.z_accept && paired_z(t.held.cost, best->held.cost) < options.z_accept) equivalent.push_back(t.effect);
+      if (passes(t) && paired_z(t.held.cost, best->held.cost) < options.z_accept) equivalent.push_back(t.effect);
     const Effect chosen = *std::min_element(equivalent.begin(), equivalent.end(), [](Effect a, Effect b) {
       return std::find(kEffects.begin(), kEffects.end(), a) < std::find(kEffects.begin(), kEffects.end(), b);
     });

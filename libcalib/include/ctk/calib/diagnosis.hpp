@@ -30,6 +30,7 @@ struct DiagnosisOptions {
   double robot_sigma_mm = 0.1;   // repeatability the robot prior assumes (3-D RMS)
   double robot_sigma_deg = 0.02;
   int max_effects = 4;
+  double min_image_effect_px = 0.01;  // image-only effects must explain at least this much held-out RMS
 };
 
 /// How well a model explains the scan: image RMS (px, per sphere), held-out RMS, and how far the

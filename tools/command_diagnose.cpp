@@ -1,0 +1,91 @@
+// ctk diagnose: which named physical effect explains the residual a calibration leaves; writes
+// the ctk-diagnosis/1 report, a corrected scan file and pictures (diagnosis-report.md).
+#include <filesystem>
+#include <iostream>
+
+#include "commands.hpp"
+#include "ctk/calib/diagnosis.hpp"
+#include "ctk/calib/diagnosis_pictures.hpp"
+#include "ctk/geom/atomic_write.hpp"
+#include "progress.hpp"
+
+namespace ctk::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct DiagnoseOptions {
+  fs::path scan, geometry, out = "diagnosis.json", corrected;
+  DiagnosisOptions diagnosis;
+  CalibrationOptions calibration;
+};
+
+void run_diagnose(const DiagnoseOptions& o) {
+  const ScanDescription scan = read_scan(o.scan);
+  for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
+  if (!scan.holder) throw InputError(o.scan.string(), "holder", "the diagnosis needs the holder's spheres (missing)");
+  const Geometry geometry = read_geometry(o.geometry);
+  // The detections and matches behind the given calibration, each view started from its pose.
+  Progress progress("detect", "views");
+  const ScanCalibration c = recalibrate_scan(scan, geometry, o.calibration, std::ref(progress));
+  const ScanObservations observations = observe_scan(scan, c, o.diagnosis);
+  if (observations.views.size() < 10)
+    throw InputError(o.geometry.string(), "views", "only " + std::to_string(observations.views.size()) +
+                                                       " calibrated views; the diagnosis needs at least 10");
+  std::cout << observations.views.size() << " views, detection noise " << observations.centre_sigma_px << " px per axis\n";
+  const Diagnosis d = diagnose(observations, o.diagnosis, [](const std::string& s) { std::cout << s << std::endl; });
+
+  nlohmann::json report = diagnosis_to_json(d, observations);
+  report["scan"] = o.scan.string();
+  report["geometry"] = o.geometry.string();
+  const fs::path stem = fs::path(o.out).replace_extension("");
+  report["pictures"] = write_diagnosis_pictures(d, observations, stem);
+  std::vector<std::string> not_carried;
+  const ScanDescription corrected = corrected_scan(scan, d, &not_carried);
+  const fs::path corrected_file = o.corrected.empty() ? fs::path(stem.string() + ".corrected-scan.json") : o.corrected;
+  // Relative names in the corrected scan must still find the projections: write it beside the
+  // original unless the user chose a place, and say where its data lives.
+  nlohmann::json corrected_json = scan_to_json(corrected);
+  if (fs::absolute(corrected_file).parent_path() != fs::absolute(o.scan).parent_path())
+    std::cerr << "note: " << corrected_file.string() << " names its files relative to " << o.scan.parent_path().string()
+              << "; keep it beside " << o.scan.filename().string() << " to use it\n";
+  write_text_atomically(corrected_file, corrected_json.dump(2) + "\n");
+  report["corrected_scan"] = corrected_file.string();
+  if (!not_carried.empty()) report["corrected_scan_lacks"] = not_carried;
+  write_text_atomically(o.out, report.dump(2) + "\n");
+
+  std::cout << "baseline " << d.baseline.rms_px << " px RMS (held out " << d.baseline.heldout_rms_px << ")";
+  if (observations.setup.robot) std::cout << ", robot prediction error " << d.baseline.fk_translation_rms_mm << " mm RMS";
+  std::cout << "\n";
+  for (const EffectFinding& f : d.effects)
+    if (f.accepted) {
+      std::cout << "accepted " << effect_name(f.effect) << ": " << f.before.rms_px << " -> " << f.after.rms_px << " px";
+      if (observations.setup.robot)
+        std::cout << ", robot prediction " << f.before.fk_translation_rms_mm << " -> " << f.after.fk_translation_rms_mm << " mm";
+      if (!f.confounded_with.empty()) {
+        std::cout << " (confounded with";
+        for (Effect e : f.confounded_with) std::cout << " " << effect_name(e);
+        std::cout << ")";
+      }
+      std::cout << "\n";
+    }
+  std::cout << "unexplained structure: " << report["unexplained"]["note"].get<std::string>() << "\n"
+            << "report " << o.out.string() << ", corrected scan " << corrected_file.string() << "\n";
+}
+
+}  // namespace
+
+void register_diagnose(CLI::App& app) {
+  auto o = std::make_shared<DiagnoseOptions>();
+  CLI::App* cmd = app.add_subcommand("diagnose", "Find the physical effect behind a calibration's residual; report, corrected scan, pictures");
+  cmd->add_option("--scan", o->scan, "scan.json (ctk-scan/1) with a holder")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--geometry", o->geometry, "Its calibrated geometry (ctk-geometry/1, from ctk calibrate)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "Report to write (ctk-diagnosis/1)")->capture_default_str();
+  cmd->add_option("--corrected-scan", o->corrected, "Corrected scan to write (default: <out>.corrected-scan.json)");
+  cmd->add_option("--robot-repeatability-mm", o->diagnosis.robot_sigma_mm, "Robot repeatability (3-D RMS) the prior assumes")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--robot-repeatability-deg", o->diagnosis.robot_sigma_deg, "Same, rotation")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->callback([o] { run_diagnose(*o); });
+}
+
+}  // namespace ctk::tools
