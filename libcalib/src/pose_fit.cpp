@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "small_problem.hpp"
+
 namespace ctk {
 
 namespace {
@@ -37,15 +39,7 @@ PoseFit fit_pose(const Eigen::Matrix3d& K, const Rigid& initial, const std::vect
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Reprojection, 2, 4, 3>(new Reprojection{K, X[i], uv[i]}),
                              new ceres::CauchyLoss(robust), q.coeffs().data(), t.data());
   problem.SetManifold(q.coeffs().data(), new ceres::EigenQuaternionManifold);
-  ceres::Solver::Options options;
-  options.max_num_iterations = 50;
-  options.linear_solver_type = ceres::DENSE_QR;  // 7 unknowns: sparse machinery only costs
-  options.function_tolerance = 1e-12;
-  options.parameter_tolerance = 1e-12;
-  options.logging_type = ceres::SILENT;
-  options.num_threads = 1;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  const ceres::Solver::Summary summary = solve_small_problem(problem, 50, 1e-12);
 
   PoseFit fit;
   fit.converged = summary.IsSolutionUsable();

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "ctk/proj/parallel.hpp"
+#include "small_problem.hpp"
 
 namespace ctk {
 
@@ -358,13 +359,7 @@ ScanModelFit fit_view_poses(const ScanObservations& o, const EffectParameters& m
     ceres::Problem problem;
     add_view(problem, o, v, pose.data(), g, with_prior);
     set_global_blocks_constant(problem, g, {});
-    ceres::Solver::Options options;
-    options.linear_solver_type = ceres::DENSE_QR;
-    options.max_num_iterations = 30;
-    options.logging_type = ceres::SILENT;
-    options.num_threads = 1;
-    ceres::Solver::Summary summary;
-    ceres::Solve(options, &problem, &summary);
+    solve_small_problem(problem, 30);
     collect_view(o, v, pose.data(), g.p, with_prior, out, static_cast<std::size_t>(slot));
     // The translation's uncertainty, from the pose block's covariance.
     ceres::Covariance::Options co;

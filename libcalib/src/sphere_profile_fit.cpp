@@ -5,6 +5,8 @@
 #include <cmath>
 #include <vector>
 
+#include "small_problem.hpp"
+
 namespace ctk {
 
 namespace {
@@ -82,13 +84,7 @@ bool refine_by_profile_fit(const Image& im, double radius_px, SphereDetection& d
   disc[1] = std::max(high - low, 1e-6) / (2 * radius_px);
   problem.SetParameterLowerBound(disc, 0, 0.5 * radius_px);
   problem.SetParameterUpperBound(disc, 0, 2.0 * radius_px);
-  ceres::Solver::Options options;
-  options.max_num_iterations = 25;
-  options.linear_solver_type = ceres::DENSE_QR;  // 7 unknowns: sparse machinery only costs
-  options.logging_type = ceres::SILENT;
-  options.num_threads = 1;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  const ceres::Solver::Summary summary = solve_small_problem(problem, 25);
   const Eigen::Vector2d move(centre[0], centre[1]);
   if (!summary.IsSolutionUsable() || !(disc[1] > 0) || !(move.norm() <= o.max_move_px)) return false;
   detection.uv = start + move;
