@@ -56,9 +56,7 @@ void write_detections_png(const Image& im, const ViewCalibration& view, const st
   std::snprintf(caption, sizeof caption, "%s, %d spheres, RMS %.3f px; green: fitted, red: residual x%g",
                 to_string(view.status), view.spheres_used, view.rms_px, magnify);
   cv::putText(picture, caption, {8, 18}, cv::FONT_HERSHEY_SIMPLEX, 0.45, colour::red, 1, cv::LINE_AA);
-  std::vector<unsigned char> bytes;
-  cv::imencode(".png", picture, bytes);
-  write_file_atomically(png, [&](std::ostream& out) { out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())); });
+  write_png_atomically(picture, png);
 }
 
 Eigen::Vector3d source_direction_in_holder(const Rigid& T_camera_holder) {

@@ -76,10 +76,12 @@ void Chart::ticks(double x_step, double y_step) {
   }
 }
 
-void Chart::save(const std::filesystem::path& png) const {
+void write_png_atomically(const cv::Mat& picture, const std::filesystem::path& png) {
   std::vector<unsigned char> bytes;
-  cv::imencode(".png", canvas_, bytes);
+  cv::imencode(".png", picture, bytes);
   write_file_atomically(png, [&](std::ostream& out) { out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())); });
 }
+
+void Chart::save(const std::filesystem::path& png) const { write_png_atomically(canvas_, png); }
 
 }  // namespace ctk

@@ -19,6 +19,9 @@ const cv::Scalar black(0, 0, 0), grey(160, 160, 160), light(225, 225, 225), red(
 cv::Scalar ramp(double fraction);
 }  // namespace colour
 
+/// Encodes a BGR picture as PNG and writes it whole or not at all.
+void write_png_atomically(const cv::Mat& picture, const std::filesystem::path& png);
+
 /// A round tick step (1, 2 or 5 times a power of ten) giving about `ticks` ticks over `span`.
 double nice_step(double span, int ticks);
 
