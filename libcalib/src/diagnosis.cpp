@@ -45,7 +45,7 @@ HeldOut held_out(const ScanObservations& o, const std::vector<Effect>& active, c
     std::vector<std::size_t> train, test;
     for (std::size_t i = 0; i < o.views.size(); ++i) (static_cast<int>(i % 2) == fold ? test : train).push_back(i);
     const EffectParameters model = active.empty() ? start : fit_scan_model(o, active, train, start).parameters;
-    const ScanModelFit f = fit_view_poses(o, model, test, true);
+    const ScanModelFit f = fit_view_poses(o, model, test);
     for (std::size_t k = 0; k < test.size(); ++k) {
       h.cost[test[k]] = f.cost[k];
       sq += f.image_sq_px[k];
@@ -89,7 +89,8 @@ void fk_error(const ScanObservations& o, const std::vector<Rigid>& reference, co
   e.fk_rotation_rms_deg = std::sqrt(r2 / n);
 }
 
-ModelError model_error(const ScanObservations&, const ScanModelFit& all, const HeldOut& h, const EffectParameters&) {
+// The image figures; the robot figures are filled in once the final model gives the reference.
+ModelError image_error(const ScanModelFit& all, const HeldOut& h) {
   ModelError e;
   e.rms_px = image_rms(all);
   e.heldout_rms_px = h.rms_px;
@@ -194,7 +195,6 @@ ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration
   DeclaredSetup& s = o.setup;
   s.K = scan.intrinsics();
   s.detector = scan.detector;
-  s.sdd_mm = scan.source_to_detector_mm;
   s.holder = *scan.holder;
   s.robot = scan.panda.has_value();
   if (scan.panda) {
@@ -216,7 +216,6 @@ ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration
         for (std::size_t j = 0; j < row->q.size(); ++j) (*view.joints)[j] += scan.panda->joint_offsets_rad[j];
       }
     view.T_calibrated = *r.T_camera_holder;
-    view.calibrated_sigma_mm = Eigen::Vector3d(r.translation_sigma_mm[0], r.translation_sigma_mm[1], r.translation_sigma_mm[2]);
     view.spheres = r.spheres;
     view.measured_px = r.detected_px;
     for (std::size_t k = 0; k < r.detected_px.size(); ++k) sq += (r.detected_px[k] - r.fitted_px[k]).squaredNorm();
@@ -240,9 +239,9 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, c
   EffectParameters current;
   current.spheres.assign(o.setup.holder.spheres_mm.size(), Eigen::Vector3d::Zero());
   HeldOut current_held = held_out(o, {}, current);
-  ScanModelFit current_fit = fit_view_poses(o, current, all_views(o), true);
+  ScanModelFit current_fit = fit_view_poses(o, current, all_views(o));
   d.before_fit = current_fit;
-  d.baseline = model_error(o, current_fit, current_held, current);
+  d.baseline = image_error(current_fit, current_held);
   say("baseline: " + std::to_string(d.baseline.rms_px) + " px RMS, held out " + std::to_string(d.baseline.heldout_rms_px));
 
   std::vector<EffectFinding> rejected_last;
@@ -316,7 +315,7 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, c
       const int start = all.covariance_offsets[slot], size = parameter_count(chosen, o);
       f.covariance = all.covariance.block(start, start, size, size);
     }
-    f.after = model_error(o, all, current_held, current);
+    f.after = image_error(all, current_held);
     d.final_error = f.after;
     say(std::string("accepted ") + effect_name(chosen) + ": " + std::to_string(f.before.rms_px) + " -> " +
         std::to_string(f.after.rms_px) + " px");

@@ -178,27 +178,24 @@ Rigid pose_from_block(const double* pose, const Eigen::Matrix3d& R0) {
   return make_rigid(R, t);
 }
 
-// Adds one view's residual blocks; returns the image blocks' ids (one per sphere).
-std::vector<ceres::ResidualBlockId> add_view(ceres::Problem& problem, const ScanObservations& o, const ViewObservations& v,
-                                             double* pose, GlobalBlocks& g, bool with_prior) {
+// Adds one view's residual blocks: one per matched sphere, and the robot prior.
+void add_view(ceres::Problem& problem, const ScanObservations& o, const ViewObservations& v, double* pose, GlobalBlocks& g) {
   const DeclaredSetup& s = o.setup;
   const Eigen::Matrix3d R0 = v.T_calibrated.linear();
-  std::vector<ceres::ResidualBlockId> ids;
   for (std::size_t i = 0; i < v.spheres.size(); ++i) {
     const auto k = static_cast<std::size_t>(v.spheres[i]);
     auto* f = new ImageResidual{R0, s.holder.spheres_mm[k], v.measured_px[i], s.K, s.detector.pitch_u_mm, s.detector.pitch_v_mm,
                                 static_cast<double>(v.view), 1.0 / o.centre_sigma_px};
-    ids.push_back(problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ImageResidual, 2, 6, 3, 3, 3, 2>(f), nullptr, pose,
-                                           g.block(Effect::sphere_positions, k), g.block(Effect::detector_intrinsics),
-                                           g.block(Effect::detector_distortion), g.block(Effect::source_drift)));
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ImageResidual, 2, 6, 3, 3, 3, 2>(f), nullptr, pose,
+                             g.block(Effect::sphere_positions, k), g.block(Effect::detector_intrinsics),
+                             g.block(Effect::detector_distortion), g.block(Effect::source_drift));
   }
-  if (with_prior && s.robot && v.joints) {
+  if (s.robot && v.joints) {
     auto* f = new RobotPrior{R0, *v.joints, s.T_camera_base.matrix(), s.T_flange_holder.matrix(), o.robot_sigma_mm / std::sqrt(3.0),
                              o.robot_sigma_deg * kDegree / std::sqrt(3.0)};
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RobotPrior, 6, 6, 6, 6, 7>(f), nullptr, pose,
                              g.block(Effect::robot_base_frame), g.block(Effect::holder_mount), g.block(Effect::joint_offsets));
   }
-  return ids;
 }
 
 void set_global_blocks_constant(ceres::Problem& problem, GlobalBlocks& g, const std::vector<Effect>& active) {
@@ -215,10 +212,10 @@ void set_global_blocks_constant(ceres::Problem& problem, GlobalBlocks& g, const 
 
 // Per-view results from the solved blocks.
 void collect_view(const ScanObservations& o, const ViewObservations& v, const double* pose, const EffectParameters& p,
-                  bool with_prior, ScanModelFit& out, std::size_t slot) {
+                  ScanModelFit& out, std::size_t slot) {
   const Eigen::Matrix3d R0 = v.T_calibrated.linear();
   out.poses[slot] = pose_from_block(pose, R0);
-  double image = 0, sq = 0;
+  double sq = 0;
   out.residual_px[slot].clear();
   for (std::size_t i = 0; i < v.spheres.size(); ++i) {
     const auto k = static_cast<std::size_t>(v.spheres[i]);
@@ -230,9 +227,9 @@ void collect_view(const ScanObservations& o, const ViewObservations& v, const do
     out.residual_px[slot].emplace_back(-r[0], -r[1]);
     sq += r[0] * r[0] + r[1] * r[1];
   }
-  image = sq / (o.centre_sigma_px * o.centre_sigma_px);
+  const double image = sq / (o.centre_sigma_px * o.centre_sigma_px);
   double prior = 0;
-  if (with_prior && o.setup.robot && v.joints) {
+  if (o.setup.robot && v.joints) {
     const RobotPrior f{R0, *v.joints, o.setup.T_camera_base.matrix(), o.setup.T_flange_holder.matrix(),
                        o.robot_sigma_mm / std::sqrt(3.0), o.robot_sigma_deg * kDegree / std::sqrt(3.0)};
     double r[6];
@@ -246,7 +243,6 @@ void collect_view(const ScanObservations& o, const ViewObservations& v, const do
 
 void size_result(ScanModelFit& out, std::size_t n) {
   out.poses.resize(n);
-  out.pose_sigma_mm.assign(n, Eigen::Vector3d::Zero());
   out.cost.assign(n, 0.0);
   out.image_sq_px.assign(n, 0.0);
   out.residual_count.assign(n, 0);
@@ -268,7 +264,7 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
   auto* ordering = new ceres::ParameterBlockOrdering;
   for (std::size_t i : views) {
     poses.push_back(start_pose(o.views[i].T_calibrated));
-    add_view(problem, o, o.views[i], poses.back().data(), g, true);
+    add_view(problem, o, o.views[i], poses.back().data(), g);
     ordering->AddElementToGroup(poses.back().data(), 0);
   }
   const bool spheres_free = std::find(active.begin(), active.end(), Effect::sphere_positions) != active.end();
@@ -310,7 +306,7 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
   out.converged = summary.IsSolutionUsable();
   out.parameters = g.p;
   size_result(out, views.size());
-  for (std::size_t i = 0; i < views.size(); ++i) collect_view(o, o.views[views[i]], poses[i].data(), g.p, true, out, i);
+  for (std::size_t i = 0; i < views.size(); ++i) collect_view(o, o.views[views[i]], poses[i].data(), g.p, out, i);
 
   if (with_covariance && !active.empty()) {
     std::vector<const double*> blocks;
@@ -346,8 +342,7 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
   return out;
 }
 
-ScanModelFit fit_view_poses(const ScanObservations& o, const EffectParameters& model, const std::vector<std::size_t>& views,
-                            bool with_prior) {
+ScanModelFit fit_view_poses(const ScanObservations& o, const EffectParameters& model, const std::vector<std::size_t>& views) {
   ScanModelFit out;
   out.parameters = model;
   out.converged = true;
@@ -357,21 +352,10 @@ ScanModelFit fit_view_poses(const ScanObservations& o, const EffectParameters& m
     GlobalBlocks g(model, o.setup.holder.spheres_mm.size());
     std::array<double, 6> pose = start_pose(v.T_calibrated);
     ceres::Problem problem;
-    add_view(problem, o, v, pose.data(), g, with_prior);
+    add_view(problem, o, v, pose.data(), g);
     set_global_blocks_constant(problem, g, {});
     solve_small_problem(problem, 30);
-    collect_view(o, v, pose.data(), g.p, with_prior, out, static_cast<std::size_t>(slot));
-    // The translation's uncertainty, from the pose block's covariance.
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    ceres::Covariance covariance(co);
-    const double* block = pose.data();
-    std::vector<std::pair<const double*, const double*>> pairs{{block, block}};
-    if (covariance.Compute(pairs, &problem)) {
-      double c[36];
-      if (covariance.GetCovarianceBlock(block, block, c))
-        for (int a = 0; a < 3; ++a) out.pose_sigma_mm[static_cast<std::size_t>(slot)][a] = std::sqrt(std::max(0.0, c[(3 + a) * 6 + 3 + a]));
-    }
+    collect_view(o, v, pose.data(), g.p, out, static_cast<std::size_t>(slot));
   });
   return out;
 }

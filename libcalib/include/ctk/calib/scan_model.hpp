@@ -51,7 +51,6 @@ struct EffectParameters {
 struct DeclaredSetup {
   Intrinsics K;
   Detector detector;
-  double sdd_mm = 0;
   Holder holder;
   bool robot = false;
   Rigid T_camera_base = Rigid::Identity(), T_flange_holder = Rigid::Identity();
@@ -61,7 +60,6 @@ struct ViewObservations {
   int view = 0;                      // projection index (time order)
   std::optional<panda::Joints> joints;
   Rigid T_calibrated;                // the per-view calibrated pose (start of every fit)
-  Eigen::Vector3d calibrated_sigma_mm{0, 0, 0};  // its uncertainty, camera x, y, z
   std::vector<int> spheres;
   std::vector<Eigen::Vector2d> measured_px;
 };

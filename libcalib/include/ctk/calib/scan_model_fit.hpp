@@ -16,7 +16,6 @@ namespace ctk {
 struct ScanModelFit {
   EffectParameters parameters;
   std::vector<Rigid> poses;                  // per fitted view, in the order of `views`
-  std::vector<Eigen::Vector3d> pose_sigma_mm; // camera-frame translation uncertainty (image-only fits)
   std::vector<double> cost;                  // chi-square per view (image + prior)
   std::vector<double> image_sq_px;           // sum of squared image residuals per view (px^2)
   std::vector<int> residual_count;           // image residuals per view (2 per sphere)
@@ -32,10 +31,10 @@ ScanModelFit fit_scan_model(const ScanObservations& observations, const std::vec
                             const std::vector<std::size_t>& views, const EffectParameters& start,
                             bool with_covariance = false);
 
-/// Every view of `views` alone with the model fixed: its pose from its spheres, with the robot
-/// prior (`with_prior`, the held-out test) or from the image alone (as a recalibration would).
+/// Every view of `views` alone with the model fixed: its pose from its spheres and the robot
+/// prior (the held-out test).
 ScanModelFit fit_view_poses(const ScanObservations& observations, const EffectParameters& model,
-                            const std::vector<std::size_t>& views, bool with_prior);
+                            const std::vector<std::size_t>& views);
 
 /// Number of parameters an effect adds (sphere offsets: 3 per sphere).
 int parameter_count(Effect e, const ScanObservations& observations);
