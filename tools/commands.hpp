@@ -11,5 +11,6 @@ void register_phantom(CLI::App& app);
 void register_reconstruct(CLI::App& app);
 void register_calibrate(CLI::App& app);
 void register_diagnose(CLI::App& app);
+void register_import(CLI::App& app);
 
 }  // namespace ctk::tools

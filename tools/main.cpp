@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   ctk::tools::register_simulate(app);
   ctk::tools::register_phantom(app);
+  ctk::tools::register_import(app);
   ctk::tools::register_geometry(app);
   ctk::tools::register_calibrate(app);
   ctk::tools::register_diagnose(app);

@@ -29,6 +29,27 @@ void require_readable(const ScanDescription& scan, const JsonNode& node, const s
   }
 }
 
+// One file name or a non-empty list of them (frames to average), each readable.
+std::vector<std::string> read_frame_names(const ScanDescription& scan, const JsonNode& node) {
+  std::vector<std::string> names;
+  if (node.raw().is_array()) {
+    if (node.size() == 0) node.fail("expected a file name or a non-empty list of file names");
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      names.push_back(node.at(i).string());
+      require_readable(scan, node.at(i), names.back());
+    }
+  } else {
+    names.push_back(node.string());
+    require_readable(scan, node, names.back());
+  }
+  return names;
+}
+
+nlohmann::json frame_names_to_json(const std::vector<std::string>& names) {
+  if (names.size() == 1) return names.front();
+  return names;
+}
+
 Detector read_detector(const JsonNode& node, Eigen::Vector2d* principal_point) {
   node.warn_unknown_keys({"cols", "rows", "pixel_pitch_mm", "principal_point_px"});
   Detector d;
@@ -68,10 +89,8 @@ ProjectionSet read_projections(const JsonNode& node, const ScanDescription& scan
   const std::string kind = node.at("kind").string();
   if (kind == "counts") {
     p.kind = ProjectionKind::counts;
-    p.flat = node.at("flat").string();
-    p.dark = node.at("dark").string();
-    require_readable(scan, node.at("flat"), p.flat);
-    require_readable(scan, node.at("dark"), p.dark);
+    p.flat = read_frame_names(scan, node.at("flat"));
+    p.dark = read_frame_names(scan, node.at("dark"));
   } else if (kind == "line_integrals") {
     p.kind = ProjectionKind::line_integrals;
   } else {
@@ -172,8 +191,8 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
   proj["count"] = p.count;
   proj["kind"] = p.kind == ProjectionKind::counts ? "counts" : "line_integrals";
   if (p.kind == ProjectionKind::counts) {
-    proj["flat"] = p.flat;
-    proj["dark"] = p.dark;
+    proj["flat"] = frame_names_to_json(p.flat);
+    proj["dark"] = frame_names_to_json(p.dark);
   }
   j["projections"] = proj;
   if (scan.panda) {

@@ -9,8 +9,17 @@ namespace ctk {
 std::optional<FlatDark> read_flat_dark(const ScanDescription& scan) {
   if (scan.projections.kind != ProjectionKind::counts) return std::nullopt;
   const Detector& d = scan.detector;
-  return FlatDark{read_image(scan.resolve(scan.projections.flat), d.cols, d.rows),
-                  read_image(scan.resolve(scan.projections.dark), d.cols, d.rows)};
+  // Several frames (flats before and after the scan, say) are averaged pixel by pixel.
+  auto mean_of = [&](const std::vector<std::string>& names) {
+    Image mean = read_image(scan.resolve(names.front()), d.cols, d.rows);
+    for (std::size_t f = 1; f < names.size(); ++f) {
+      const Image next = read_image(scan.resolve(names[f]), d.cols, d.rows);
+      for (std::size_t i = 0; i < mean.pixels.size(); ++i) mean.pixels[i] += next.pixels[i];
+    }
+    for (float& x : mean.pixels) x /= static_cast<float>(names.size());
+    return mean;
+  };
+  return FlatDark{mean_of(scan.projections.flat), mean_of(scan.projections.dark)};
 }
 
 void counts_to_line_integrals(const Image& counts, const Image& flat, const Image& dark, float* p, float* w,

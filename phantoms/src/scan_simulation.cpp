@@ -26,8 +26,8 @@ ScanDescription declared_scan(const ScanSimulation& sim, const fs::path& folder,
   scan.projections.count = view_count;
   scan.projections.kind = counts ? ProjectionKind::counts : ProjectionKind::line_integrals;
   if (counts) {
-    scan.projections.flat = "flat.tif";
-    scan.projections.dark = "dark.tif";
+    scan.projections.flat = {"flat.tif"};
+    scan.projections.dark = {"dark.tif"};
   }
   if (sim.poses) {
     scan.matrices = MatricesPoseSource{"poses.json", *sim.poses};

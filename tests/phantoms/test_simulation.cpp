@@ -175,8 +175,8 @@ TEST(ScanSimulation, CountsScanHasFlatDarkAndOpenBeamAtTheFlatLevel) {
   simulate_scan(sim, dir);
   const ScanDescription scan = read_scan(dir / "scan.json");
   ASSERT_EQ(scan.projections.kind, ProjectionKind::counts);
-  const Image flat = read_image(scan.resolve(scan.projections.flat), 96, 80);
-  const Image dark = read_image(scan.resolve(scan.projections.dark), 96, 80);
+  const Image flat = read_image(scan.resolve(scan.projections.flat.front()), 96, 80);
+  const Image dark = read_image(scan.resolve(scan.projections.dark.front()), 96, 80);
   EXPECT_EQ(flat.pixels[0], 20150.0f);
   EXPECT_EQ(dark.pixels[0], 150.0f);
   const Image im = read_image(scan.projection_path(1), 96, 80);

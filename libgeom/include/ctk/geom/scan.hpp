@@ -23,7 +23,9 @@ struct ProjectionSet {
   std::vector<std::string> file_names;        // as written when a list was given
   int count = 0;
   ProjectionKind kind = ProjectionKind::line_integrals;
-  std::string flat, dark;                     // as written (required for counts)
+  /// As written (required for counts). A list of several frames (e.g. flats taken before and
+  /// after the scan) is averaged pixel by pixel: an extension of ctk-scan/1, one name stays a string.
+  std::vector<std::string> flat, dark;
   /// Name of projection `view` as written in the file (relative to the scan folder).
   std::string file_name(int view) const;
 };
