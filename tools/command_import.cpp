@@ -98,8 +98,7 @@ void run_circular(const CircularOptions& o) {
   orbit.source_to_detector_mm = o.sdd;
   orbit.sense = o.sense;
   for (int k = 0; k < projections.count; ++k) orbit.angles_rad.push_back((o.first_angle_deg + k * o.step_deg) * M_PI / 180.0);
-  std::vector<ProjectionMatrix> matrices;
-  for (const ConeVec& v : circular_cone_vecs(orbit)) matrices.push_back(from_cone_vec(v, orbit.detector));
+  const std::vector<ProjectionMatrix> matrices = circular_matrices(orbit);
   finish(import_matrices(orbit.detector, matrices, projections, o.out), o.out);
 }
 

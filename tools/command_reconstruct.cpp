@@ -12,6 +12,7 @@
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/image_io.hpp"
+#include "ctk/recon/default_volume.hpp"
 #include "ctk/recon/fdk.hpp"
 #include "ctk/recon/measurements.hpp"
 #include "ctk/recon/memory_plan.hpp"
@@ -36,32 +37,14 @@ struct ReconstructOptions {
   double voxel_mm = 0;
 };
 
-// Median distance from the source to the holder origin: the scale of the default voxel.
-double median_source_distance(const std::vector<ProjectionMatrix>& views) {
-  std::vector<double> d;
-  for (const auto& P : views) d.push_back(P.source_position().norm());
-  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
-  return d[d.size() / 2];
-}
-
-// Default grid: voxels the size of a detector pixel seen at the holder origin, covering the
-// helix holder (a 60 x 60 x 122 mm box) when the scan declares one, else the detector's field.
 VolumeLayout volume_layout(const ReconstructOptions& o, const ScanDescription& scan, const std::vector<ProjectionMatrix>& views) {
-  const double sod = median_source_distance(views);
-  const double voxel = o.voxel_mm > 0 ? o.voxel_mm : scan.detector.pitch_u_mm * sod / scan.source_to_detector_mm;
-  std::array<int, 3> size{};
+  VolumeLayout layout = default_volume_layout(scan, views, o.voxel_mm);
   if (!o.size.empty()) {
+    std::array<int, 3> size{};
     for (std::size_t a = 0; a < 3; ++a) size[a] = o.size[std::min(a, o.size.size() - 1)];
-  } else if (scan.holder) {
-    const int across = static_cast<int>(std::ceil(60.0 / voxel)), along = static_cast<int>(std::ceil(122.0 / voxel));
-    size = {across, across, along};
-  } else {
-    const double field = std::max(scan.detector.cols * scan.detector.pitch_u_mm, scan.detector.rows * scan.detector.pitch_v_mm) *
-                         sod / scan.source_to_detector_mm;
-    const int n = static_cast<int>(std::ceil(field / voxel));
-    size = {n, n, static_cast<int>(std::ceil(scan.detector.rows * scan.detector.pitch_v_mm * sod / scan.source_to_detector_mm / voxel))};
+    layout = VolumeLayout::centred(size, layout.voxel_mm);
   }
-  return VolumeLayout::centred(size, Eigen::Vector3d::Constant(voxel));
+  return layout;
 }
 
 void write_previews(const Volume& x, const fs::path& out) {

@@ -12,5 +12,6 @@ void register_reconstruct(CLI::App& app);
 void register_calibrate(CLI::App& app);
 void register_diagnose(CLI::App& app);
 void register_import(CLI::App& app);
+void register_refine(CLI::App& app);
 
 }  // namespace ctk::tools

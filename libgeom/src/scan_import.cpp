@@ -37,6 +37,12 @@ std::vector<ConeVec> circular_cone_vecs(const CircularOrbit& orbit) {
   return vecs;
 }
 
+std::vector<ProjectionMatrix> circular_matrices(const CircularOrbit& orbit) {
+  std::vector<ProjectionMatrix> out;
+  for (const ConeVec& v : circular_cone_vecs(orbit)) out.push_back(from_cone_vec(v, orbit.detector));
+  return out;
+}
+
 StoredOrientation stored_orientation_from_string(const std::string& name) {
   if (name == "as-described") return StoredOrientation::as_described;
   if (name == "transpose-flipud") return StoredOrientation::transposed_flipped;

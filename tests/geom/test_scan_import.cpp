@@ -130,8 +130,7 @@ TEST(ConeVecImport, ScanFileRoundTripsWithAveragedFlats) {
   orbit.source_to_axis_mm = 500;
   orbit.source_to_detector_mm = 900;
   orbit.angles_rad = {0.0, 0.5};
-  std::vector<ProjectionMatrix> matrices;
-  for (const auto& v : circular_cone_vecs(orbit)) matrices.push_back(from_cone_vec(v, orbit.detector));
+  const std::vector<ProjectionMatrix> matrices = circular_matrices(orbit);
   ProjectionSet p;
   p.file_names = {(dir / "a.tif").string(), (dir / "b.tif").string()};
   p.count = 2;

@@ -22,9 +22,7 @@ std::vector<ProjectionMatrix> fan_orbit(int views) {
   orbit.source_to_axis_mm = 400;
   orbit.source_to_detector_mm = 600;
   for (int k = 0; k < views; ++k) orbit.angles_rad.push_back(2 * M_PI * k / views);
-  std::vector<ProjectionMatrix> out;
-  for (const auto& v : circular_cone_vecs(orbit)) out.push_back(from_cone_vec(v, kFan));
-  return out;
+  return circular_matrices(orbit);
 }
 
 // Chord of the ray through pixel (u, 0) with the disc of radius r about c in the plane z = 0.

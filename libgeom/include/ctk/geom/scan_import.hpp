@@ -30,6 +30,8 @@ struct CircularOrbit {
 
 /// Throws std::invalid_argument on non-positive distances, SDD <= SOD, no angles or a bad sense.
 std::vector<ConeVec> circular_cone_vecs(const CircularOrbit& orbit);
+/// The same views as projection matrices.
+std::vector<ProjectionMatrix> circular_matrices(const CircularOrbit& orbit);
 
 /// How a stored image file relates to the image its geometry describes.
 enum class StoredOrientation {

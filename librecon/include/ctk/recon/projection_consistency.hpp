@@ -1,0 +1,73 @@
+#pragma once
+// The markerless yardstick: how well a reconstruction from some views predicts the views it
+// never saw. Views are split by interleaving: the even views are reconstructed (FDK on a coarse
+// grid), views 1 mod 4 are where effects are fitted, views 3 mod 4 where they are judged. A model
+// closer to the physics predicts the held-out views better; a wrong one leaves structured residuals.
+#include <vector>
+
+#include "ctk/geom/detector.hpp"
+#include "ctk/proj/joseph_projector.hpp"
+#include "ctk/recon/global_geometry.hpp"
+
+namespace ctk {
+
+struct ConsistencySplit {
+  std::vector<int> reconstruct, fit, judge;  // indices into the stack
+};
+/// Even views reconstruct; 1 mod 4 fit; 3 mod 4 judge.
+ConsistencySplit interleaved_split(int views);
+
+/// The acquisition physics the forward model can include.
+struct ForwardModel {
+  double blur_arc_rad = 0;  // angular_blur: each view integrates this arc of continuous rotation
+  int blur_samples = 4;
+  double hardening_c2 = 0;  // beam_hardening: straight line integral = p + c2 p^2 (p as measured)
+  /// Not physics but the yardstick's own resolution: this fraction of a 3 x 3 box filter is mixed
+  /// into every prediction, so that effects cannot win by merely smoothing a streaky prediction.
+  double prediction_smoothing = 0;
+};
+/// Measured line integral p to the straight (monochromatic) one, and back.
+double linearise_line_integral(double p, double c2);
+double measured_from_linear(double y, double c2);
+
+/// Mean squared residual per view, in measured line-integral units squared, over the detector
+/// rows except a tenth at the top and at the bottom (a long object's incomplete region).
+struct ConsistencyCosts {
+  std::vector<double> fit, judge;
+};
+
+class ConsistencyProbe {
+ public:
+  /// `b`: measured line integrals of every view, `nominal` their matrices (a circular orbit),
+  /// `layout` the (coarse) grid the held-out prediction is reconstructed on.
+  ConsistencyProbe(const ProjectionStack& b, std::vector<ProjectionMatrix> nominal, const Detector& detector,
+                   const VolumeLayout& layout, ConsistencySplit split);
+
+  /// `judge_residuals` (optional) receives predicted - measured for the judge views.
+  ConsistencyCosts costs(const GlobalGeometry& geometry, const ForwardModel& model, ProjectionStack* judge_residuals = nullptr) const;
+  /// FDK from every view with the model's geometry and linearisation, on `layout`.
+  Volume reconstruct_all(const GlobalGeometry& geometry, const ForwardModel& model, const VolumeLayout& layout) const;
+  const CircularTrajectory& orbit() const { return orbit_; }
+  const ConsistencySplit& split() const { return split_; }
+  /// Principal point of the first nominal view (the detector offsets are relative to it).
+  Eigen::Vector2d nominal_principal_point() const;
+
+ private:
+  Volume reconstruct(const std::vector<int>& views, const std::vector<ProjectionMatrix>& matrices, const ForwardModel& model,
+                     const VolumeLayout& layout) const;
+
+  const ProjectionStack& b_;
+  std::vector<ProjectionMatrix> nominal_;
+  Detector detector_;
+  VolumeLayout layout_;
+  ConsistencySplit split_;
+  CircularTrajectory orbit_;
+  int row_margin_;  // detector rows left out of the cost at the top and at the bottom
+  JosephProjector projector_;
+};
+
+/// Edge sharpness of a volume, as line profiles show it: the mean of the largest 1 % of absolute
+/// differences between neighbouring voxels along x and y in the central axial slice, per mm.
+double edge_sharpness(const Volume& x);
+
+}  // namespace ctk

@@ -1,0 +1,363 @@
+#include "ctk/recon/markerless_refinement.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <optional>
+#include <sstream>
+
+namespace ctk {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+struct State {
+  GlobalGeometry geometry;
+  ForwardModel model;
+};
+
+// One fitted parameter of a candidate: where it lives in the model, its scan step, the range a
+// physical value may take (an estimate at its edge is a sign the candidate absorbs something else)
+// and how it is reported.
+struct Knob {
+  std::string key;
+  double step, lower, upper;
+  std::function<double&(State&)> value;
+  double report_scale = 1.0;   // internal value * scale = reported value
+  double report_offset = 0.0;  // added after scaling (the nominal principal point for u0/v0)
+};
+
+struct Candidate {
+  std::string name;
+  bool changes_geometry;  // else it changes the forward model only
+  std::vector<Knob> knobs;
+};
+
+std::vector<Candidate> make_candidates(const Eigen::Vector2d& nominal_pp, const RefinementOptions& o) {
+  const double arc = o.nominal_blur_arc_deg > 0 ? o.nominal_blur_arc_deg : 2.0;
+  std::vector<Candidate> all = {
+      {"detector_offset", true,
+       {{"u0_px", 0.5, -10, 10, [](State& s) -> double& { return s.geometry.du_px; }, 1.0, nominal_pp.x()},
+        {"v0_px", 0.5, -10, 10, [](State& s) -> double& { return s.geometry.dv_px; }, 1.0, nominal_pp.y()}}},
+      {"detector_roll", true, {{"roll_deg", 0.1 * kDeg, -2 * kDeg, 2 * kDeg, [](State& s) -> double& { return s.geometry.roll_rad; }, 1 / kDeg}}},
+      {"axis_tilt", true, {{"tilt_deg", 0.25 * kDeg, -2 * kDeg, 2 * kDeg, [](State& s) -> double& { return s.geometry.tilt_rad; }, 1 / kDeg}}},
+      {"magnification", true, {{"sdd_scale", 0.005, 0.97, 1.03, [](State& s) -> double& { return s.geometry.sdd_scale; }}}},
+      {"angular_blur", false, {{"arc_deg", arc / 4 * kDeg, 0.0, 2 * arc * kDeg, [](State& s) -> double& { return s.model.blur_arc_rad; }, 1 / kDeg}}},
+      {"beam_hardening", false, {{"c2", 0.03, -0.2, 0.2, [](State& s) -> double& { return s.model.hardening_c2; }}}},
+  };
+  std::vector<Candidate> chosen;
+  for (const auto& name : o.candidates) {
+    auto it = std::find_if(all.begin(), all.end(), [&](const Candidate& c) { return c.name == name; });
+    if (it == all.end()) throw std::invalid_argument("markerless refinement: unknown effect '" + name + "'");
+    chosen.push_back(*it);
+  }
+  return chosen;
+}
+
+double sum(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); }
+double rms(const std::vector<double>& mean_squares) { return std::sqrt(sum(mean_squares) / static_cast<double>(mean_squares.size())); }
+
+// Paired z of the per-view improvement: mean(before - after) / its standard error.
+double paired_z(const std::vector<double>& before, const std::vector<double>& after) {
+  const std::size_t n = before.size();
+  std::vector<double> d(n);
+  for (std::size_t k = 0; k < n; ++k) d[k] = before[k] - after[k];
+  const double mean = sum(d) / static_cast<double>(n);
+  double var = 0;
+  for (double x : d) var += (x - mean) * (x - mean);
+  var /= static_cast<double>(n - 1);
+  const double se = std::sqrt(var / static_cast<double>(n));
+  return se > 0 ? mean / se : (mean > 0 ? std::numeric_limits<double>::infinity() : 0.0);
+}
+
+// Vertex of the least-squares parabola through (x_i, y_i); NaN when it opens downwards.
+double parabola_vertex(const std::vector<double>& x, const std::vector<double>& y) {
+  const double x0 = x[x.size() / 2];
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(x.size()), 3);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(x.size()));
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double t = x[i] - x0;
+    A.row(static_cast<Eigen::Index>(i)) << t * t, t, 1.0;
+    b(static_cast<Eigen::Index>(i)) = y[i];
+  }
+  const Eigen::Vector3d c = A.colPivHouseholderQr().solve(b);
+  if (!(c(0) > 0)) return std::numeric_limits<double>::quiet_NaN();
+  return x0 - c(1) / (2 * c(0));
+}
+
+struct KnobFit {
+  double value = 0;
+  double standard_error = std::numeric_limits<double>::quiet_NaN();  // unknown when the cost is not a parabola
+  bool at_edge = false;  // the cost kept falling to the end of the allowed range
+};
+
+// Scans one knob over five settings on the fit views, re-centring until the parabola's vertex
+// lies inside the scanned range (or the knob's range ends); the standard error is a jackknife over
+// the fit views.
+KnobFit fit_knob(const ConsistencyProbe& probe, State state, const Knob& knob) {
+  const double span = 4 * knob.step;
+  double first = std::clamp(knob.value(state) - 2 * knob.step, knob.lower, knob.upper - span);
+  KnobFit out;
+  bool symmetrised = false;
+  for (int scan = 0; scan < 5; ++scan) {
+    std::vector<double> x;
+    std::vector<std::vector<double>> per_view;
+    for (int i = 0; i < 5; ++i) {
+      x.push_back(first + i * knob.step);
+      knob.value(state) = x.back();
+      per_view.push_back(probe.costs(state.geometry, state.model).fit);
+    }
+    std::vector<double> total;
+    for (const auto& c : per_view) total.push_back(sum(c));
+    double vertex = parabola_vertex(x, total);
+    if (std::isnan(vertex)) vertex = x[static_cast<std::size_t>(std::min_element(total.begin(), total.end()) - total.begin())];
+    out.value = std::clamp(vertex, knob.lower, knob.upper);
+    out.at_edge = out.value <= knob.lower + 0.5 * knob.step || out.value >= knob.upper - 0.5 * knob.step;
+    const bool outside = vertex < x.front() || vertex > x.back();
+    if (outside && !out.at_edge && scan < 4) {
+      first = std::clamp(vertex - 2 * knob.step, knob.lower, knob.upper - span);
+      continue;
+    }
+    // A parabola sampled lopsidedly about its vertex is biased where the cost is not exactly
+    // quadratic: scan once more, centred on the vertex (once only: a weakly observable knob's
+    // vertex wanders on a flat cost, and chasing it would walk it anywhere).
+    if (!symmetrised && !out.at_edge && std::abs(vertex - x[2]) > 0.25 * knob.step) {
+      symmetrised = true;
+      first = std::clamp(vertex - 2 * knob.step, knob.lower, knob.upper - span);
+      continue;
+    }
+    // Jackknife: leave one fit view out, refit the vertex.
+    const std::size_t n = per_view.front().size();
+    std::vector<double> leave_one;
+    for (std::size_t k = 0; k < n; ++k) {
+      std::vector<double> t;
+      for (std::size_t i = 0; i < per_view.size(); ++i) t.push_back(total[i] - per_view[i][k]);
+      const double v = parabola_vertex(x, t);
+      if (!std::isnan(v)) leave_one.push_back(v);
+    }
+    if (leave_one.size() > 2) {
+      const double mean = sum(leave_one) / static_cast<double>(leave_one.size());
+      double ss = 0;
+      for (double v : leave_one) ss += (v - mean) * (v - mean);
+      out.standard_error = std::sqrt(ss * static_cast<double>(leave_one.size() - 1) / static_cast<double>(leave_one.size()));
+    }
+    break;
+  }
+  return out;
+}
+
+struct Trial {
+  State after;
+  RefinedEffect effect;
+  std::vector<double> judge_after;
+  bool at_edge = false;
+  bool undetermined = false;  // the cost showed no minimum with positive curvature
+};
+
+Trial try_candidate(const ConsistencyProbe& probe, const State& current, const std::vector<double>& judge_before,
+                    const Candidate& candidate, const std::function<void(const std::string&)>& log) {
+  Trial t;
+  t.after = current;
+  t.effect.name = candidate.name;
+  std::vector<std::pair<const Knob*, KnobFit>> fits;
+  // A knob whose cost shows no curved minimum is not measured: it keeps its value. The candidate
+  // is a measurement only if at least one of its knobs is.
+  int measured = 0;
+  std::string unmeasured;
+  for (const Knob& knob : candidate.knobs) {
+    KnobFit f = fit_knob(probe, t.after, knob);
+    if (std::isnan(f.standard_error) && !f.at_edge) {
+      f.value = knob.value(t.after);
+      unmeasured += (unmeasured.empty() ? "" : ", ") + knob.key;
+    } else {
+      ++measured;
+    }
+    knob.value(t.after) = f.value;
+    fits.emplace_back(&knob, f);
+  }
+  t.undetermined = measured == 0;
+  if (!unmeasured.empty())
+    t.effect.note = "no well-curved minimum of the held-out cost in " + unmeasured +
+                    (t.undetermined ? ": not a measurement, so not accepted" : ": not observable here, kept at its starting value");
+  if (candidate.name == "detector_offset")
+    t.effect.note += std::string(t.effect.note.empty() ? "" : "; ") +
+                     "v0 (the central row) is weakly observable in a circular scan: its uncertainty is the view-to-view "
+                     "scatter only and does not include the yardstick's systematic error";
+  t.judge_after = probe.costs(t.after.geometry, t.after.model).judge;
+  t.effect.heldout_rms_before = rms(judge_before);
+  t.effect.heldout_rms_after = rms(t.judge_after);
+  t.effect.z = paired_z(judge_before, t.judge_after);
+  std::ostringstream line;
+  line << candidate.name << ":";
+  for (const auto& [knob, f] : fits) {
+    const double reported = f.value * knob->report_scale + knob->report_offset;
+    t.effect.parameters[knob->key] = reported;
+    t.effect.uncertainty[knob->key] = f.standard_error * std::abs(knob->report_scale);
+    line << " " << knob->key << " " << reported << " +- " << f.standard_error * std::abs(knob->report_scale);
+    if (f.at_edge) {
+      t.at_edge = true;
+      t.effect.note = "the fit ran to the end of the physically plausible range: the candidate absorbs something else "
+                      "(the coarse prediction's own blur or streaks), so it is not accepted";
+    }
+  }
+  line << "; held-out RMS " << t.effect.heldout_rms_before << " -> " << t.effect.heldout_rms_after << " (z " << t.effect.z << ")";
+  if (log) log(line.str());
+  return t;
+}
+
+// A fixed detector pattern the model misses shows as a per-pixel mean residual over the judge
+// views far outside its standard error. Returns the mean of (mean / se)^2 over pixels (~1 if none).
+double fixed_pattern_statistic(const ProjectionStack& r) {
+  const std::size_t n = r.pixels_per_view();
+  double total = 0;
+  for (std::size_t p = 0; p < n; ++p) {
+    double s = 0, s2 = 0;
+    for (int v = 0; v < r.views; ++v) s += r.view(v)[p], s2 += double(r.view(v)[p]) * r.view(v)[p];
+    const double mean = s / r.views, var = std::max(s2 / r.views - mean * mean, 1e-30) / (r.views - 1);
+    total += mean * mean / var;
+  }
+  return total / static_cast<double>(n);
+}
+
+}  // namespace
+
+RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLayout& fine, const RefinementOptions& options,
+                                   const std::function<void(const std::string&)>& log) {
+  RefinementResult result;
+  result.views = static_cast<int>(probe.split().reconstruct.size() + probe.split().fit.size() + probe.split().judge.size());
+  State state;
+  // The yardstick's own resolution first: how much smoothing the nominal prediction wants.
+  const Knob smoothing{"prediction_smoothing", 0.2, 0.0, 1.0, [](State& s) -> double& { return s.model.prediction_smoothing; }};
+  state.model.prediction_smoothing = fit_knob(probe, state, smoothing).value;
+  result.prediction_smoothing = state.model.prediction_smoothing;
+  if (log) log("yardstick: prediction smoothing " + std::to_string(state.model.prediction_smoothing));
+  std::vector<double> judge = probe.costs(state.geometry, state.model).judge;
+  result.heldout_rms_before = rms(judge);
+  result.volume_before = probe.reconstruct_all(state.geometry, state.model, fine);
+  double sharpness = edge_sharpness(result.volume_before);
+  result.sharpness_before = sharpness;
+  if (log) {
+    std::ostringstream s;
+    s << "nominal model: held-out RMS " << result.heldout_rms_before << ", sharpness " << sharpness << " per mm";
+    log(s.str());
+  }
+
+  std::vector<Candidate> remaining = make_candidates(probe.nominal_principal_point(), options);
+  std::vector<RefinedEffect> rejected;
+  for (int round = 1; round <= options.max_rounds && !remaining.empty(); ++round) {
+    if (log) log("round " + std::to_string(round) + ": trying " + std::to_string(remaining.size()) + " effects");
+    std::vector<Trial> trials;
+    for (const Candidate& c : remaining) trials.push_back(try_candidate(probe, state, judge, c, log));
+    // The eligible candidate that lowers the held-out RMS most joins the model, unless it blurs
+    // the reconstruction: a true geometric correction sharpens it, one that compensates the
+    // yardstick's own errors does not.
+    std::vector<std::size_t> eligible;
+    for (std::size_t i = 0; i < trials.size(); ++i)
+      if (trials[i].effect.z > options.z_accept && !trials[i].at_edge && !trials[i].undetermined) eligible.push_back(i);
+    std::sort(eligible.begin(), eligible.end(), [&](std::size_t a, std::size_t b) {
+      return trials[a].effect.heldout_rms_after < trials[b].effect.heldout_rms_after;
+    });
+    std::optional<std::size_t> winner;
+    std::vector<bool> dropped(trials.size(), false);
+    for (std::size_t i : eligible) {
+      Volume after = probe.reconstruct_all(trials[i].after.geometry, trials[i].after.model, fine);
+      const double s_after = edge_sharpness(after);
+      if (s_after < (1 - options.sharpness_tolerance) * sharpness) {
+        trials[i].effect.note = "held-out views improve, but the reconstruction's edges blur (sharpness " + std::to_string(sharpness) +
+                                " -> " + std::to_string(s_after) + " per mm): the candidate compensates the yardstick, not the geometry";
+        dropped[i] = true;
+        if (log) log("not accepted " + trials[i].effect.name + ": " + trials[i].effect.note);
+        continue;
+      }
+      winner = i;
+      trials[i].effect.sharpness_before = sharpness;
+      trials[i].effect.sharpness_after = s_after;
+      result.volume_after = std::move(after);
+      sharpness = s_after;
+      break;
+    }
+    if (!winner) {
+      for (auto& t : trials) rejected.push_back(t.effect);
+      remaining.clear();
+      break;
+    }
+    Trial& win = trials[*winner];
+    win.effect.accepted = true;
+    win.effect.round = round;
+    // Others that pass too and predict the judge views as well as the winner, within noise.
+    for (std::size_t i : eligible)
+      if (i != *winner && !dropped[i] && std::abs(paired_z(trials[i].judge_after, win.judge_after)) < options.z_accept)
+        win.effect.confounded_with.push_back(trials[i].effect.name);
+    state = win.after;
+    judge = win.judge_after;
+    if (log) log("accepted " + win.effect.name + "; sharpness " + std::to_string(win.effect.sharpness_before) + " -> " + std::to_string(sharpness));
+    result.effects.push_back(win.effect);
+    // Candidates whose fit ran to the edge, had no minimum or blurred the volume are not tried again.
+    std::vector<Candidate> next;
+    for (std::size_t i = 0; i < trials.size(); ++i) {
+      if (i == *winner) continue;
+      if (dropped[i] || trials[i].at_edge || trials[i].undetermined || round == options.max_rounds) rejected.push_back(trials[i].effect);
+      else next.push_back(remaining[i]);
+    }
+    remaining = std::move(next);
+  }
+  for (auto& e : rejected) {
+    if (e.note.empty()) e.note = "the held-out views do not improve beyond chance";
+    if (e.name == "angular_blur")
+      e.note += "; in a circular scan at constant speed, views blurred over an arc are exact projections of the "
+                "rotation-averaged object, so blur is not observable by consistency, only in resolution";
+    result.effects.push_back(e);
+  }
+  result.geometry = state.geometry;
+  result.model = state.model;
+  result.heldout_rms_after = rms(judge);
+  result.sharpness_after = sharpness;
+  if (result.volume_after.data.empty()) result.volume_after = result.volume_before;
+
+  ProjectionStack residuals;
+  probe.costs(state.geometry, state.model, &residuals);
+  const double pattern = fixed_pattern_statistic(residuals);
+  result.structured = pattern > 2.0;
+  std::ostringstream note;
+  note << "fixed detector pattern of the held-out residual: mean (mean/se)^2 per pixel over the judge views " << pattern
+       << " (about 1 when there is none)";
+  result.unexplained_note = note.str();
+  return result;
+}
+
+nlohmann::json refinement_to_json(const RefinementResult& r) {
+  using nlohmann::json;
+  json effects = json::array();
+  for (const auto& e : r.effects) {
+    json j = {{"name", e.name},
+              {"accepted", e.accepted},
+              {"parameters", e.parameters},
+              {"uncertainty", e.uncertainty},
+              {"confounded_with", e.confounded_with},
+              {"heldout_projection_rms_before", e.heldout_rms_before},
+              {"heldout_projection_rms_after", e.heldout_rms_after},
+              {"heldout_z", e.z}};
+    if (e.accepted) {
+      j["round"] = e.round;
+      j["sharpness_per_mm_before"] = e.sharpness_before;
+      j["sharpness_per_mm_after"] = e.sharpness_after;
+    }
+    if (!e.note.empty()) j["note"] = e.note;
+    effects.push_back(j);
+  }
+  return {{"format", "ctk-diagnosis/1"},
+          {"mode", "markerless"},
+          {"baseline", {{"views_ok", r.views}, {"heldout_projection_rms", r.heldout_rms_before}, {"sharpness_per_mm", r.sharpness_before}}},
+          {"final", {{"heldout_projection_rms", r.heldout_rms_after}, {"sharpness_per_mm", r.sharpness_after}}},
+          {"effects", effects},
+          {"yardstick", {{"prediction_smoothing", r.prediction_smoothing}}},
+          {"criterion",
+           "fitted on views 1 mod 4, judged on views 3 mod 4 of a reconstruction from the even views; accepted when the mean "
+           "per-view held-out cost falls by more than z standard errors of the paired differences"},
+          {"unexplained", {{"structured", r.structured}, {"note", r.unexplained_note}}}};
+}
+
+}  // namespace ctk

@@ -1,0 +1,125 @@
+// ctk refine: close the loop on a scan without fiducials (circular orbits). Reconstructs from half
+// of the views, predicts the other half, and accepts the named effects (detector offset and roll,
+// axis tilt, magnification, angular blur, beam hardening) that predict held-out views better than
+// chance. Writes the report (ctk-diagnosis/1, mode "markerless"), the refined per-view matrices, a
+// scan file that uses them, and central slices before and after.
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+
+#include "commands.hpp"
+#include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/error.hpp"
+#include "ctk/geom/nominal_geometry.hpp"
+#include "ctk/proj/image_io.hpp"
+#include "ctk/recon/default_volume.hpp"
+#include "ctk/recon/markerless_refinement.hpp"
+#include "ctk/recon/measurements.hpp"
+#include "progress.hpp"
+
+namespace ctk::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RefineOptions {
+  fs::path scan, geometry, out;
+  double coarsening = 2.0;
+  double blur_arc_deg = 0;
+  double z_accept = 3.0;
+  std::vector<std::string> effects;
+};
+
+fs::path beside(const fs::path& out, const std::string& suffix) { return out.parent_path() / (out.stem().string() + suffix); }
+
+void write_central_slice(const Volume& x, float high, const fs::path& file) { write_slice_png(x, 2, x.layout.size[2] / 2, 0.0f, high, file); }
+
+void run_refine(const RefineOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  const ScanDescription scan = read_scan(o.scan);
+  for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
+  Geometry geometry = o.geometry.empty() ? nominal_geometry(scan) : read_geometry(o.geometry);
+  Progress reading("reading projections", "views");
+  const Measurements m = load_measurements(scan, geometry, {false}, std::ref(reading));
+  if (m.clamped_pixels > 0) std::cout << "clamped " << m.clamped_pixels << " pixels\n";
+
+  // Sharpness and pictures need only the central axial slice at full resolution. The coarse grid
+  // reaches 20 % beyond the detector's field along the axis, so the cone's edge rays stay inside
+  // it and a vertical detector shift is not mistaken for a better fit of a truncated object.
+  VolumeLayout fine = default_volume_layout(scan, m.matrices);
+  fine = VolumeLayout::centred({fine.size[0], fine.size[1], 1}, fine.voxel_mm);
+  VolumeLayout coarse = default_volume_layout(scan, m.matrices, 0, o.coarsening);
+  coarse = VolumeLayout::centred({coarse.size[0], coarse.size[1], static_cast<int>(std::ceil(1.2 * coarse.size[2]))}, coarse.voxel_mm);
+  std::cout << "held-out predictions on " << coarse.size[0] << " x " << coarse.size[1] << " x " << coarse.size[2] << " voxels of "
+            << coarse.voxel_mm.x() << " mm; sharpness on " << fine.size[0] << " x " << fine.size[1] << " x " << fine.size[2] << "\n";
+  const ConsistencyProbe probe(m.line_integrals, m.matrices, scan.detector, coarse, interleaved_split(m.line_integrals.views));
+
+  RefinementOptions options;
+  options.z_accept = o.z_accept;
+  options.nominal_blur_arc_deg = o.blur_arc_deg;
+  if (!o.effects.empty()) options.candidates = o.effects;
+  auto log = [&](const std::string& line) {
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::cout << "[" << static_cast<int>(t) << " s] " << line << std::endl;
+  };
+  const RefinementResult r = refine_markerless(probe, fine, options, log);
+
+  // The refined matrices replace the ok views' matrices; other views stay as they were.
+  const std::vector<ProjectionMatrix> refined = apply_global_geometry(r.geometry, m.matrices, probe.orbit());
+  for (std::size_t i = 0; i < m.view_indices.size(); ++i) {
+    GeometryView& v = geometry.views[static_cast<std::size_t>(m.view_indices[i])];
+    v.P = refined[i];
+    v.rms_px.reset();
+  }
+  const fs::path geometry_file = beside(o.out, ".geometry.json"), scan_file = beside(o.out, ".scan.json");
+  write_geometry(geometry, geometry_file);
+  ScanDescription corrected = scan;
+  corrected.panda.reset();
+  corrected.matrices = MatricesPoseSource{fs::absolute(geometry_file).lexically_proximate(scan.folder).string(), geometry};
+  write_scan(corrected, scan_file);
+
+  nlohmann::json report = refinement_to_json(r);
+  report["scan"] = o.scan.string();
+  report["corrected_geometry"] = geometry_file.string();
+  report["corrected_scan"] = scan_file.string();
+  nlohmann::json lacks = nlohmann::json::array();
+  if (r.model.blur_arc_rad > 0) lacks.push_back("angular_blur");
+  if (r.model.hardening_c2 != 0) lacks.push_back("beam_hardening");
+  if (!lacks.empty()) report["corrected_scan_lacks"] = lacks;
+  report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  write_text_atomically(o.out, report.dump(2) + "\n");
+
+  std::vector<float> sorted = r.volume_before.data;
+  const std::size_t hi = static_cast<std::size_t>(0.999 * static_cast<double>(sorted.size() - 1));
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(hi), sorted.end());
+  write_central_slice(r.volume_before, sorted[hi], beside(o.out, ".before.png"));
+  write_central_slice(r.volume_after, sorted[hi], beside(o.out, ".after.png"));
+
+  std::cout << "held-out projection RMS " << r.heldout_rms_before << " -> " << r.heldout_rms_after << "; sharpness "
+            << r.sharpness_before << " -> " << r.sharpness_after << " per mm\n";
+  for (const auto& e : r.effects)
+    if (e.accepted) std::cout << "accepted " << e.name << " " << e.parameters.dump() << " +- " << e.uncertainty.dump() << "\n";
+  std::cout << "report " << o.out.string() << ", refined matrices " << geometry_file.string() << ", scan " << scan_file.string()
+            << ", slices " << beside(o.out, ".before.png").string() << " / .after.png\n";
+}
+
+}  // namespace
+
+void register_refine(CLI::App& app) {
+  auto o = std::make_shared<RefineOptions>();
+  CLI::App* cmd = app.add_subcommand("refine", "Markerless loop for circular scans: find and fit the effects the geometry lacks, judged on held-out views");
+  cmd->add_option("--scan", o->scan, "scan.json (ctk-scan/1)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--geometry", o->geometry, "Per-view matrices to start from (default: the scan's nominal geometry)")->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "Report (ctk-diagnosis/1); beside it <stem>.geometry.json, <stem>.scan.json, slices")->required();
+  cmd->add_option("--coarsening", o->coarsening, "Voxel of the held-out predictions, in pixels seen at the axis")->check(CLI::Range(1.0, 8.0))->capture_default_str();
+  cmd->add_option("--blur-arc", o->blur_arc_deg, "Arc of rotation each view is known to integrate, degrees (sets the blur scan's step)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--z", o->z_accept, "Acceptance: held-out improvement in standard errors")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--effects", o->effects, "Candidates (default: all)")
+      ->check(CLI::IsMember({"detector_offset", "detector_roll", "axis_tilt", "magnification", "angular_blur", "beam_hardening"}));
+  cmd->callback([o] { run_refine(*o); });
+}
+
+}  // namespace ctk::tools
