@@ -213,13 +213,16 @@ Trial try_candidate(const ConsistencyProbe& probe, const State& current, const s
 double fixed_pattern_statistic(const ProjectionStack& r) {
   const std::size_t n = r.pixels_per_view();
   double total = 0;
+  std::size_t used = 0;
   for (std::size_t p = 0; p < n; ++p) {
     double s = 0, s2 = 0;
     for (int v = 0; v < r.views; ++v) s += r.view(v)[p], s2 += double(r.view(v)[p]) * r.view(v)[p];
+    if (s2 == 0) continue;  // a row left out of the cost
     const double mean = s / r.views, var = std::max(s2 / r.views - mean * mean, 1e-30) / (r.views - 1);
     total += mean * mean / var;
+    ++used;
   }
-  return total / static_cast<double>(n);
+  return used > 0 ? total / static_cast<double>(used) : 0.0;
 }
 
 }  // namespace
@@ -252,8 +255,8 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
     std::vector<Trial> trials;
     for (const Candidate& c : remaining) trials.push_back(try_candidate(probe, state, judge, c, log));
     // The eligible candidate that lowers the held-out RMS most joins the model, unless it blurs
-    // the reconstruction: a true geometric correction sharpens it, one that compensates the
-    // yardstick's own errors does not.
+    // the reconstruction (beyond `sharpness_tolerance`): a true geometric correction does not,
+    // one that compensates the yardstick's own errors may.
     std::vector<std::size_t> eligible;
     for (std::size_t i = 0; i < trials.size(); ++i)
       if (trials[i].effect.z > options.z_accept && !trials[i].at_edge && !trials[i].undetermined) eligible.push_back(i);

@@ -38,8 +38,9 @@ struct ConsistencyCosts {
 
 class ConsistencyProbe {
  public:
-  /// `b`: measured line integrals of every view, `nominal` their matrices (a circular orbit),
-  /// `layout` the (coarse) grid the held-out prediction is reconstructed on.
+  /// `b`: measured line integrals of every view (kept by reference: it must outlive the probe),
+  /// `nominal` their matrices (a circular orbit), `layout` the (coarse) grid the held-out
+  /// prediction is reconstructed on.
   ConsistencyProbe(const ProjectionStack& b, std::vector<ProjectionMatrix> nominal, const Detector& detector,
                    const VolumeLayout& layout, ConsistencySplit split);
 
