@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <sstream>
 
@@ -54,6 +55,29 @@ HeldOut held_out(const ScanObservations& o, const std::vector<Effect>& active, c
   }
   h.rms_px = n > 0 ? std::sqrt(sq / n) : 0.0;
   return h;
+}
+
+// Which spheres are misplaced: fitted all together (gauge fixed), a misplaced sphere stands out
+// from the rest, while an error of the detector or the robot that the offsets absorb spreads over
+// many of them. Offsets beyond 6 robust deviations of the median (and 0.03 mm) are free in the
+// model; if none stands out, all are (the full model, with its gauge).
+std::vector<bool> misplaced_spheres(const ScanObservations& o, const std::vector<Effect>& active, EffectParameters start) {
+  start.free_spheres.clear();
+  std::vector<std::size_t> views(o.views.size());
+  std::iota(views.begin(), views.end(), std::size_t{0});
+  const ScanModelFit all = fit_scan_model(o, active, views, start);
+  std::vector<double> m;
+  for (const auto& x : all.parameters.spheres) m.push_back(x.norm());
+  std::vector<double> sorted = m;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  for (double& x : sorted) x = std::abs(x - median);
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  const double limit = std::max(0.03, median + 6 * 1.4826 * sorted[sorted.size() / 2]);
+  std::vector<bool> free(m.size(), false);
+  bool any = false;
+  for (std::size_t k = 0; k < m.size(); ++k) any |= free[k] = m[k] > limit;
+  return any ? free : std::vector<bool>{};
 }
 
 // Mean of a - b over views in standard errors (paired).
@@ -203,6 +227,16 @@ ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration
   }
   o.robot_sigma_mm = options.robot_sigma_mm;
   o.robot_sigma_deg = options.robot_sigma_deg;
+  // A sphere the calibration left out as an outlier in most of the views that matched it is off
+  // in every view: a property of the sphere (misplaced), not of one view's background. Its
+  // detections go back into the observations, so the diagnosis can find where it really is.
+  std::map<int, int> used, dropped;
+  for (const ViewCalibration& r : c.views) {
+    if (r.status != ViewStatus::ok) continue;
+    for (int k : r.spheres) ++used[k];
+    for (int k : r.outlier_spheres) ++dropped[k];
+  }
+  auto consistently_off = [&](int k) { return dropped[k] >= 5 && dropped[k] > used[k]; };
   double sq = 0;
   int dof = 0;
   for (std::size_t v = 0; v < c.views.size(); ++v) {
@@ -220,6 +254,11 @@ ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration
     view.measured_px = r.detected_px;
     for (std::size_t k = 0; k < r.detected_px.size(); ++k) sq += (r.detected_px[k] - r.fitted_px[k]).squaredNorm();
     dof += 2 * static_cast<int>(r.detected_px.size()) - 6;
+    for (std::size_t k = 0; k < r.outlier_spheres.size(); ++k)
+      if (consistently_off(r.outlier_spheres[k])) {
+        view.spheres.push_back(r.outlier_spheres[k]);
+        view.measured_px.push_back(r.outlier_detected_px[k]);
+      }
     o.views.push_back(std::move(view));
   }
   if (dof > 0) o.centre_sigma_px = std::sqrt(sq / dof);
@@ -255,7 +294,9 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, c
     for (Effect e : candidates) {
       std::vector<Effect> active = d.accepted;
       active.push_back(e);
-      Trial t{e, held_out(o, active, current), 0};
+      EffectParameters start = current;
+      if (e == Effect::sphere_positions) start.free_spheres = misplaced_spheres(o, active, current);
+      Trial t{e, held_out(o, active, start), 0};
       t.z = paired_z(current_held.cost, t.held.cost);
       say(std::string("  ") + effect_name(e) + ": held-out improvement " + std::to_string(t.z) + " standard errors");
       trials.push_back(std::move(t));
@@ -305,6 +346,7 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, c
     f.before = d.accepted.empty() ? d.baseline : d.final_error;
     f.model_before = current;
     d.accepted.push_back(chosen);
+    if (chosen == Effect::sphere_positions) current.free_spheres = misplaced_spheres(o, d.accepted, current);
     const ScanModelFit all = fit_scan_model(o, d.accepted, all_views(o), current, true);
     current = all.parameters;
     current_held = t.held;

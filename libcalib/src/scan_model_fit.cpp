@@ -268,7 +268,8 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
     ordering->AddElementToGroup(poses.back().data(), 0);
   }
   const bool spheres_free = std::find(active.begin(), active.end(), Effect::sphere_positions) != active.end();
-  if (spheres_free) {
+  const bool sphere_subset = spheres_free && !start.free_spheres.empty();
+  if (spheres_free && !sphere_subset) {
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     for (const auto& X : o.setup.holder.spheres_mm) centroid += X;
     centroid /= static_cast<double>(o.setup.holder.spheres_mm.size());
@@ -292,6 +293,10 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
     }
   }
   set_global_blocks_constant(problem, g, active);
+  if (sphere_subset)
+    for (std::size_t k = 0; k < g.p.spheres.size(); ++k)
+      if (!start.free_spheres[k] && problem.HasParameterBlock(g.block(Effect::sphere_positions, k)))
+        problem.SetParameterBlockConstant(g.block(Effect::sphere_positions, k));
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_SCHUR;
   options.linear_solver_ordering.reset(ordering);

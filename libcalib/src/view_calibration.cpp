@@ -59,6 +59,7 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   // fitted pose with a tight gate and refit, then drop outliers and refit once.
   struct Attempt {
     std::vector<SphereMatch> matches;
+    std::vector<SphereMatch> dropped;  // matched, but left out as outliers
     PoseFit fit;
   };
   auto fit_matches = [&](const Rigid& start, const std::vector<SphereMatch>& matches) {
@@ -96,11 +97,11 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
     std::vector<double> r = a.fit.residual_px;
     std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
     const double limit = std::max(0.25, 3 * 1.4826 * r[r.size() / 2]);
-    std::vector<SphereMatch> kept;
-    for (std::size_t i = 0; i < a.matches.size(); ++i)
-      if (a.fit.residual_px[i] <= limit) kept.push_back(a.matches[i]);
-    if (kept.size() < a.matches.size() && static_cast<int>(kept.size()) >= o.min_spheres) {
+    std::vector<SphereMatch> kept, dropped;
+    for (std::size_t i = 0; i < a.matches.size(); ++i) (a.fit.residual_px[i] <= limit ? kept : dropped).push_back(a.matches[i]);
+    if (!dropped.empty() && static_cast<int>(kept.size()) >= o.min_spheres) {
       a.matches = std::move(kept);
+      a.dropped = std::move(dropped);
       a.fit = fit_matches(pose, a.matches);
     }
     return a;
@@ -127,6 +128,7 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   // The matched spheres' centres from their whole profiles, then the final fit. A sphere whose
   // profile fit fails keeps its centroid.
   for (const auto& m : best.matches) refine_by_profile_fit(image, radius_px, detections[static_cast<std::size_t>(m.detection)]);
+  for (const auto& m : best.dropped) refine_by_profile_fit(image, radius_px, detections[static_cast<std::size_t>(m.detection)]);
   best.fit = fit_matches(best.fit.T_camera_holder, best.matches);
   const std::vector<SphereMatch>& matches = best.matches;
   const PoseFit& fit = best.fit;
@@ -145,6 +147,10 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
     out.spheres.push_back(m.sphere);
     out.detected_px.push_back(detections[static_cast<std::size_t>(m.detection)].uv);
     out.fitted_px.push_back(out.P->project(holder.spheres_mm[static_cast<std::size_t>(m.sphere)]));
+  }
+  for (const auto& m : best.dropped) {
+    out.outlier_spheres.push_back(m.sphere);
+    out.outlier_detected_px.push_back(detections[static_cast<std::size_t>(m.detection)].uv);
   }
   if (!fit.converged) {
     out.reason = "pose fit did not converge";

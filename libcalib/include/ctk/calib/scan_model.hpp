@@ -45,6 +45,9 @@ struct EffectParameters {
   double intrinsics[3] = {0, 0, 0};      // principal point shift u, v (px); focal length change (px, on fu and fv alike)
   double distortion[3] = {0, 0, 0};      // radial shift at 360 px from the centre (px); centre offset from the principal point (px)
   std::vector<Eigen::Vector3d> spheres;  // offset of each sphere (mm, holder frame)
+  /// Which sphere offsets are free when sphere_positions is fitted: empty means all (the list's
+  /// centroid, orientation and scale then fixed by a gauge); a subset is held in place by the rest.
+  std::vector<bool> free_spheres;
 };
 
 /// The kinematic chain and detector the scan declares.

@@ -33,6 +33,10 @@ struct ViewCalibration {
   double rotation_sigma_deg = 0;
   std::vector<Eigen::Vector2d> detected_px, fitted_px;  // the used pairs, for pictures
   std::vector<int> spheres;                              // their sphere indices
+  /// Matched spheres left out of the fit as outliers (a sample's edge pulling one view's centre,
+  /// or a sphere that is not where the holder's list says: the diagnosis tells them apart).
+  std::vector<int> outlier_spheres;
+  std::vector<Eigen::Vector2d> outlier_detected_px;
 };
 
 /// `K`: the scan's detector matrix; `initial`: first-guess T_camera_holder (robot FK).
