@@ -38,6 +38,7 @@ struct SimulateOptions {
   double displacement_mm = 0.2;
   std::vector<double> base_translation_mm, base_rotation_deg, mount_translation_mm, mount_rotation_deg, joint_offsets_deg,
       source_drift_mm;
+  std::optional<double> holder_sag_deg;
   std::optional<double> blur_fraction;
   double blur_sigma_px = 2.0;
   std::optional<int> false_blobs;
@@ -64,6 +65,7 @@ SimulationEffects effects_from(const SimulateOptions& o, const PandaSetup& setup
     e.joint_offsets_rad = q;
   }
   if (!o.source_drift_mm.empty()) e.source_drift_mm_per_100_views = vec2(o.source_drift_mm);
+  if (o.holder_sag_deg) e.holder_sag_deg = *o.holder_sag_deg;
   if (o.blur_fraction) e.blurred_views = BlurredViews{*o.blur_fraction, o.blur_sigma_px};
   if (o.false_blobs) e.false_blobs_per_view = *o.false_blobs;
   return e;
@@ -165,6 +167,9 @@ void register_simulate(CLI::App& app) {
   cmd->add_option("--mount-rotation-deg", o->mount_rotation_deg, "Holder-mount rotation vector")->expected(3)->group(effects);
   cmd->add_option("--joint-offsets-deg", o->joint_offsets_deg, "Encoder zero offsets q1..q7 (true = logged + offset)")->expected(7)->group(effects);
   cmd->add_option("--source-drift-mm", o->source_drift_mm, "Focal-spot drift per 100 views (camera x, y)")->expected(2)->group(effects);
+  cmd->add_option("--holder-sag-deg", o->holder_sag_deg,
+                  "Outside the diagnosis' vocabulary: the holder turns towards gravity by this much times the sine of its axis' angle to it")
+      ->group(effects);
   cmd->add_option("--blur-fraction", o->blur_fraction, "Fraction of views blurred")->check(CLI::Range(0.0, 1.0))->group(effects);
   cmd->add_option("--blur-sigma-px", o->blur_sigma_px, "Blur of those views")->check(CLI::PositiveNumber)->capture_default_str()->group(effects);
   cmd->add_option("--false-blobs", o->false_blobs, "Spurious sphere-like blobs per view")->check(CLI::Range(0, 10000))->group(effects);

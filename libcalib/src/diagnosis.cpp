@@ -1,10 +1,13 @@
 #include "ctk/calib/diagnosis.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <numeric>
 #include <sstream>
+
+#include "ctk/geom/panda.hpp"
 
 namespace ctk {
 
@@ -121,6 +124,30 @@ ModelError image_error(const ScanModelFit& all, const HeldOut& h) {
   return e;
 }
 
+// Whether deviation component c follows the direction of gravity in the flange frame (a load
+// the model lacks: a sagging holder, a bending arm): the fraction of its variance a linear fit
+// on that direction explains, said when it is most of it.
+std::string gravity_note(const ScanObservations& o, const std::vector<Eigen::Matrix<double, 6, 1>>& d, int c) {
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(d.size()), 4);
+  Eigen::VectorXd y(static_cast<Eigen::Index>(d.size()));
+  Eigen::Index row = 0;
+  for (const auto& view : o.views) {
+    if (!view.joints) continue;
+    const Eigen::Vector3d g = panda::forward_kinematics(*view.joints).linear().transpose() * Eigen::Vector3d(0, 0, -1);
+    A.row(row) << 1.0, g.x(), g.y(), g.z();
+    y(row) = d[static_cast<std::size_t>(row)](c);
+    ++row;
+  }
+  const Eigen::VectorXd fit = A * A.colPivHouseholderQr().solve(y);
+  const double total = (y.array() - y.mean()).square().sum(), left = (y - fit).squaredNorm();
+  const double explained = total > 0 ? 1 - left / total : 0;
+  if (explained < 0.5) return "";
+  std::ostringstream s;
+  s << "; " << static_cast<int>(100 * explained) << " % of it follows the direction of gravity in the flange frame "
+    << "(a load-dependent effect outside the vocabulary, such as the holder sagging)";
+  return s.str();
+}
+
 // Residual structure the final model leaves, tested against the noise (Bonferroni over cells).
 std::vector<StructureFinding> find_structure(const ScanObservations& o, const ScanModelFit& f) {
   std::vector<StructureFinding> out;
@@ -205,6 +232,21 @@ std::vector<StructureFinding> find_structure(const ScanObservations& o, const Sc
             << ", camera frame of the flange) changes smoothly from view to view (lag-1 correlation " << r
             << ", noise would give |r| < " << 4.0 / std::sqrt(n) << ")";
           out.push_back({"by view order", s.str()});
+        }
+      }
+      // Independent of the order: deviations larger than the repeatability allows (the per-view
+      // pose leans on the robot prior, so the model's own deviations are smaller than that).
+      // Chi-square with n dof per component (Wilson-Hilferty), p ~ 1e-5 each.
+      const double limit = n * std::pow(1 - 2 / (9 * n) + 4.3 * std::sqrt(2 / (9 * n)), 3);
+      for (int c = 0; c < 6; ++c) {
+        double sum2 = 0;
+        for (const auto& x : d) sum2 += x(c) * x(c);
+        if (sum2 > limit) {
+          std::ostringstream s;
+          s << "the pose's deviation from the robot model (" << (c < 3 ? "rotation " : "translation ") << "xyz"[c % 3]
+            << ") is " << std::sqrt(sum2 / n) << " times the repeatability (RMS), beyond what it allows ("
+            << std::sqrt(limit / n) << ")" << gravity_note(o, d, c);
+          out.push_back({"by robot configuration", s.str()});
         }
       }
     }

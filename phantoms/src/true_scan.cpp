@@ -41,7 +41,7 @@ nlohmann::json json2(const Eigen::Vector2d& v) { return {v.x(), v.y()}; }
 
 bool has_pose_effects(const SimulationEffects& e) {
   return e.detector_intrinsics || e.sphere_positions || e.robot_base_frame || e.holder_mount || e.joint_offsets_rad ||
-         e.source_drift_mm_per_100_views;
+         e.source_drift_mm_per_100_views || e.holder_sag_deg;
 }
 
 void draw_true_holder(const ScanSimulation& sim, TrueScan& truth, std::mt19937_64& rng) {
@@ -85,7 +85,16 @@ void draw_robot_views(const ScanSimulation& sim, TrueScan& truth, double true_sd
       for (std::size_t j = 0; j < q.size(); ++j) q[j] += (*e.joint_offsets_rad)[j];
     view.joints_true = q;
     const Rigid noise = make_rigid(rotation_from_vector(gaussian3(rng, sigma_r)), gaussian3(rng, sigma_t));
-    view.T_camera_holder = truth.T_camera_base * panda::forward_kinematics(q) * noise * truth.T_flange_holder;
+    const Rigid T_base_flange = panda::forward_kinematics(q);
+    Rigid sag = Rigid::Identity();
+    if (e.holder_sag_deg) {
+      // In flange coordinates: the holder's axis and gravity; it turns about their cross product.
+      const Eigen::Vector3d axis = truth.T_flange_holder.linear().col(2);
+      const Eigen::Vector3d gravity = T_base_flange.linear().transpose() * Eigen::Vector3d(0, 0, -1);
+      const Eigen::Vector3d turn = axis.cross(gravity);  // |turn| = sin(angle to gravity)
+      sag = make_rigid(rotation_from_vector(*e.holder_sag_deg * kDegree * turn), Eigen::Vector3d::Zero());
+    }
+    view.T_camera_holder = truth.T_camera_base * T_base_flange * noise * sag * truth.T_flange_holder;
     if (e.source_drift_mm_per_100_views)
       view.source_offset_mm.head<2>() = *e.source_drift_mm_per_100_views * (static_cast<double>(v) / 100.0);
     Rigid shift = Rigid::Identity();
@@ -196,6 +205,7 @@ nlohmann::json truth_to_json(const ScanSimulation& sim, const TrueScan& truth, c
                                {"drift_px_per_100_views",
                                 {mm.x() / sim.setup.detector.pitch_u_mm, mm.y() / sim.setup.detector.pitch_v_mm}}};
   }
+  if (e.holder_sag_deg) effects["holder_sag"] = {{"max_deg", *e.holder_sag_deg}};
   if (e.blurred_views) {
     nlohmann::json views = nlohmann::json::array();
     for (const TrueView& v : truth.views)
@@ -231,7 +241,8 @@ nlohmann::json truth_to_json(const ScanSimulation& sim, const TrueScan& truth, c
             {"joint_offsets", "true joint angle = logged angle + offset"},
             {"source_drift", "focal spot at view v displaced by v / 100 * drift in camera x, y; detector fixed"},
             {"detector_distortion", "ideal projection x is measured at x + k1 |x - c|^2 (x - c)"},
-            {"robot_noise", "per view, between FK(joints) and the flange: Gaussian, each axis value / sqrt(3)"}}},
+            {"robot_noise", "per view, between FK(joints) and the flange: Gaussian, each axis value / sqrt(3)"},
+            {"holder_sag", "the holder turns about the flange origin by max_deg * (axis x gravity), flange coordinates, gravity -z of the base"}}},
           {"robot_noise", {{"translation_mm", sim.robot_noise.translation_mm}, {"rotation_deg", sim.robot_noise.rotation_deg}}},
           {"simulation",
            {{"supersampling", sim.supersampling},

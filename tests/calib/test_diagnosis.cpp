@@ -214,5 +214,19 @@ TEST(Diagnosis, DisplacedSphereBesideRadialDistortion) {
   EXPECT_LT(o.report.at("final").at("rms_px").get<double>(), 0.6 * o.report.at("baseline").at("rms_px").get<double>());
 }
 
+// Outside the vocabulary: the holder sags under its weight, turning towards gravity by up to
+// 0.15 deg depending on its orientation (a spherical trajectory turns it every way). No named
+// effect may take the blame; the report must say structure is left, and where.
+TEST(Diagnosis, HolderSagIsStructuredAndAttributedToNothing) {
+  ScanSimulation sim = scan_with(60, true);
+  sim.effects.holder_sag_deg = 0.15;
+  const auto o = run(sim);
+  EXPECT_TRUE(accepted_names(o).empty()) << o.report.at("effects").dump();
+  EXPECT_TRUE(o.report.at("unexplained").at("structured").get<bool>());
+  const std::string note = o.report.at("unexplained").at("note").get<std::string>();
+  std::cout << note << "\n";
+  EXPECT_NE(note.find("gravity"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace ctk

@@ -49,6 +49,10 @@ struct SimulationEffects {
   std::optional<RigidOffset> holder_mount;
   std::optional<panda::Joints> joint_offsets_rad;
   std::optional<Eigen::Vector2d> source_drift_mm_per_100_views;  // camera x, y
+  /// Outside the diagnosis' vocabulary: the holder bends under its weight, turning about the
+  /// flange towards gravity (-z of the robot base) by this angle times the sine of the angle
+  /// between its axis and gravity (a cantilever's load), so the error depends on the orientation.
+  std::optional<double> holder_sag_deg;
   std::optional<BlurredViews> blurred_views;
   std::optional<int> false_blobs_per_view;
 };
