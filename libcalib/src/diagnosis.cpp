@@ -124,6 +124,19 @@ ModelError image_error(const ScanModelFit& all, const HeldOut& h) {
   return e;
 }
 
+DeclaredSetup declared_setup(const ScanDescription& scan) {
+  DeclaredSetup s;
+  s.K = scan.intrinsics();
+  s.detector = scan.detector;
+  s.holder = *scan.holder;
+  s.robot = scan.panda.has_value();
+  if (scan.panda) {
+    s.T_camera_base = scan.panda->T_camera_base;
+    s.T_flange_holder = scan.panda->T_flange_holder;
+  }
+  return s;
+}
+
 // Whether deviation component c follows the direction of gravity in the flange frame (a load
 // the model lacks: a sagging holder, a bending arm): the fraction of its variance a linear fit
 // on that direction explains, said when it is most of it.
@@ -258,15 +271,7 @@ std::vector<StructureFinding> find_structure(const ScanObservations& o, const Sc
 
 ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration& c, const DiagnosisOptions& options) {
   ScanObservations o;
-  DeclaredSetup& s = o.setup;
-  s.K = scan.intrinsics();
-  s.detector = scan.detector;
-  s.holder = *scan.holder;
-  s.robot = scan.panda.has_value();
-  if (scan.panda) {
-    s.T_camera_base = scan.panda->T_camera_base;
-    s.T_flange_holder = scan.panda->T_flange_holder;
-  }
+  o.setup = declared_setup(scan);
   o.robot_sigma_mm = options.robot_sigma_mm;
   o.robot_sigma_deg = options.robot_sigma_deg;
   // A sphere the calibration left out as an outlier in most of the views that matched it is off
@@ -574,8 +579,15 @@ ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d, 
         out.principal_point_px += Eigen::Vector2d(p.intrinsics[0], p.intrinsics[1]);
         out.source_to_detector_mm *= 1.0 + p.intrinsics[2] / scan.intrinsics().fu_px;
         break;
+      case Effect::detector_distortion: {
+        // The centre is absolute (the declared principal point plus the fitted offset). Found on
+        // top of a declared distortion, the k1 add up (the centres are taken as the same).
+        const RadialDistortion found = distortion_of(declared_setup(scan), p);
+        if (out.distortion) out.distortion->k1_per_px2 += found.k1_per_px2;
+        else out.distortion = found;
+        break;
+      }
       case Effect::source_drift:
-      case Effect::detector_distortion:
         if (not_carried) not_carried->push_back(effect_name(e));
         break;
     }

@@ -41,7 +41,7 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
     } else {
       try {
         const Image image = read_line_integrals(scan, v, flat_dark);
-        out = calibrate_view(image, K, *guess.T_camera_holder, *scan.holder, scan.detector, options);
+        out = calibrate_view(image, K, *guess.T_camera_holder, *scan.holder, scan.detector, options, scan.distortion);
       } catch (const InputError& e) {
         out.status = ViewStatus::rejected;
         out.reason = std::string("unreadable image: ") + e.what();

@@ -44,7 +44,7 @@ Prediction predict(const Eigen::Matrix3d& K, const Rigid& T, const Holder& holde
 }  // namespace
 
 ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, const Rigid& initial, const Holder& holder,
-                               const Detector& detector, const CalibrationOptions& o) {
+                               const Detector& detector, const CalibrationOptions& o, const std::optional<RadialDistortion>& distortion) {
   ViewCalibration out;
   // Projected sphere radius at the holder's depth.
   const double depth = (K.row(2) * initial.translation())(0);
@@ -52,7 +52,15 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   out.radius_px = radius_px;
   DetectionOptions detection;
   detection.radius_px = radius_px;
-  std::vector<SphereDetection> detections = detect_spheres(image, detection);
+  // `measured` are where the centres are in the image (profile fits refine them there); `detections`
+  // are the same centres where an ideal pinhole detector would have them (a declared distortion
+  // removed), which is what matching and the pose fit compare with projections.
+  std::vector<SphereDetection> measured = detect_spheres(image, detection);
+  std::vector<SphereDetection> detections = measured;
+  auto undistort = [&](std::size_t i) {
+    detections[i].uv = distortion ? distortion->ideal_from_measured(measured[i].uv) : measured[i].uv;
+  };
+  for (std::size_t i = 0; i < detections.size(); ++i) undistort(i);
   out.detections = static_cast<int>(detections.size());
 
   // Each candidate shift of the predicted pattern is tried: match, fit, then match again from the
@@ -127,8 +135,12 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   }
   // The matched spheres' centres from their whole profiles, then the final fit. A sphere whose
   // profile fit fails keeps its centroid.
-  for (const auto& m : best.matches) refine_by_profile_fit(image, radius_px, detections[static_cast<std::size_t>(m.detection)]);
-  for (const auto& m : best.dropped) refine_by_profile_fit(image, radius_px, detections[static_cast<std::size_t>(m.detection)]);
+  for (const auto* list : {&best.matches, &best.dropped})
+    for (const auto& m : *list) {
+      const auto i = static_cast<std::size_t>(m.detection);
+      refine_by_profile_fit(image, radius_px, measured[i]);
+      undistort(i);
+    }
   best.fit = fit_matches(best.fit.T_camera_holder, best.matches);
   const std::vector<SphereMatch>& matches = best.matches;
   const PoseFit& fit = best.fit;

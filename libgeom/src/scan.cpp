@@ -51,7 +51,7 @@ nlohmann::json frame_names_to_json(const std::vector<std::string>& names) {
 }
 
 Detector read_detector(const JsonNode& node, Eigen::Vector2d* principal_point) {
-  node.warn_unknown_keys({"cols", "rows", "pixel_pitch_mm", "principal_point_px"});
+  node.warn_unknown_keys({"cols", "rows", "pixel_pitch_mm", "principal_point_px", "radial_distortion"});
   Detector d;
   d.cols = node.at("cols").integer();
   d.rows = node.at("rows").integer();
@@ -139,6 +139,11 @@ ScanDescription read_scan(const fs::path& file) {
   if (format != kFormat) top.at("format").fail("expected \"" + std::string(kFormat) + "\", got \"" + format + "\"");
 
   scan.detector = read_detector(top.at("detector"), &scan.principal_point_px);
+  if (auto rd = top.at("detector").find("radial_distortion")) {
+    rd->warn_unknown_keys({"k1_per_px2", "center_px"});
+    const auto c = rd->at("center_px").numbers(2);
+    scan.distortion = RadialDistortion{rd->at("k1_per_px2").number(), {c[0], c[1]}};
+  }
   scan.source_to_detector_mm = top.at("source_to_detector_mm").positive_number();
   scan.projections = read_projections(top.at("projections"), scan);
 
@@ -184,6 +189,9 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
                    {"rows", scan.detector.rows},
                    {"pixel_pitch_mm", {scan.detector.pitch_u_mm, scan.detector.pitch_v_mm}},
                    {"principal_point_px", {scan.principal_point_px.x(), scan.principal_point_px.y()}}};
+  if (scan.distortion)
+    j["detector"]["radial_distortion"] = {{"k1_per_px2", scan.distortion->k1_per_px2},
+                                          {"center_px", {scan.distortion->centre_px.x(), scan.distortion->centre_px.y()}}};
   j["source_to_detector_mm"] = scan.source_to_detector_mm;
   const auto& p = scan.projections;
   json proj;

@@ -25,6 +25,9 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
     m.matrices.push_back(*v.P);
   }
   const int n = static_cast<int>(m.view_indices.size());
+  if (scan.distortion)
+    m.notes.push_back("the scan declares a radial detector distortion (k1 " + std::to_string(scan.distortion->k1_per_px2) +
+                      " per px^2); the projector is a pinhole and the images are used as measured");
   const bool counts = scan.projections.kind == ProjectionKind::counts;
   m.line_integrals = ProjectionStack(n, d.rows, d.cols);
   if (counts && options.statistical_weights) m.weights = ProjectionStack(n, d.rows, d.cols);

@@ -39,8 +39,11 @@ struct ViewCalibration {
   std::vector<Eigen::Vector2d> outlier_detected_px;
 };
 
-/// `K`: the scan's detector matrix; `initial`: first-guess T_camera_holder (robot FK).
+/// `K`: the scan's detector matrix; `initial`: first-guess T_camera_holder (robot FK);
+/// `distortion`: the detector's declared radial distortion (centres are undistorted before the
+/// fit, so P stays the pinhole matrix of the contract; detected_px are then ideal positions).
 ViewCalibration calibrate_view(const Image& line_integrals, const Eigen::Matrix3d& K, const Rigid& initial,
-                               const Holder& holder, const Detector& detector, const CalibrationOptions& options);
+                               const Holder& holder, const Detector& detector, const CalibrationOptions& options,
+                               const std::optional<RadialDistortion>& distortion = std::nullopt);
 
 }  // namespace ctk
