@@ -41,8 +41,7 @@ void run_diagnose(const DiagnoseOptions& o) {
   report["geometry"] = o.geometry.string();
   const fs::path stem = fs::path(o.out).replace_extension("");
   report["pictures"] = write_diagnosis_pictures(d, observations, stem);
-  std::vector<std::string> not_carried;
-  const ScanDescription corrected = corrected_scan(scan, d, &not_carried);
+  const ScanDescription corrected = corrected_scan(scan, d);
   const fs::path corrected_file = o.corrected.empty() ? fs::path(stem.string() + ".corrected-scan.json") : o.corrected;
   // Relative names in the corrected scan must still find the projections: write it beside the
   // original unless the user chose a place, and say where its data lives.
@@ -52,7 +51,6 @@ void run_diagnose(const DiagnoseOptions& o) {
               << "; keep it beside " << o.scan.filename().string() << " to use it\n";
   write_text_atomically(corrected_file, corrected_json.dump(2) + "\n");
   report["corrected_scan"] = corrected_file.string();
-  if (!not_carried.empty()) report["corrected_scan_lacks"] = not_carried;
   write_text_atomically(o.out, report.dump(2) + "\n");
 
   std::cout << "baseline " << d.baseline.rms_px << " px RMS (held out " << d.baseline.heldout_rms_px << ")";

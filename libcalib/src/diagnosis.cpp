@@ -134,6 +134,7 @@ DeclaredSetup declared_setup(const ScanDescription& scan) {
     s.T_camera_base = scan.panda->T_camera_base;
     s.T_flange_holder = scan.panda->T_flange_holder;
   }
+  s.source_drift_mm_per_100_views = scan.source_drift_mm_per_100_views;
   return s;
 }
 
@@ -559,7 +560,7 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& o) 
            "improvement of the held-out cost exceeds 3 standard errors (one-sided p ~ 0.001)"}};
 }
 
-ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d, std::vector<std::string>* not_carried) {
+ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d) {
   ScanDescription out = scan;
   const EffectParameters& p = d.model;
   auto offset = [](const double* x) {
@@ -588,7 +589,7 @@ ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d, 
         break;
       }
       case Effect::source_drift:
-        if (not_carried) not_carried->push_back(effect_name(e));
+        out.source_drift_mm_per_100_views += Eigen::Vector2d(p.drift[0], p.drift[1]);
         break;
     }
   }

@@ -41,7 +41,16 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
     } else {
       try {
         const Image image = read_line_integrals(scan, v, flat_dark);
-        out = calibrate_view(image, K, *guess.T_camera_holder, *scan.holder, scan.detector, options, scan.distortion);
+        // A declared drift: the view is seen from a moved focal spot, i.e. through K with its
+        // principal point moved, at a pose shifted by the focal spot's offset (P = K' [R | t - s]).
+        const Eigen::Vector3d s = scan.source_offset_mm(v);
+        Eigen::Matrix3d K_view = K;
+        K_view(0, 2) += s.x() / scan.detector.pitch_u_mm;
+        K_view(1, 2) += s.y() / scan.detector.pitch_v_mm;
+        Rigid shift = Rigid::Identity();
+        shift.translation() = -s;
+        out = calibrate_view(image, K_view, shift * *guess.T_camera_holder, *scan.holder, scan.detector, options, scan.distortion);
+        if (out.T_camera_holder) out.T_camera_holder = shift.inverse() * *out.T_camera_holder;  // the pose from the nominal spot
       } catch (const InputError& e) {
         out.status = ViewStatus::rejected;
         out.reason = std::string("unreadable image: ") + e.what();

@@ -56,6 +56,7 @@ struct ImageResidual {
   Eigen::Vector2d measured;
   Intrinsics K;
   double pitch_u, pitch_v, view, weight;
+  Eigen::Vector2d declared_drift;  // mm per 100 views; the effect's parameters add to it
 
   template <typename T>
   bool operator()(const T* pose, const T* sphere, const T* intrinsics, const T* distortion, const T* drift, T* r) const {
@@ -63,7 +64,7 @@ struct ImageResidual {
     Vec3<T> t;
     pose_of(pose, R0, R, t);
     const Vec3<T> Xs = X.cast<T>() + Vec3<T>(sphere[0], sphere[1], sphere[2]);
-    const T s0 = drift[0] * T(view / 100.0), s1 = drift[1] * T(view / 100.0);
+    const T s0 = (drift[0] + T(declared_drift.x())) * T(view / 100.0), s1 = (drift[1] + T(declared_drift.y())) * T(view / 100.0);
     const Vec3<T> Y = R * Xs + t - Vec3<T>(s0, s1, T(0.0));
     // Seen from the moved focal spot the principal point moves with it (detector fixed).
     const T fu = T(K.fu_px) + intrinsics[2], fv = T(K.fv_px) + intrinsics[2] * T(K.fv_px / K.fu_px);
@@ -185,7 +186,7 @@ void add_view(ceres::Problem& problem, const ScanObservations& o, const ViewObse
   for (std::size_t i = 0; i < v.spheres.size(); ++i) {
     const auto k = static_cast<std::size_t>(v.spheres[i]);
     auto* f = new ImageResidual{R0, s.holder.spheres_mm[k], v.measured_px[i], s.K, s.detector.pitch_u_mm, s.detector.pitch_v_mm,
-                                static_cast<double>(v.view), 1.0 / o.centre_sigma_px};
+                                static_cast<double>(v.view), 1.0 / o.centre_sigma_px, s.source_drift_mm_per_100_views};
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ImageResidual, 2, 6, 3, 3, 3, 2>(f), nullptr, pose,
                              g.block(Effect::sphere_positions, k), g.block(Effect::detector_intrinsics),
                              g.block(Effect::detector_distortion), g.block(Effect::source_drift));
@@ -220,7 +221,7 @@ void collect_view(const ScanObservations& o, const ViewObservations& v, const do
   for (std::size_t i = 0; i < v.spheres.size(); ++i) {
     const auto k = static_cast<std::size_t>(v.spheres[i]);
     const ImageResidual f{R0, o.setup.holder.spheres_mm[k], v.measured_px[i], o.setup.K, o.setup.detector.pitch_u_mm,
-                          o.setup.detector.pitch_v_mm, static_cast<double>(v.view), 1.0};
+                          o.setup.detector.pitch_v_mm, static_cast<double>(v.view), 1.0, o.setup.source_drift_mm_per_100_views};
     double r[2];
     f(pose, p.spheres[k].data(), p.intrinsics, p.distortion, p.drift, r);
     // f gives model - measured; the residual shown is measured - model.

@@ -134,7 +134,8 @@ ScanDescription read_scan(const fs::path& file) {
   const nlohmann::json root = read_json_file(file);
   const JsonNode top(root, file.string(), "", &scan.warnings);
   if (!root.is_object()) top.fail("expected a JSON object");
-  top.warn_unknown_keys({"format", "detector", "source_to_detector_mm", "projections", "pose_source", "holder"});
+  top.warn_unknown_keys({"format", "detector", "source_to_detector_mm", "projections", "pose_source", "holder",
+                         "source_drift_mm_per_100_views"});
   const std::string format = top.at("format").string();
   if (format != kFormat) top.at("format").fail("expected \"" + std::string(kFormat) + "\", got \"" + format + "\"");
 
@@ -145,6 +146,10 @@ ScanDescription read_scan(const fs::path& file) {
     scan.distortion = RadialDistortion{rd->at("k1_per_px2").number(), {c[0], c[1]}};
   }
   scan.source_to_detector_mm = top.at("source_to_detector_mm").positive_number();
+  if (auto drift = top.find("source_drift_mm_per_100_views")) {
+    const auto d = drift->numbers(2);
+    scan.source_drift_mm_per_100_views = {d[0], d[1]};
+  }
   scan.projections = read_projections(top.at("projections"), scan);
 
   const JsonNode pose = top.at("pose_source");
@@ -193,6 +198,8 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
     j["detector"]["radial_distortion"] = {{"k1_per_px2", scan.distortion->k1_per_px2},
                                           {"center_px", {scan.distortion->centre_px.x(), scan.distortion->centre_px.y()}}};
   j["source_to_detector_mm"] = scan.source_to_detector_mm;
+  if (scan.source_drift_mm_per_100_views != Eigen::Vector2d::Zero())
+    j["source_drift_mm_per_100_views"] = {scan.source_drift_mm_per_100_views.x(), scan.source_drift_mm_per_100_views.y()};
   const auto& p = scan.projections;
   json proj;
   if (p.file_names.empty()) proj["files"] = p.files_pattern; else proj["files"] = p.file_names;

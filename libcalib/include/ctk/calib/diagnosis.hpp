@@ -78,9 +78,9 @@ Diagnosis diagnose(const ScanObservations& observations, const DiagnosisOptions&
 /// The report in the ctk-diagnosis/1 format.
 nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& observations);
 
-/// The scan with the accepted effects written into its setup (frames, joint offsets, detector,
-/// sphere list). Effects the scan format cannot carry yet (distortion, source drift) are listed
-/// in `not_carried`.
-ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d, std::vector<std::string>* not_carried);
+/// The scan with the accepted effects written into its setup: frames, joint offsets, detector
+/// (intrinsics, `radial_distortion`), source drift, sphere list. Calibrating with it starts where
+/// the diagnosis ended.
+ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d);
 
 }  // namespace ctk

@@ -57,6 +57,7 @@ struct DeclaredSetup {
   Holder holder;
   bool robot = false;
   Rigid T_camera_base = Rigid::Identity(), T_flange_holder = Rigid::Identity();
+  Eigen::Vector2d source_drift_mm_per_100_views{0, 0};  // declared; the source_drift effect adds to it
 };
 
 struct ViewObservations {

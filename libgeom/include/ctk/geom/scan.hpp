@@ -56,9 +56,16 @@ struct ScanDescription {
   /// Optional key `detector.radial_distortion` {k1_per_px2, center_px} (an extension of
   /// ctk-scan/1, as the diagnosis reports it): the detector measures x at x + k1 |x - c|^2 (x - c).
   std::optional<RadialDistortion> distortion;
+  /// Optional key `source_drift_mm_per_100_views` [x, y] (an extension of ctk-scan/1): the focal
+  /// spot moves linearly with the view index, in camera x and y, the detector staying put.
+  Eigen::Vector2d source_drift_mm_per_100_views{0, 0};
   std::vector<std::string> warnings;          // unknown keys and other non-fatal findings
 
   Intrinsics intrinsics() const { return Intrinsics::from_setup(source_to_detector_mm, detector, principal_point_px); }
+  /// Where the focal spot is at `view` (camera frame, mm), from the declared drift.
+  Eigen::Vector3d source_offset_mm(int view) const {
+    return {source_drift_mm_per_100_views.x() * view / 100.0, source_drift_mm_per_100_views.y() * view / 100.0, 0.0};
+  }
   std::filesystem::path resolve(const std::string& name) const;
   std::filesystem::path projection_path(int view) const { return resolve(projections.file_name(view)); }
 };
