@@ -151,6 +151,29 @@ TEST(ScanFile, AbsentJointRowsAreSkippedViewsNotErrors) {
   EXPECT_EQ(g.ok_views().size(), 12u);
 }
 
+// The extensions a corrected scan writes: radial distortion and source drift round-trip, and a
+// malformed one is an error naming its key; a scan without them means what it always meant.
+TEST(ScanFile, DistortionAndDriftExtensions) {
+  const auto file = write_valid_scan(testing::scratch_dir());
+  ScanDescription scan = read_scan(file);
+  EXPECT_FALSE(scan.distortion);
+  EXPECT_EQ(scan.source_drift_mm_per_100_views, Eigen::Vector2d::Zero());
+  EXPECT_EQ(scan.source_offset_mm(50), Eigen::Vector3d::Zero());
+  scan.distortion = RadialDistortion{2e-8, {380, 340}};
+  scan.source_drift_mm_per_100_views = {1.0, -0.6};
+  write_scan(scan, file);
+  const ScanDescription back = read_scan(file);
+  EXPECT_TRUE(back.warnings.empty());
+  ASSERT_TRUE(back.distortion);
+  EXPECT_EQ(back.distortion->k1_per_px2, 2e-8);
+  EXPECT_EQ(back.distortion->centre_px, Eigen::Vector2d(380, 340));
+  EXPECT_EQ(back.source_offset_mm(50), Eigen::Vector3d(0.5, -0.3, 0.0));
+  expect_error_naming(file, [](nlohmann::json& j) { j["detector"]["radial_distortion"]["center_px"] = {1.0}; },
+                      "detector.radial_distortion.center_px");
+  write_scan(scan, file);  // each check starts from a valid file
+  expect_error_naming(file, [](nlohmann::json& j) { j["source_drift_mm_per_100_views"] = "fast"; }, "source_drift_mm_per_100_views");
+}
+
 TEST(ScanFile, UnknownKeysWarn) {
   const auto file = write_valid_scan(testing::scratch_dir());
   nlohmann::json j = read_json_file(file);
