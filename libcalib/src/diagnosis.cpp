@@ -60,15 +60,33 @@ HeldOut held_out(const ScanObservations& o, const std::vector<Effect>& active, c
   return h;
 }
 
+// Whether sphere k's offset x differs from zero beyond chance (chi-square, 3 dof, p < 0.001),
+// from the covariance C of all sphere offsets (pseudo-inverse: the gauge leaves directions
+// unfixed); without a covariance, beyond 0.03 mm. `sigma` gets its standard deviations.
+bool sphere_offset_significant(const Eigen::Vector3d& x, const Eigen::MatrixXd& C, std::size_t k, Eigen::Vector3d* sigma) {
+  if (C.rows() < static_cast<Eigen::Index>(3 * (k + 1))) return x.norm() > 0.03;
+  const Eigen::Matrix3d Ck = C.block(static_cast<Eigen::Index>(3 * k), static_cast<Eigen::Index>(3 * k), 3, 3);
+  if (sigma) *sigma = Ck.diagonal().cwiseMax(0.0).cwiseSqrt();
+  const Eigen::Matrix3d inv = Ck.completeOrthogonalDecomposition().pseudoInverse();
+  return x.dot(inv * x) > 16.27;
+}
+
 // Which spheres are misplaced: fitted all together (gauge fixed), a misplaced sphere stands out
 // from the rest, while an error of the detector or the robot that the offsets absorb spreads over
 // many of them. Offsets beyond 6 robust deviations of the median (and 0.03 mm) are free in the
-// model; if none stands out, all are (the full model, with its gauge).
+// model; empty when none stands out.
 std::vector<bool> misplaced_spheres(const ScanObservations& o, const std::vector<Effect>& active, EffectParameters start) {
   start.free_spheres.clear();
   std::vector<std::size_t> views(o.views.size());
   std::iota(views.begin(), views.end(), std::size_t{0});
-  const ScanModelFit all = fit_scan_model(o, active, views, start);
+  const ScanModelFit all = fit_scan_model(o, active, views, start, true);
+  // The sphere offsets' block of the covariance (they come last among the active effects).
+  const auto slot = static_cast<std::size_t>(std::find(active.begin(), active.end(), Effect::sphere_positions) - active.begin());
+  Eigen::MatrixXd C;
+  if (all.covariance.size() > 0) {
+    const auto n = static_cast<Eigen::Index>(3 * all.parameters.spheres.size());
+    C = all.covariance.block(all.covariance_offsets[slot], all.covariance_offsets[slot], n, n);
+  }
   std::vector<double> m;
   for (const auto& x : all.parameters.spheres) m.push_back(x.norm());
   std::vector<double> sorted = m;
@@ -77,9 +95,24 @@ std::vector<bool> misplaced_spheres(const ScanObservations& o, const std::vector
   for (double& x : sorted) x = std::abs(x - median);
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
   const double limit = std::max(0.03, median + 6 * 1.4826 * sorted[sorted.size() / 2]);
+  // A sphere's 3-D place is only fixed by views from well-separated directions: one seen in a
+  // few views, or from a narrow cone of directions, fits any bias of its centres (a sample's edge
+  // over it) with a large, meaningless offset.
+  std::vector<std::vector<Eigen::Vector3d>> seen_from(m.size());
+  for (const auto& view : o.views)
+    for (int k : view.spheres) seen_from[static_cast<std::size_t>(k)].push_back(view.T_calibrated.linear().row(2).transpose());
+  auto well_observed = [&](std::size_t k) {
+    const auto& d = seen_from[k];
+    if (d.size() < 10) return false;
+    double widest = 0;
+    for (std::size_t i = 0; i < d.size(); ++i)
+      for (std::size_t j = i + 1; j < d.size(); ++j) widest = std::max(widest, std::acos(std::clamp(d[i].dot(d[j]), -1.0, 1.0)));
+    return widest > 30 * kDegree;
+  };
   std::vector<bool> free(m.size(), false);
   bool any = false;
-  for (std::size_t k = 0; k < m.size(); ++k) any |= free[k] = m[k] > limit;
+  for (std::size_t k = 0; k < m.size(); ++k)
+    any |= free[k] = m[k] > limit && well_observed(k) && sphere_offset_significant(all.parameters.spheres[k], C, k, nullptr);
   return any ? free : std::vector<bool>{};
 }
 
@@ -343,7 +376,20 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, c
       std::vector<Effect> active = d.accepted;
       active.push_back(e);
       EffectParameters start = current;
-      if (e == Effect::sphere_positions) start.free_spheres = misplaced_spheres(o, active, current);
+      if (e == Effect::sphere_positions) {
+        // Only spheres that stand out are candidates; with none, the effect has nothing to name
+        // (offsets spread over all spheres absorb other errors and noise instead).
+        start.free_spheres = misplaced_spheres(o, active, current);
+        if (start.free_spheres.empty()) {
+          say("  sphere_positions: no sphere stands out from the others");
+          trials.push_back(Trial{e, current_held, 0});
+          continue;
+        }
+        std::string which;
+        for (std::size_t k = 0; k < start.free_spheres.size(); ++k)
+          if (start.free_spheres[k]) which += " " + std::to_string(k);
+        say("  sphere_positions: spheres standing out:" + which);
+      }
       Trial t{e, held_out(o, active, start), 0};
       t.z = paired_z(current_held.cost, t.held.cost);
       say(std::string("  ") + effect_name(e) + ": held-out improvement " + std::to_string(t.z) + " standard errors");
@@ -486,16 +532,8 @@ void effect_parameters_json(const EffectFinding& f, const ScanObservations& o, n
       nlohmann::json spheres = nlohmann::json::array(), sigmas = nlohmann::json::array();
       for (std::size_t k = 0; k < p.spheres.size(); ++k) {
         const Eigen::Vector3d& x = p.spheres[k];
-        bool significant = false;
         Eigen::Vector3d s(0, 0, 0);
-        if (C.rows() >= static_cast<Eigen::Index>(3 * (k + 1))) {
-          const Eigen::Matrix3d Ck = C.block(static_cast<Eigen::Index>(3 * k), static_cast<Eigen::Index>(3 * k), 3, 3);
-          s = Ck.diagonal().cwiseMax(0.0).cwiseSqrt();
-          const Eigen::Matrix3d inv = Ck.completeOrthogonalDecomposition().pseudoInverse();
-          significant = x.dot(inv * x) > 16.27;
-        } else {
-          significant = x.norm() > 0.03;
-        }
+        const bool significant = sphere_offset_significant(x, C, k, &s);
         if (!significant) continue;
         spheres.push_back({{"index", k}, {"offset_mm", {x.x(), x.y(), x.z()}}});
         sigmas.push_back({{"index", k}, {"offset_mm", {s.x(), s.y(), s.z()}}});
