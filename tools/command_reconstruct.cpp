@@ -48,10 +48,7 @@ VolumeLayout volume_layout(const ReconstructOptions& o, const ScanDescription& s
 }
 
 void write_previews(const Volume& x, const fs::path& out) {
-  std::vector<float> sorted = x.data;
-  const std::size_t hi = static_cast<std::size_t>(0.999 * static_cast<double>(sorted.size() - 1));
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(hi), sorted.end());
-  const float high = std::max(sorted[hi], 1e-6f);
+  const float high = preview_ceiling(x);
   const auto& n = x.layout.size;
   const std::string stem = (out.parent_path() / out.stem()).string();
   write_slice_png(x, 2, n[2] / 2, 0.0f, high, stem + "_axial.png");

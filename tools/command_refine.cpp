@@ -91,11 +91,9 @@ void run_refine(const RefineOptions& o) {
   report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_text_atomically(o.out, report.dump(2) + "\n");
 
-  std::vector<float> sorted = r.volume_before.data;
-  const std::size_t hi = static_cast<std::size_t>(0.999 * static_cast<double>(sorted.size() - 1));
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(hi), sorted.end());
-  write_central_slice(r.volume_before, sorted[hi], beside(o.out, ".before.png"));
-  write_central_slice(r.volume_after, sorted[hi], beside(o.out, ".after.png"));
+  const float high = preview_ceiling(r.volume_before);  // one grey scale for both pictures
+  write_central_slice(r.volume_before, high, beside(o.out, ".before.png"));
+  write_central_slice(r.volume_after, high, beside(o.out, ".after.png"));
 
   std::cout << "held-out projection RMS " << r.heldout_rms_before << " -> " << r.heldout_rms_after << "; sharpness "
             << r.sharpness_before << " -> " << r.sharpness_after << " per mm\n";

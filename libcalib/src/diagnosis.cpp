@@ -370,6 +370,7 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, c
       Effect effect;
       HeldOut held;
       double z;
+      std::vector<bool> free_spheres;  // sphere_positions: the spheres its fit frees
     };
     std::vector<Trial> trials;
     for (Effect e : candidates) {
@@ -382,7 +383,7 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, c
         start.free_spheres = misplaced_spheres(o, active, current);
         if (start.free_spheres.empty()) {
           say("  sphere_positions: no sphere stands out from the others");
-          trials.push_back(Trial{e, current_held, 0});
+          trials.push_back(Trial{e, current_held, 0, {}});
           continue;
         }
         std::string which;
@@ -390,7 +391,7 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, c
           if (start.free_spheres[k]) which += " " + std::to_string(k);
         say("  sphere_positions: spheres standing out:" + which);
       }
-      Trial t{e, held_out(o, active, start), 0};
+      Trial t{e, held_out(o, active, start), 0, start.free_spheres};
       t.z = paired_z(current_held.cost, t.held.cost);
       say(std::string("  ") + effect_name(e) + ": held-out improvement " + std::to_string(t.z) + " standard errors");
       trials.push_back(std::move(t));
@@ -440,7 +441,7 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, c
     f.before = d.accepted.empty() ? d.baseline : d.final_error;
     f.model_before = current;
     d.accepted.push_back(chosen);
-    if (chosen == Effect::sphere_positions) current.free_spheres = misplaced_spheres(o, d.accepted, current);
+    if (chosen == Effect::sphere_positions) current.free_spheres = t.free_spheres;  // as judged
     const ScanModelFit all = fit_scan_model(o, d.accepted, all_views(o), current, true);
     current = all.parameters;
     current_held = t.held;

@@ -29,6 +29,9 @@ void write_image_uint16(const Image& counts, const std::filesystem::path& file);
 void write_volume_nrrd(const Volume& volume, const std::filesystem::path& nrrd_file);
 /// One float32 page per z slice.
 void write_volume_tiff(const Volume& volume, const std::filesystem::path& file);
+/// The grey level previews map to white: the 99.9th percentile of the voxels (a few hot voxels
+/// must not darken the picture), at least 1e-6.
+float preview_ceiling(const Volume& volume);
 /// Slice `index` across `axis` (0: x, 1: y, 2: z), grey levels linear from `low` to `high`.
 void write_slice_png(const Volume& volume, int axis, int index, float low, float high,
                      const std::filesystem::path& file);
