@@ -28,6 +28,8 @@ struct SimulateOptions {
   int supersampling = 2;
   std::string output = "counts";
   double flat_counts = 1e4, dark_counts = 100;
+  std::optional<double> kvp;
+  double filter_al_mm = 2.0;
   double robot_noise_mm = 0.1, robot_noise_deg = 0.02;
   std::uint64_t seed = 1;
   // Effects (unset: off).
@@ -101,6 +103,7 @@ void run_simulate(const SimulateOptions& o) {
     sim.trajectory = spherical_robot_trajectory(sim.setup, HealpixSphere(o.nside).directions());
   }
   sim.supersampling = o.supersampling;
+  if (o.kvp) sim.spectrum = tube_spectrum(*o.kvp, o.filter_al_mm);
   sim.output = o.output == "counts" ? SimulatedOutput::counts : SimulatedOutput::line_integrals;
   sim.counts = {o.flat_counts, o.dark_counts};
   sim.robot_noise = {o.robot_noise_mm, o.robot_noise_deg};
@@ -149,6 +152,11 @@ void register_simulate(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--flat-counts", o->flat_counts, "Mean counts above dark, open beam")->check(CLI::Range(1.0, 65000.0))->capture_default_str();
   cmd->add_option("--dark-counts", o->dark_counts, "Dark offset (counts)")->check(CLI::Range(0.0, 10000.0))->capture_default_str();
+  cmd->add_option("--kvp", o->kvp, "Polychromatic rays from a tube at this voltage (Kramers spectrum; beam hardening)")
+      ->check(CLI::Range(16.0, 150.0));
+  cmd->add_option("--filter-al-mm", o->filter_al_mm, "Aluminium filter of the polychromatic spectrum")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--robot-noise-mm", o->robot_noise_mm, "Pose repeatability, RMS translation (0: off)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--robot-noise-deg", o->robot_noise_deg, "Pose repeatability, RMS rotation (0: off)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--seed", o->seed, "Random seed (noise, effects)")->capture_default_str();

@@ -24,6 +24,11 @@ void add_hole(Phantom& p, const Vector3d& centre, double diameter, double length
   p.primitives.push_back(Primitive::cylinder(centre, 0.5 * diameter, length, R, -mu, label));
 }
 
+// Names what every primitive added since `first` is made of (polychromatic simulation).
+void made_of(Phantom& p, std::size_t first, const char* material) {
+  for (std::size_t i = first; i < p.primitives.size(); ++i) p.primitives[i].material = material;
+}
+
 }  // namespace
 
 Phantom helix_holder_phantom(const Holder& holder) {
@@ -33,9 +38,12 @@ Phantom helix_holder_phantom(const Holder& holder) {
                                              "POM tube"));
   p.primitives.push_back(Primitive::cylinder(Vector3d::Zero(), inner_radius, height, kIdentity, -material::pom,
                                              "POM tube bore"));
+  made_of(p, 0, "pom");
+  const std::size_t spheres = p.primitives.size();
   for (std::size_t k = 0; k < holder.spheres_mm.size(); ++k)
     p.primitives.push_back(Primitive::sphere(holder.spheres_mm[k], 0.5 * holder.sphere_diameter_mm,
                                              material::aluminium, "sphere " + std::to_string(k)));
+  made_of(p, spheres, "aluminium");
   return p;
 }
 
@@ -61,6 +69,7 @@ Phantom shepp_logan_phantom(double s, double mu) {
     p.primitives.push_back(Primitive::ellipsoid(s * Vector3d(r.x, r.y, r.z), s * Vector3d(r.a, r.b, r.c),
                                                 about_w(r.phi) * about_u(r.psi), mu * r.density,
                                                 "ellipsoid " + std::to_string(k++)));
+  made_of(p, 0, "water");
   return p;
 }
 
@@ -78,6 +87,8 @@ Phantom brick_and_plate_phantom() {
   }
   // The plate: 4 mm PVC, its long edges slanting 15 degrees out of the axis.
   p.primitives.push_back(Primitive::box(Vector3d(13, 0, 0), Vector3d(4, 26, 45), about_u(15), material::pvc, "plate"));
+  made_of(p, 0, "abs");
+  p.primitives.back().material = "pvc";  // the plate
   return p;
 }
 
@@ -94,6 +105,8 @@ Phantom sample1_phantom() {
   add_hole(p, cylinder_centre + Vector3d(0, 0, -7), 6, across, about_v(90), low, "cylinder hole 0");
   add_hole(p, cylinder_centre + Vector3d(0, 0, 7), 6, across, about_v(90), low, "cylinder hole 1");
   p.primitives.push_back(Primitive::box(Vector3d(13, 0, 0), Vector3d(4, 30, 50), kIdentity, high, "absorber"));
+  made_of(p, 0, "abs");
+  p.primitives.back().material = "aluminium";  // the absorber
   return p;
 }
 
@@ -113,6 +126,8 @@ Phantom sample2_phantom() {
   p.primitives.push_back(Primitive::cylinder(cyl_b, 3, 12, kIdentity, low, "cylinder b"));
   add_hole(p, cyl_b, 0.8, 12, kIdentity, low, "cylinder b hole");
   p.primitives.push_back(Primitive::box(Vector3d(-7, 7, floor + 6), Vector3d(1, 12, 12), kIdentity, high, "absorber"));
+  made_of(p, 0, "abs");
+  p.primitives.back().material = "aluminium";  // the absorber
   return p;
 }
 
@@ -135,6 +150,7 @@ Phantom walnut_phantom() {
                                                   about_w(side * 12.0 * (slice % 2 ? 1 : -1)), kernel,
                                                   "kernel fold " + std::to_string(slice)));
     }
+  made_of(p, 0, "water");
   return p;
 }
 

@@ -4,6 +4,7 @@
 
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/json_access.hpp"
+#include "ctk/phantoms/material_attenuation.hpp"
 
 namespace ctk {
 
@@ -31,7 +32,7 @@ namespace {
 
 constexpr double kDegree = M_PI / 180.0;
 
-Primitive primitive_from_json(const JsonNode& node) {
+Primitive shape_from_json(const JsonNode& node) {
   const std::string type = node.at("type").string();
   const Eigen::Vector3d centre = node.at("center_mm").vector3();
   const double mu = node.at("attenuation_per_mm").number();
@@ -40,7 +41,7 @@ Primitive primitive_from_json(const JsonNode& node) {
   std::string label;
   if (auto l = node.find("label")) label = l->string();
   if (type == "sphere") {
-    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "radius_mm"});
+    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "material", "radius_mm"});
     return Primitive::sphere(centre, node.at("radius_mm").positive_number(), mu, label);
   }
   auto positive3 = [&](const char* key) {
@@ -50,20 +51,33 @@ Primitive primitive_from_json(const JsonNode& node) {
     return v;
   };
   if (type == "ellipsoid") {
-    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "rotation_vector_deg", "radii_mm"});
+    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "material", "rotation_vector_deg", "radii_mm"});
     return Primitive::ellipsoid(centre, positive3("radii_mm"), R, mu, label);
   }
   if (type == "cylinder") {
-    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "rotation_vector_deg", "radius_mm",
-                            "height_mm"});
+    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "material", "rotation_vector_deg",
+                            "radius_mm", "height_mm"});
     return Primitive::cylinder(centre, node.at("radius_mm").positive_number(), node.at("height_mm").positive_number(),
                                R, mu, label);
   }
   if (type == "box") {
-    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "rotation_vector_deg", "size_mm"});
+    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "material", "rotation_vector_deg", "size_mm"});
     return Primitive::box(centre, positive3("size_mm"), R, mu, label);
   }
   node.at("type").fail("expected \"sphere\", \"ellipsoid\", \"cylinder\" or \"box\", got \"" + type + "\"");
+}
+
+Primitive primitive_from_json(const JsonNode& node) {
+  Primitive p = shape_from_json(node);
+  if (auto m = node.find("material")) {
+    p.material = m->string();
+    if (!is_known_material(p.material)) {
+      std::string names;
+      for (const auto& n : known_materials()) names += (names.empty() ? "" : ", ") + n;
+      m->fail("unknown material \"" + p.material + "\" (known: " + names + ")");
+    }
+  }
+  return p;
 }
 
 nlohmann::json primitive_to_json(const Primitive& p) {
@@ -87,6 +101,7 @@ nlohmann::json primitive_to_json(const Primitive& p) {
     if (r.norm() > 0) j["rotation_vector_deg"] = {r.x(), r.y(), r.z()};
   }
   j["attenuation_per_mm"] = p.attenuation_per_mm;
+  if (!p.material.empty()) j["material"] = p.material;
   return j;
 }
 

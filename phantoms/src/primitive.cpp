@@ -19,22 +19,22 @@ const char* to_string(Shape shape) {
 
 Primitive Primitive::sphere(const Eigen::Vector3d& centre, double radius, double mu, std::string label) {
   return {Shape::sphere, Eigen::Vector3d::Constant(radius), make_rigid(Eigen::Matrix3d::Identity(), centre), mu,
-          std::move(label)};
+          std::move(label), {}};
 }
 
 Primitive Primitive::ellipsoid(const Eigen::Vector3d& centre, const Eigen::Vector3d& radii, const Eigen::Matrix3d& R,
                                double mu, std::string label) {
-  return {Shape::ellipsoid, radii, make_rigid(R, centre), mu, std::move(label)};
+  return {Shape::ellipsoid, radii, make_rigid(R, centre), mu, std::move(label), {}};
 }
 
 Primitive Primitive::cylinder(const Eigen::Vector3d& centre, double radius, double height, const Eigen::Matrix3d& R,
                               double mu, std::string label) {
-  return {Shape::cylinder, Eigen::Vector3d(radius, radius, 0.5 * height), make_rigid(R, centre), mu, std::move(label)};
+  return {Shape::cylinder, Eigen::Vector3d(radius, radius, 0.5 * height), make_rigid(R, centre), mu, std::move(label), {}};
 }
 
 Primitive Primitive::box(const Eigen::Vector3d& centre, const Eigen::Vector3d& size, const Eigen::Matrix3d& R,
                          double mu, std::string label) {
-  return {Shape::box, 0.5 * size, make_rigid(R, centre), mu, std::move(label)};
+  return {Shape::box, 0.5 * size, make_rigid(R, centre), mu, std::move(label), {}};
 }
 
 namespace {

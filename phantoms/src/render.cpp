@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+
+#include "ctk/phantoms/material_attenuation.hpp"
 
 namespace ctk {
 
@@ -43,28 +46,63 @@ double largest_distortion_shift_px(const RenderOptions& options, const Detector&
   return shift;
 }
 
+// Primitives grouped by material, with how each group's attenuation scales in each energy bin.
+struct MaterialGroups {
+  std::vector<int> group_of;                // per primitive
+  std::vector<std::vector<double>> ratio;   // [group][bin]
+  std::vector<double> bin_weight;           // one bin of weight 1 when monochromatic
+};
+
+MaterialGroups material_groups(const Phantom& phantom, const std::optional<XraySpectrum>& spectrum) {
+  MaterialGroups g;
+  if (!spectrum) {
+    g.group_of.assign(phantom.primitives.size(), 0);
+    g.ratio = {{1.0}};
+    g.bin_weight = {1.0};
+    return g;
+  }
+  std::vector<std::string> names;
+  for (const Primitive& p : phantom.primitives) {
+    const auto found = std::find(names.begin(), names.end(), p.material);
+    g.group_of.push_back(static_cast<int>(found - names.begin()));
+    if (found == names.end()) names.push_back(p.material);
+  }
+  for (const SpectrumBin& b : spectrum->bins) g.bin_weight.push_back(b.weight);
+  for (const std::string& name : names) {
+    std::vector<double> r;
+    for (const SpectrumBin& b : spectrum->bins) r.push_back(name.empty() ? 1.0 : attenuation_ratio(name, b.energy_kev));
+    g.ratio.push_back(std::move(r));
+  }
+  return g;
+}
+
 }  // namespace
 
 Image render_line_integrals(const Phantom& phantom, const ProjectionMatrix& P, const Detector& detector,
                             const RenderOptions& options) {
   const int s = options.supersampling;
   if (s < 1) throw std::invalid_argument("render_line_integrals: supersampling must be at least 1");
+  const MaterialGroups groups = material_groups(phantom, options.spectrum);
+  const std::size_t group_count = groups.ratio.size();
   const std::size_t samples = static_cast<std::size_t>(s) * static_cast<std::size_t>(s);
   const std::size_t pixels = static_cast<std::size_t>(detector.cols) * static_cast<std::size_t>(detector.rows);
-  std::vector<double> sub(pixels * samples, 0.0);  // line integral per sub-pixel ray
+  // Line integral at the reference energy per sub-pixel ray and material group.
+  std::vector<double> sub(pixels * samples * group_count, 0.0);
   std::vector<unsigned char> touched(pixels, 0);
 
   const Eigen::Matrix3d M_inverse = P.matrix().leftCols<3>().inverse();
   const Eigen::Vector3d source = P.source_position();
   const double margin = 1.0 + largest_distortion_shift_px(options, detector);
 
-  for (const Primitive& primitive : phantom.primitives) {
+  for (std::size_t k = 0; k < phantom.primitives.size(); ++k) {
+    const Primitive& primitive = phantom.primitives[k];
+    const std::size_t group = static_cast<std::size_t>(groups.group_of[k]);
     const PixelRect rect = pixels_covering(primitive, P, detector, margin);
     for (int row = rect.row0; row <= rect.row1; ++row)
       for (int col = rect.col0; col <= rect.col1; ++col) {
         const std::size_t pixel = static_cast<std::size_t>(row) * static_cast<std::size_t>(detector.cols) +
                                   static_cast<std::size_t>(col);
-        double* out = &sub[pixel * samples];
+        double* out = &sub[(pixel * group_count + group) * samples];
         for (int b = 0; b < s; ++b)
           for (int a = 0; a < s; ++a) {
             Eigen::Vector2d uv(col + (a + 0.5) / s - 0.5, row + (b + 0.5) / s - 0.5);
@@ -80,13 +118,18 @@ Image render_line_integrals(const Phantom& phantom, const ProjectionMatrix& P, c
   Image image{detector.cols, detector.rows, std::vector<float>(pixels, 0.0f)};
   for (std::size_t pixel = 0; pixel < pixels; ++pixel) {
     if (!touched[pixel]) continue;
-    const double* p = &sub[pixel * samples];
-    if (samples == 1) {
+    const double* p = &sub[pixel * group_count * samples];
+    if (samples == 1 && !options.spectrum) {
       image.pixels[pixel] = static_cast<float>(p[0]);
       continue;
     }
     double transmitted = 0;
-    for (std::size_t k = 0; k < samples; ++k) transmitted += std::exp(-p[k]);
+    for (std::size_t k = 0; k < samples; ++k)
+      for (std::size_t bin = 0; bin < groups.bin_weight.size(); ++bin) {
+        double exponent = 0;
+        for (std::size_t g = 0; g < group_count; ++g) exponent += groups.ratio[g][bin] * p[g * samples + k];
+        transmitted += groups.bin_weight[bin] * std::exp(-exponent);
+      }
     image.pixels[pixel] = static_cast<float>(-std::log(transmitted / static_cast<double>(samples)));
   }
   return image;

@@ -84,7 +84,7 @@ SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder
   Phantom phantom{sim.with_holder ? "helix-holder + " + sim.sample.name : sim.sample.name, {}};
   if (sim.with_holder) phantom.add(helix_holder_phantom(truth.holder));
   phantom.add(sim.sample);
-  RenderOptions render{sim.supersampling, sim.effects.detector_distortion};
+  RenderOptions render{sim.supersampling, sim.effects.detector_distortion, sim.spectrum};
 
   fs::create_directories(folder / "projections");
   std::vector<int> acquired;

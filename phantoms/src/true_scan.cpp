@@ -251,7 +251,12 @@ nlohmann::json truth_to_json(const ScanSimulation& sim, const TrueScan& truth, c
             {"dark_counts", sim.counts.dark_counts},
             {"seed", sim.seed},
             {"holder_in_beam", sim.with_holder},
-            {"sample", sim.sample.name}}},
+            {"sample", sim.sample.name},
+            {"spectrum", sim.spectrum ? nlohmann::json{{"kvp", sim.spectrum->kvp},
+                                                       {"filter_al_mm", sim.spectrum->filter_al_mm},
+                                                       {"mean_energy_kev", sim.spectrum->mean_energy_kev()},
+                                                       {"bins", sim.spectrum->bins.size()}}
+                                      : nlohmann::json("monochromatic")}}},
           {"holder_spheres_mm", spheres},
           {"views", views}};
 }

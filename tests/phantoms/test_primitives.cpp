@@ -36,7 +36,7 @@ TEST(Primitives, SphereChordIsTwiceTheHalfChordFromTheCentreDistance) {
   const double r = 9.0, mu = 0.037;
   const Phantom phantom{"sphere", {Primitive::sphere(centre, r, mu)}};
   const ProjectionMatrix P = oblique_view();
-  const Image im = render_line_integrals(phantom, P, kDetector, {1, std::nullopt});
+  const Image im = render_line_integrals(phantom, P, kDetector, {1, std::nullopt, std::nullopt});
   int hits = 0;
   for_each_ray(P, [&](int col, int row, const Eigen::Vector3d& s, const Eigen::Vector3d& d) {
     const double distance = (centre - s).cross(d).norm();
@@ -55,7 +55,7 @@ TEST(Primitives, CylinderChordFromAxisDistanceAndAngle) {
   const double r = 7.0, height = 30.0, mu = 0.02;
   const Phantom phantom{"cylinder", {Primitive::cylinder(centre, r, height, R, mu)}};
   const ProjectionMatrix P = oblique_view();
-  const Image im = render_line_integrals(phantom, P, kDetector, {1, std::nullopt});
+  const Image im = render_line_integrals(phantom, P, kDetector, {1, std::nullopt, std::nullopt});
   const Eigen::Vector3d axis = R.col(2);
   int compared = 0;
   for_each_ray(P, [&](int col, int row, const Eigen::Vector3d& s, const Eigen::Vector3d& d) {
@@ -88,7 +88,7 @@ TEST(Primitives, BoxChordBetweenOppositeFaces) {
   const double mu = 0.05;
   const Phantom phantom{"box", {Primitive::box(centre, size, R, mu)}};
   const ProjectionMatrix P = oblique_view();
-  const Image im = render_line_integrals(phantom, P, kDetector, {1, std::nullopt});
+  const Image im = render_line_integrals(phantom, P, kDetector, {1, std::nullopt, std::nullopt});
   int compared = 0;
   for_each_ray(P, [&](int col, int row, const Eigen::Vector3d& s, const Eigen::Vector3d& d) {
     const Eigen::Vector3d p = R.transpose() * (s - centre), q = R.transpose() * d;
@@ -125,8 +125,8 @@ TEST(Primitives, SupersamplingAveragesTransmittedIntensity) {
                                              Eigen::Matrix3d::Identity(), 0.3)}};
   const Intrinsics K = Intrinsics::from_setup(1500, kDetector, kDetector.centre_px());
   const ProjectionMatrix P = ProjectionMatrix::compose(K, make_rigid(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 1000)));
-  const Image fine = render_line_integrals(slab, P, kDetector, {4, std::nullopt});
-  const Image centre_only = render_line_integrals(slab, P, kDetector, {1, std::nullopt});
+  const Image fine = render_line_integrals(slab, P, kDetector, {4, std::nullopt, std::nullopt});
+  const Image centre_only = render_line_integrals(slab, P, kDetector, {1, std::nullopt, std::nullopt});
   const int c = kDetector.cols / 2, r = kDetector.rows / 2;
   EXPECT_NEAR(pixel(fine, c, r), pixel(centre_only, c, r), 1e-5);
   // Column whose pixel straddles the slab's edge (u of the edge at x = 10 mm, depth 995 mm).

@@ -21,6 +21,10 @@ struct Primitive {
   Rigid pose = Rigid::Identity();   // T_holder_primitive: centre and orientation
   double attenuation_per_mm = 0;    // linear attenuation coefficient, 1/mm (negative: a hole)
   std::string label;                // what it is ("sphere 12", "POM wall"), for files and reports
+  /// What it is made of (material_attenuation.hpp), for polychromatic simulation: the attenuation
+  /// above holds at the reference energy and scales like the material's. Empty: the same at every
+  /// energy.
+  std::string material;
 
   static Primitive sphere(const Eigen::Vector3d& centre_mm, double radius_mm, double mu, std::string label = {});
   static Primitive ellipsoid(const Eigen::Vector3d& centre_mm, const Eigen::Vector3d& radii_mm,

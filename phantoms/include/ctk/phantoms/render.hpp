@@ -4,11 +4,16 @@
 // The pixel reports what a detector measures: the mean transmitted intensity over its area,
 // as a line integral -log(mean(exp(-p))) (partial-volume effect included; s = 1 gives the
 // line integral through the pixel centre).
+//
+// With a spectrum the rays are polychromatic: each energy bin attenuates by the primitives'
+// materials at that energy, and the pixel reports -log of the signal-weighted transmission, so
+// thick or dense parts harden the beam (their line integral grows less than their path).
 #include <optional>
 
 #include "ctk/geom/detector.hpp"
 #include "ctk/geom/projection_matrix.hpp"
 #include "ctk/phantoms/phantom.hpp"
+#include "ctk/phantoms/xray_spectrum.hpp"
 #include "ctk/proj/image_io.hpp"
 
 namespace ctk {
@@ -16,6 +21,7 @@ namespace ctk {
 struct RenderOptions {
   int supersampling = 2;                       // s: s x s rays per pixel
   std::optional<RadialDistortion> distortion;  // the detector's, applied to where rays land
+  std::optional<XraySpectrum> spectrum;        // absent: monochromatic at the reference energy
 };
 
 /// Line-integral image (cols x rows) of `phantom` for the view P (holder frame -> pixels).

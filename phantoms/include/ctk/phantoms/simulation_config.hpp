@@ -11,6 +11,7 @@
 #include "ctk/phantoms/detector_response.hpp"
 #include "ctk/phantoms/phantom.hpp"
 #include "ctk/phantoms/robot_trajectory.hpp"
+#include "ctk/phantoms/xray_spectrum.hpp"
 
 namespace ctk {
 
@@ -74,6 +75,9 @@ struct ScanSimulation {
   std::vector<PlannedView> trajectory;  // a robot scan ...
   std::optional<Geometry> poses;        // ... or given per-view matrices (no robot, no pose effects)
   int supersampling = 2;
+  /// Polychromatic rays (beam hardening, photon starvation behind dense parts); absent:
+  /// monochromatic at the reference energy.
+  std::optional<XraySpectrum> spectrum;
   SimulatedOutput output = SimulatedOutput::counts;
   CountsModel counts;
   RobotNoise robot_noise;
