@@ -13,5 +13,6 @@ void register_calibrate(CLI::App& app);
 void register_diagnose(CLI::App& app);
 void register_import(CLI::App& app);
 void register_refine(CLI::App& app);
+void register_plan(CLI::App& app);
 
 }  // namespace ctk::tools

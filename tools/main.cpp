@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   ctk::tools::register_calibrate(app);
   ctk::tools::register_diagnose(app);
   ctk::tools::register_refine(app);
+  ctk::tools::register_plan(app);
   ctk::tools::register_reconstruct(app);
   ctk::tools::register_bench(app);
   try {

@@ -5,7 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "chart.hpp"
+#include "ctk/calib/chart.hpp"
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/sphere_map.hpp"
 

@@ -1,4 +1,4 @@
-#include "chart.hpp"
+#include "ctk/calib/chart.hpp"
 
 #include <cmath>
 #include <cstdio>

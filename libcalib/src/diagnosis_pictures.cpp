@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "chart.hpp"
+#include "ctk/calib/chart.hpp"
 
 namespace ctk {
 

@@ -47,19 +47,12 @@ ScanDescription declared_scan(const ScanSimulation& sim, const fs::path& folder,
 // One acquired view, from the phantom to the file.
 std::size_t write_projection(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view,
                              const RenderOptions& render, const fs::path& file) {
-  Image image = render_line_integrals(phantom, *view.P, sim.setup.detector, render);
-  if (view.blur_sigma_px > 0) blur_image(image, view.blur_sigma_px);
-  for (const Blob& blob : view.blobs) add_blob(image, blob);
-  if (sim.output == SimulatedOutput::line_integrals) {
+  std::size_t saturated = 0;
+  const Image image = simulated_image(sim, phantom, view, render, &saturated);
+  if (sim.output == SimulatedOutput::line_integrals)
     write_image_float(image, file);
-    return 0;
-  }
-  // Noise differs per view but not with the thread count: one stream per (seed, view).
-  std::seed_seq seq{static_cast<std::uint64_t>(sim.seed), static_cast<std::uint64_t>(view.index), std::uint64_t{0x5ca1ab1e}};
-  std::mt19937_64 rng(seq);
-  Image counts = expected_counts(image, sim.counts);
-  const std::size_t saturated = draw_counts(counts, sim.counts, rng);
-  write_image_uint16(counts, file);
+  else
+    write_image_uint16(image, file);
   return saturated;
 }
 
@@ -73,6 +66,32 @@ void write_flat_and_dark(const ScanSimulation& sim, const fs::path& folder) {
 
 }  // namespace
 
+Image simulated_image(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view, const RenderOptions& render,
+                      std::size_t* saturated) {
+  Image image = render_line_integrals(phantom, *view.P, sim.setup.detector, render);
+  if (view.blur_sigma_px > 0) blur_image(image, view.blur_sigma_px);
+  for (const Blob& blob : view.blobs) add_blob(image, blob);
+  if (sim.output == SimulatedOutput::line_integrals) return image;
+  // Noise differs per view but not with the thread count: one stream per (seed, view).
+  std::seed_seq seq{static_cast<std::uint64_t>(sim.seed), static_cast<std::uint64_t>(view.index), std::uint64_t{0x5ca1ab1e}};
+  std::mt19937_64 rng(seq);
+  Image counts = expected_counts(image, sim.counts);
+  const std::size_t n = draw_counts(counts, sim.counts, rng);
+  if (saturated) *saturated = n;
+  return counts;
+}
+
+Phantom simulated_phantom(const ScanSimulation& sim, const TrueScan& truth) {
+  Phantom phantom{sim.with_holder ? "helix-holder + " + sim.sample.name : sim.sample.name, {}};
+  if (sim.with_holder) phantom.add(helix_holder_phantom(truth.holder));
+  phantom.add(sim.sample);
+  return phantom;
+}
+
+RenderOptions simulated_render_options(const ScanSimulation& sim) {
+  return {sim.supersampling, sim.effects.detector_distortion, sim.spectrum};
+}
+
 SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder,
                                const std::function<void(int, int)>& progress) {
   const TrueScan truth = make_true_scan(sim);
@@ -81,10 +100,8 @@ SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder
   std::vector<std::string> names;
   for (int v = 0; v < view_count; ++v) names.push_back(scan.projections.file_name(v));
 
-  Phantom phantom{sim.with_holder ? "helix-holder + " + sim.sample.name : sim.sample.name, {}};
-  if (sim.with_holder) phantom.add(helix_holder_phantom(truth.holder));
-  phantom.add(sim.sample);
-  RenderOptions render{sim.supersampling, sim.effects.detector_distortion, sim.spectrum};
+  const Phantom phantom = simulated_phantom(sim, truth);
+  const RenderOptions render = simulated_render_options(sim);
 
   fs::create_directories(folder / "projections");
   std::vector<int> acquired;

@@ -61,7 +61,7 @@ double ball_centre_value(double span_rad, int count) {
   const auto views = circular_views(count, span_rad);
   ProjectionStack b(count, kDetector.rows, kDetector.cols);
   for (int v = 0; v < count; ++v) {
-    const Image im = render_line_integrals(ball, views[static_cast<std::size_t>(v)], kDetector, {1, std::nullopt});
+    const Image im = render_line_integrals(ball, views[static_cast<std::size_t>(v)], kDetector, {1, std::nullopt, std::nullopt});
     std::copy(im.pixels.begin(), im.pixels.end(), b.view(v));
   }
   Volume x(VolumeLayout::centred({48, 48, 48}, Eigen::Vector3d::Constant(0.8)));

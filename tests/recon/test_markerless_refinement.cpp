@@ -46,7 +46,7 @@ Simulated simulate(double true_shift_px) {
   const Phantom phantom = shepp_logan_phantom(28.0, 0.02);
 #pragma omp parallel for schedule(dynamic)
   for (int v = 0; v < views; ++v) {
-    const Image im = render_line_integrals(phantom, truth[static_cast<std::size_t>(v)], d, {2, std::nullopt});
+    const Image im = render_line_integrals(phantom, truth[static_cast<std::size_t>(v)], d, {2, std::nullopt, std::nullopt});
     std::copy(im.pixels.begin(), im.pixels.end(), s.b.view(v));
   }
   return s;

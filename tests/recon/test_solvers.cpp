@@ -35,7 +35,7 @@ struct SheppLoganScan {
     exact = ProjectionStack(static_cast<int>(views.size()), kDetector.rows, kDetector.cols);
 #pragma omp parallel for schedule(dynamic)
     for (int v = 0; v < exact.views; ++v) {
-      const Image im = render_line_integrals(phantom, views[static_cast<std::size_t>(v)], kDetector, {2, std::nullopt});
+      const Image im = render_line_integrals(phantom, views[static_cast<std::size_t>(v)], kDetector, {2, std::nullopt, std::nullopt});
       std::copy(im.pixels.begin(), im.pixels.end(), exact.view(v));
     }
     truth = Volume(layout);

@@ -30,7 +30,7 @@ Result reconstruct_sample2(const std::vector<Eigen::Vector3d>& directions) {
   ProjectionStack b(static_cast<int>(views.size()), kDetector.rows, kDetector.cols);
 #pragma omp parallel for schedule(dynamic)
   for (int v = 0; v < b.views; ++v) {
-    const Image im = render_line_integrals(phantom, views[static_cast<std::size_t>(v)], kDetector, {2, std::nullopt});
+    const Image im = render_line_integrals(phantom, views[static_cast<std::size_t>(v)], kDetector, {2, std::nullopt, std::nullopt});
     std::copy(im.pixels.begin(), im.pixels.end(), b.view(v));
   }
   Volume x(kLayout);

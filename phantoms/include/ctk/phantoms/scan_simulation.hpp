@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <functional>
 
+#include "ctk/phantoms/render.hpp"
 #include "ctk/phantoms/true_scan.hpp"
 
 namespace ctk {
@@ -16,6 +17,14 @@ struct SimulationReport {
   int views_acquired = 0;
   std::size_t saturated_pixels = 0;
 };
+
+/// Everything in the beam: the true holder (when in the beam) and the sample.
+Phantom simulated_phantom(const ScanSimulation& simulation, const TrueScan& truth);
+RenderOptions simulated_render_options(const ScanSimulation& simulation);
+/// One acquired view's image as the detector delivers it: counts (noise drawn from the seed and
+/// the view index) or noise-free line integrals, per `simulation.output`.
+Image simulated_image(const ScanSimulation& simulation, const Phantom& phantom, const TrueView& view,
+                      const RenderOptions& render, std::size_t* saturated = nullptr);
 
 /// `progress(done, total)` is called as views are written (from one thread at a time).
 SimulationReport simulate_scan(const ScanSimulation& simulation, const std::filesystem::path& folder,

@@ -1,6 +1,7 @@
 #pragma once
 // A small plotting canvas for report pictures (OpenCV drawing): data coordinates mapped onto a
-// framed plot area, axis labels, and a PNG written atomically. Internal to libcalib.
+// framed plot area, axis labels, and a PNG written atomically. Used by the calibration and
+// diagnosis reports, and by the view planner's pictures.
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <string>
@@ -36,6 +37,7 @@ class Chart {
   /// Tick labels along both axes at the given steps (data units).
   void ticks(double x_step, double y_step);
   void save(const std::filesystem::path& png) const;
+  const cv::Mat& canvas() const { return canvas_; }
 
  private:
   ChartAxes axes_;

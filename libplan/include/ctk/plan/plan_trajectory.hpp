@@ -1,0 +1,76 @@
+#pragma once
+// The planning loop (thesis chapter 7, done better): a scout scan on a coarse HEALPix sphere,
+// then view after view: calibrate the new view from its helix spheres (robot FK as first guess),
+// add it to the warm-started coarse reconstruction, segment the absorbers, score every candidate
+// direction by the absorber path it would look through, and draw the next direction (view_planner).
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ctk/calib/view_calibration.hpp"
+#include "ctk/geom/panda_setup.hpp"
+#include "ctk/plan/absorber_segmentation.hpp"
+#include "ctk/plan/acquisition.hpp"
+#include "ctk/plan/direction_damage.hpp"
+#include "ctk/plan/incremental_reconstruction.hpp"
+#include "ctk/plan/view_planner.hpp"
+
+namespace ctk {
+
+/// What the planner is told about the setup: the declared geometry and open-beam frames.
+struct PlanningSetup {
+  PandaSetup setup;
+  Holder holder;
+  Image flat, dark;  // counts
+};
+
+struct PlanningOptions {
+  int scout_nside = 2;  // 48 scout directions
+  int views = 100;      // acquired views wanted in all (scout included)
+  int max_attempts = 0; // requests in all; 0: three times `views`
+  /// Non-empty: no scout and no planning, these directions are requested in order until `views`
+  /// are acquired (the trajectories a planned one is compared with).
+  std::vector<Eigen::Vector3d> fixed_directions;
+  VolumeLayout coarse_volume;
+  PlannerOptions planner;
+  IncrementalOptions reconstruction;
+  SegmentationOptions segmentation;
+  CalibrationOptions calibration;
+};
+
+struct PlannedViewRecord {
+  int index = 0;                 // request number (the exchange's view number)
+  bool scout = false;
+  Eigen::Vector3d requested{0, 0, 1};
+  bool acquired = false;
+  std::string reason;            // unreachable, or a calibration fallback
+  panda::Joints joints{};
+  std::optional<ProjectionMatrix> P;  // calibrated (or the robot's when calibration failed)
+  double calibration_rms_px = 0;
+  double damage_mm = 0;          // of the requested direction when it was chosen
+  std::string projection_file;
+  double planning_seconds = 0;   // this view's share of the planner's own work (not acquisition)
+};
+
+struct PlanningResult {
+  std::vector<PlannedViewRecord> views;
+  Volume coarse;
+  AbsorberSegmentation segmentation;
+  std::vector<Eigen::Vector3d> candidates;
+  std::vector<CandidateWeight> weights;  // at the end
+  std::vector<double> damage_mm;         // per candidate, at the end
+  std::vector<double> step_seconds;      // planner time of each planned (not scout) step
+  int acquired() const;
+};
+
+PlanningResult plan_trajectory(Acquisition& acquisition, const PlanningSetup& setup, const PlanningOptions& options,
+                               const std::function<void(const PlannedViewRecord&)>& on_view = {});
+
+/// The scout's directions: a HEALPix sphere at `nside`.
+std::vector<Eigen::Vector3d> scout_directions(int nside);
+/// The whole sphere in an order whose every prefix is spread evenly: the cells of a HEALPix
+/// sphere at `nside`, each next one the farthest from those before it.
+std::vector<Eigen::Vector3d> whole_sphere_order(int nside);
+
+}  // namespace ctk

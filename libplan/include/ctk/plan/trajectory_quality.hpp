@@ -1,0 +1,34 @@
+#pragma once
+// How good a reconstruction is against the truth: the RMSE over the sample region (which the
+// thesis did not have), and the thesis' line-profile gradient magnitude, taken where the truth's
+// profile has an edge (sharp, full-contrast edges raise it; between edges a gradient would only
+// measure noise and streaks).
+#include <array>
+#include <vector>
+
+#include "ctk/plan/absorber_segmentation.hpp"
+
+namespace ctk {
+
+struct LineProfile {
+  int axis = 0;                 // along x, y or z
+  std::array<int, 3> through{};  // voxel the line passes through
+  std::vector<float> reconstruction, truth;
+};
+
+struct TrajectoryQuality {
+  double rmse_per_mm = 0;                  // over the sample region
+  double profile_gradient_per_mm2 = 0;     // mean |d mu / ds| across the truth's edges on the profiles
+  double truth_profile_gradient_per_mm2 = 0;
+  std::vector<LineProfile> profiles;
+};
+
+/// `truth` has the reconstruction's layout. The profiles run along x, y and z through
+/// `profile_through` (a voxel), clipped to the sample region.
+TrajectoryQuality trajectory_quality(const Volume& reconstruction, const Volume& truth, const SampleRegion& region,
+                                     const std::array<int, 3>& profile_through);
+
+/// The voxel at the attenuation-weighted centre of the truth inside the region.
+std::array<int, 3> centre_of_mass_voxel(const Volume& truth, const SampleRegion& region);
+
+}  // namespace ctk

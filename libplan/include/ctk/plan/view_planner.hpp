@@ -1,0 +1,65 @@
+#pragma once
+// Where to look next on the sphere of view directions, from what has been measured so far.
+// Candidates are the cells of a HEALPix sphere (equal areas, so no region is favoured by the
+// grid). Each gets a weight, the product of
+//   damage     (d_min / d)^s, d the direction's damage (longest absorber path plus one voxel, so
+//              tiny differences do not count), d_min the least damage among candidates: views
+//              through long absorber paths become unlikely, the sharper the larger s;
+//   spread     1 - exp(-(g / g0)^2), g the angle to the nearest measured view or its opposite (a
+//              view and its opposite see nearly the same lines), g0 the spacing the planned number
+//              of views would have on the half sphere: keeps the data complete, no clustering;
+//   reach      0 within `unreachable_radius` of a direction the robot could not take, else 1: a
+//              refusal rules out its neighbourhood only, so the borders of unreachable regions
+//              keep being explored.
+// The next direction is drawn from the weights with a seeded generator: the same seed and the
+// same measurements give the same trajectory.
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include "ctk/geom/trajectory.hpp"
+
+namespace ctk {
+
+struct PlannerOptions {
+  int candidate_nside = 8;            // 768 candidate directions, 7.3 deg apart
+  int planned_views = 100;            // total the trajectory is meant to reach (sets g0)
+  double damage_exponent = 2.0;       // s
+  double damage_floor_mm = 1.0;       // added to every damage (about a coarse voxel)
+  double unreachable_radius_deg = 4.0;
+  std::uint64_t seed = 1;
+};
+
+struct CandidateWeight {
+  double damage = 1, spread = 1, reach = 1;
+  double weight() const { return damage * spread * reach; }
+};
+
+class ViewPlanner {
+ public:
+  explicit ViewPlanner(const PlannerOptions& options);
+
+  const std::vector<Eigen::Vector3d>& candidates() const { return candidates_; }
+  void record_acquired(const Eigen::Vector3d& direction);
+  void record_unreachable(const Eigen::Vector3d& direction);
+  /// Damage (longest absorber path, mm) per candidate; an empty vector means none anywhere.
+  void set_damage(const std::vector<double>& longest_path_mm);
+
+  std::vector<CandidateWeight> weights() const;
+  /// The next direction (a candidate cell's centre); nothing when every weight is zero.
+  std::optional<Eigen::Vector3d> next();
+
+  const std::vector<Eigen::Vector3d>& acquired() const { return acquired_; }
+  const std::vector<Eigen::Vector3d>& unreachable() const { return unreachable_; }
+
+ private:
+  PlannerOptions options_;
+  std::vector<Eigen::Vector3d> candidates_;
+  std::vector<double> damage_;
+  std::vector<Eigen::Vector3d> acquired_, unreachable_;
+  std::mt19937_64 rng_;
+};
+
+}  // namespace ctk

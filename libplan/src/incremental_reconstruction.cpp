@@ -1,0 +1,46 @@
+#include "ctk/plan/incremental_reconstruction.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "ctk/proj/detector_binning.hpp"
+
+namespace ctk {
+
+namespace {
+
+void append_view(ProjectionStack& stack, const Image& image) {
+  stack.views += 1;
+  stack.rows = image.rows;
+  stack.cols = image.cols;
+  stack.data.insert(stack.data.end(), image.pixels.begin(), image.pixels.end());
+}
+
+}  // namespace
+
+IncrementalReconstruction::IncrementalReconstruction(const VolumeLayout& layout, const Detector& detector,
+                                                     const IncrementalOptions& options)
+    : options_(options), detector_(detector), coarse_(binned_detector(detector, options.binning)), x_(layout) {}
+
+void IncrementalReconstruction::add_view(const ProjectionMatrix& P, const Image& line_integrals, const Image& weights) {
+  if (line_integrals.cols != detector_.cols || line_integrals.rows != detector_.rows)
+    throw std::invalid_argument("add_view: the image is not the detector's size");
+  matrices_.push_back(binned_matrix(P, options_.binning));
+  append_view(b_, binned_image(line_integrals, options_.binning));
+  const Image w = weights.pixels.empty()
+                      ? Image{coarse_.cols, coarse_.rows, std::vector<float>(static_cast<std::size_t>(coarse_.cols) * static_cast<std::size_t>(coarse_.rows), 1.0f)}
+                      : binned_image(weights, options_.binning);
+  append_view(w_, w);
+}
+
+SolverReport IncrementalReconstruction::update() {
+  if (matrices_.empty()) return {};
+  WlsOptions o;
+  o.iterations = updates_++ == 0 ? options_.first_update_iterations : options_.iterations_per_update;
+  o.tolerance = 0;
+  o.lambda = options_.lambda;
+  o.regulariser = Regulariser::gradient;
+  return solve_wls_cg(projector_, matrices_, b_, &w_, x_, o);
+}
+
+}  // namespace ctk

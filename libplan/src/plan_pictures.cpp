@@ -1,0 +1,110 @@
+#include "ctk/plan/plan_pictures.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "ctk/calib/chart.hpp"
+#include "ctk/geom/sphere_map.hpp"
+#include "ctk/proj/image_io.hpp"
+
+namespace ctk {
+
+namespace {
+
+constexpr double kDeg = 180 / M_PI;
+
+cv::Mat slice_picture(const Volume& v, int k, float ceiling, int size) {
+  const auto& n = v.layout.size;
+  cv::Mat grey(n[1], n[0], CV_8UC1);
+  for (int j = 0; j < n[1]; ++j)
+    for (int i = 0; i < n[0]; ++i)
+      grey.at<unsigned char>(n[1] - 1 - j, i) =
+          static_cast<unsigned char>(std::clamp(255.0f * v.at(i, j, k) / ceiling, 0.0f, 255.0f));
+  cv::Mat big, colour;
+  cv::resize(grey, big, cv::Size(size, size * n[1] / n[0]), 0, 0, cv::INTER_NEAREST);
+  cv::cvtColor(big, colour, cv::COLOR_GRAY2BGR);
+  return colour;
+}
+
+cv::Mat labelled(const cv::Mat& picture, const std::string& label) {
+  cv::Mat out(picture.rows + 28, picture.cols, CV_8UC3, cv::Scalar(255, 255, 255));
+  picture.copyTo(out(cv::Rect(0, 28, picture.cols, picture.rows)));
+  cv::putText(out, label, cv::Point(6, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, colour::black, 1, cv::LINE_AA);
+  return out;
+}
+
+}  // namespace
+
+void write_plan_map_png(const PlanningResult& r, const std::filesystem::path& png) {
+  double most = 0;
+  for (double d : r.damage_mm) most = std::max(most, d);
+  Chart chart(900, 287, {-180, 180, -1, 1,
+                         "directions (equal-area); colour: predicted absorber path; . scout, o planned, x refused",
+                         "longitude about the holder axis (deg)", "sin(latitude)"});
+  for (std::size_t c = 0; c < r.candidates.size(); ++c) {
+    const MapPoint p = equal_area_map(r.candidates[c]);
+    const bool refused = c < r.weights.size() && r.weights[c].reach == 0;
+    const cv::Scalar fill = refused ? colour::light
+                            : (most > 0 && c < r.damage_mm.size()) ? colour::ramp(r.damage_mm[c] / most)
+                                                                   : colour::ramp(0);
+    chart.dot(p.x * kDeg, p.y, fill, 6);
+  }
+  chart.ticks(60, 0.5);
+  for (const PlannedViewRecord& v : r.views) {
+    const MapPoint p = equal_area_map(v.requested);
+    if (!v.acquired)
+      chart.cross(p.x * kDeg, p.y, colour::red, 5);
+    else
+      chart.dot(p.x * kDeg, p.y, v.scout ? colour::black : colour::blue, v.scout ? 2 : 4);
+  }
+  chart.save(png);
+}
+
+void write_trajectory_comparison_png(const std::vector<ComparedTrajectory>& t, const Volume& truth, const std::filesystem::path& png) {
+  if (t.empty() || t.front().quality.profiles.empty()) return;
+  const std::array<int, 3> through = t.front().quality.profiles.front().through;
+  const float ceiling = 1.5f * preview_ceiling(truth);
+  const int size = 300;
+  std::vector<cv::Mat> top, bottom;
+  top.push_back(labelled(slice_picture(truth, through[2], ceiling, size), "truth (z slice " + std::to_string(through[2]) + ")"));
+  double hi = 0;
+  for (const auto& c : t)
+    for (float v : c.quality.profiles.front().reconstruction) hi = std::max(hi, static_cast<double>(v));
+  for (float v : t.front().quality.profiles.front().truth) hi = std::max(hi, static_cast<double>(v));
+  const int width = static_cast<int>(t.size() + 1) * size;
+  for (const auto& c : t) {
+    char label[160];
+    std::snprintf(label, sizeof label, "%s: RMSE %.4f/mm, gradient %.4f", c.name.c_str(), c.quality.rmse_per_mm,
+                  c.quality.profile_gradient_per_mm2);
+    top.push_back(labelled(slice_picture(*c.reconstruction, through[2], ceiling, size), label));
+  }
+  cv::Mat slices;
+  cv::hconcat(top, slices);
+  // One chart: every trajectory's x profile and the truth's.
+  const LineProfile& first = t.front().quality.profiles.front();
+  Chart chart(width - 110, 220, {0, static_cast<double>(first.truth.size()), 0, 1.05 * hi,
+                                 "profile along x through the sample's centre (grey: truth)", "voxel", "1/mm"});
+  const cv::Scalar colours[] = {colour::blue, colour::orange, colour::green, colour::red};
+  auto draw = [&](const std::vector<float>& p, const cv::Scalar& c) {
+    for (std::size_t s = 1; s < p.size(); ++s) chart.line(s - 1.0, p[s - 1], static_cast<double>(s), p[s], c, 1);
+  };
+  draw(first.truth, colour::grey);
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    draw(t[i].quality.profiles.front().reconstruction, colours[i % 4]);
+    chart.text(2 + 0.2 * first.truth.size() * static_cast<double>(i), 1.0 * hi, t[i].name, colours[i % 4]);
+  }
+  chart.ticks(nice_step(static_cast<double>(first.truth.size()), 8), nice_step(hi, 4));
+  cv::Mat profile = chart.canvas();
+  if (profile.cols != slices.cols) {
+    cv::Mat padded(profile.rows, slices.cols, CV_8UC3, cv::Scalar(255, 255, 255));
+    profile(cv::Rect(0, 0, std::min(profile.cols, slices.cols), profile.rows))
+        .copyTo(padded(cv::Rect(0, 0, std::min(profile.cols, slices.cols), profile.rows)));
+    profile = padded;
+  }
+  cv::Mat picture;
+  cv::vconcat(slices, profile, picture);
+  write_png_atomically(picture, png);
+}
+
+}  // namespace ctk

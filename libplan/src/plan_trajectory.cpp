@@ -1,0 +1,167 @@
+#include "ctk/plan/plan_trajectory.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include "ctk/geom/trajectory.hpp"
+#include "ctk/proj/projection_reading.hpp"
+
+namespace ctk {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+class Loop {
+ public:
+  Loop(Acquisition& acquisition, const PlanningSetup& setup, const PlanningOptions& options)
+      : acq_(acquisition),
+        s_(setup),
+        o_(options),
+        planner_(options.planner),
+        recon_(options.coarse_volume, setup.setup.detector, options.reconstruction),
+        K_(Intrinsics::from_setup(setup.setup.source_to_detector_mm, setup.setup.detector, setup.setup.principal_point_px)) {}
+
+  // Requests one view; returns the record (planner time of the bookkeeping included).
+  PlannedViewRecord take(const Eigen::Vector3d& direction, bool scout, double damage_mm) {
+    PlannedViewRecord rec;
+    rec.index = next_index_++;
+    rec.scout = scout;
+    rec.requested = direction.normalized();
+    rec.damage_mm = damage_mm;
+    AcquisitionRequest request{rec.index, rec.requested, rotation_looking_along(rec.requested),
+                               Eigen::Vector3d(0, 0, s_.setup.source_to_isocentre_mm)};
+    AcquisitionAnswer answer = acq_.acquire(request);
+    const auto start = Clock::now();
+    if (!answer.acquired) {
+      rec.reason = answer.reason.empty() ? "unreachable" : answer.reason;
+      planner_.record_unreachable(rec.requested);
+      rec.planning_seconds = seconds_since(start);
+      return rec;
+    }
+    rec.acquired = true;
+    rec.joints = answer.joints;
+    rec.projection_file = answer.projection_file;
+    const Detector& d = s_.setup.detector;
+    const std::size_t n = static_cast<std::size_t>(d.cols) * static_cast<std::size_t>(d.rows);
+    Image p{d.cols, d.rows, std::vector<float>(n)}, w{d.cols, d.rows, std::vector<float>(n)};
+    std::size_t clamped = 0;
+    counts_to_line_integrals(answer.counts, s_.flat, s_.dark, p.pixels.data(), w.pixels.data(), clamped);
+    const Rigid guess = s_.setup.T_camera_base * panda::forward_kinematics(answer.joints) * s_.setup.T_flange_holder;
+    const ViewCalibration cal = calibrate_view(p, K_.K(), guess, s_.holder, d, o_.calibration);
+    if (cal.status == ViewStatus::ok && cal.P) {
+      rec.P = *cal.P;
+      rec.calibration_rms_px = cal.rms_px;
+    } else {
+      rec.P = ProjectionMatrix::compose(K_, guess);
+      rec.reason = "calibration failed (" + cal.reason + "): the robot's pose is used";
+    }
+    recon_.add_view(*rec.P, p, w);
+    planner_.record_acquired(rec.P->principal_ray());
+    ++acquired_;
+    rec.planning_seconds = seconds_since(start);
+    return rec;
+  }
+
+  // Reconstruct, segment, score: the planner's picture after the views so far.
+  double refresh() {
+    const auto start = Clock::now();
+    recon_.update();
+    segmentation_ = segment_absorbers(recon_.volume(), o_.segmentation);
+    DamageGeometry g;
+    g.source_to_isocentre_mm = s_.setup.source_to_isocentre_mm;
+    g.source_to_detector_mm = s_.setup.source_to_detector_mm;
+    damage_.clear();
+    for (const DirectionDamage& d : direction_damage(segmentation_, planner_.candidates(), g)) damage_.push_back(d.longest_path_mm);
+    planner_.set_damage(segmentation_.voxels > 0 ? damage_ : std::vector<double>{});
+    return seconds_since(start);
+  }
+
+  PlanningResult run(const std::function<void(const PlannedViewRecord&)>& on_view) {
+    PlanningResult result;
+    auto report = [&](PlannedViewRecord rec) {
+      if (on_view) on_view(rec);
+      result.views.push_back(std::move(rec));
+    };
+    const int max_attempts = o_.max_attempts > 0 ? o_.max_attempts : 3 * o_.views;
+    if (!o_.fixed_directions.empty()) {
+      for (const Eigen::Vector3d& d : o_.fixed_directions) {
+        if (acquired_ >= o_.views || next_index_ >= max_attempts) break;
+        report(take(d, false, 0));
+      }
+      refresh();
+      return finish(std::move(result));
+    }
+    for (const Eigen::Vector3d& d : scout_directions(o_.scout_nside)) {
+      if (acquired_ >= o_.views) break;
+      report(take(d, true, 0));
+    }
+    result.views.back().planning_seconds += refresh();
+    while (acquired_ < o_.views && next_index_ < max_attempts) {
+      const auto start = Clock::now();
+      const std::optional<Eigen::Vector3d> next = planner_.next();
+      if (!next) break;
+      const auto cell = static_cast<std::size_t>(HealpixSphere(o_.planner.candidate_nside).cell_of(*next));
+      const double chosen = seconds_since(start);
+      PlannedViewRecord rec = take(*next, false, damage_.empty() ? 0.0 : damage_[cell]);
+      rec.planning_seconds += chosen;
+      if (rec.acquired) rec.planning_seconds += refresh();
+      result.step_seconds.push_back(rec.planning_seconds);
+      report(std::move(rec));
+    }
+    return finish(std::move(result));
+  }
+
+  PlanningResult finish(PlanningResult result) {
+    result.coarse = recon_.volume();
+    result.segmentation = segmentation_;
+    result.candidates = planner_.candidates();
+    result.weights = planner_.weights();
+    result.damage_mm = damage_;
+    return result;
+  }
+
+ private:
+  Acquisition& acq_;
+  const PlanningSetup& s_;
+  const PlanningOptions& o_;
+  ViewPlanner planner_;
+  IncrementalReconstruction recon_;
+  Intrinsics K_;
+  AbsorberSegmentation segmentation_;
+  std::vector<double> damage_;
+  int next_index_ = 0, acquired_ = 0;
+};
+
+}  // namespace
+
+int PlanningResult::acquired() const {
+  return static_cast<int>(std::count_if(views.begin(), views.end(), [](const PlannedViewRecord& v) { return v.acquired; }));
+}
+
+std::vector<Eigen::Vector3d> scout_directions(int nside) { return HealpixSphere(nside).directions(); }
+
+std::vector<Eigen::Vector3d> whole_sphere_order(int nside) {
+  std::vector<Eigen::Vector3d> cells = HealpixSphere(nside).directions();
+  std::vector<Eigen::Vector3d> order;
+  std::vector<double> nearest(cells.size(), 4.0);  // angle to the chosen ones
+  std::size_t pick = 0;
+  while (order.size() < cells.size()) {
+    order.push_back(cells[pick]);
+    std::size_t best = 0;
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      nearest[c] = std::min(nearest[c], angular_distance_rad(cells[c], cells[pick]));
+      if (nearest[c] > nearest[best]) best = c;
+    }
+    pick = best;
+  }
+  return order;
+}
+
+PlanningResult plan_trajectory(Acquisition& acquisition, const PlanningSetup& setup, const PlanningOptions& options,
+                               const std::function<void(const PlannedViewRecord&)>& on_view) {
+  return Loop(acquisition, setup, options).run(on_view);
+}
+
+}  // namespace ctk

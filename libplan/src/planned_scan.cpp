@@ -1,0 +1,81 @@
+#include "ctk/plan/planned_scan.hpp"
+
+#include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/scan.hpp"
+
+namespace ctk {
+
+nlohmann::json trajectory_to_json(const PlanningResult& r) {
+  nlohmann::json views = nlohmann::json::array();
+  for (const PlannedViewRecord& v : r.views) {
+    nlohmann::json j = {{"request", v.index},
+                        {"scout", v.scout},
+                        {"direction_holder", {v.requested.x(), v.requested.y(), v.requested.z()}},
+                        {"status", v.acquired ? "acquired" : "unreachable"},
+                        {"predicted_damage_mm", v.damage_mm},
+                        {"planning_seconds", v.planning_seconds}};
+    if (!v.reason.empty()) j["reason"] = v.reason;
+    if (v.acquired) {
+      j["projection"] = v.projection_file;
+      j["calibration_rms_px"] = v.calibration_rms_px;
+    }
+    views.push_back(j);
+  }
+  double worst = 0, sum = 0;
+  for (double s : r.step_seconds) {
+    worst = std::max(worst, s);
+    sum += s;
+  }
+  return {{"format", "ctk-plan/1"},
+          {"acquired", r.acquired()},
+          {"requests", r.views.size()},
+          {"absorbers",
+           {{"voxels", r.segmentation.voxels},
+            {"threshold_per_mm", r.segmentation.threshold},
+            {"bulk_per_mm", r.segmentation.bulk_level},
+            {"high_per_mm", r.segmentation.high_level},
+            {"note", r.segmentation.note}}},
+          {"planning_step_seconds",
+           {{"mean", r.step_seconds.empty() ? 0.0 : sum / static_cast<double>(r.step_seconds.size())}, {"max", worst}}},
+          {"views", views}};
+}
+
+void write_planned_scan(const PlanningResult& r, const PlanningSetup& s, const std::filesystem::path& folder) {
+  ScanDescription scan;
+  scan.folder = folder;
+  scan.detector = s.setup.detector;
+  scan.principal_point_px = s.setup.principal_point_px;
+  scan.source_to_detector_mm = s.setup.source_to_detector_mm;
+  scan.projections.kind = ProjectionKind::counts;
+  scan.projections.flat = {"flat.tif"};
+  scan.projections.dark = {"dark.tif"};
+  PandaPoseSource panda;
+  panda.joints_csv = "joints.csv";
+  panda.T_camera_base = s.setup.T_camera_base;
+  panda.T_flange_holder = s.setup.T_flange_holder;
+  Geometry geometry;
+  geometry.detector = s.setup.detector;
+  for (const PlannedViewRecord& v : r.views) {
+    if (!v.acquired) continue;
+    const int index = static_cast<int>(scan.projections.file_names.size());
+    scan.projections.file_names.push_back(v.projection_file);
+    panda.joints.add(index, v.joints);
+    GeometryView g;
+    g.index = index;
+    g.projection = v.projection_file;
+    g.P = v.P;
+    if (v.calibration_rms_px > 0) g.rms_px = v.calibration_rms_px;
+    geometry.views.push_back(g);
+  }
+  scan.projections.count = static_cast<int>(scan.projections.file_names.size());
+  scan.panda = panda;
+  scan.holder = s.holder;
+  write_image_uint16(s.flat, folder / "flat.tif");
+  write_image_uint16(s.dark, folder / "dark.tif");
+  panda.joints.write(folder / "joints.csv");
+  write_geometry(geometry, folder / "geometry.json");
+  write_text_atomically(folder / "trajectory.json", trajectory_to_json(r).dump(2) + "\n");
+  write_scan(scan, folder / "scan.json");
+}
+
+}  // namespace ctk

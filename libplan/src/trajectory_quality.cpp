@@ -1,0 +1,67 @@
+#include "ctk/plan/trajectory_quality.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace ctk {
+
+std::array<int, 3> centre_of_mass_voxel(const Volume& truth, const SampleRegion& region) {
+  const auto& n = truth.layout.size;
+  Eigen::Vector3d sum(0, 0, 0);
+  double mass = 0;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i)
+        if (truth.at(i, j, k) > 0 && region.contains(truth.layout.centre_of(i, j, k))) {
+          sum += truth.at(i, j, k) * Eigen::Vector3d(i, j, k);
+          mass += truth.at(i, j, k);
+        }
+  if (!(mass > 0)) return {n[0] / 2, n[1] / 2, n[2] / 2};
+  return {static_cast<int>(std::lround(sum.x() / mass)), static_cast<int>(std::lround(sum.y() / mass)),
+          static_cast<int>(std::lround(sum.z() / mass))};
+}
+
+TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const SampleRegion& region,
+                                     const std::array<int, 3>& through) {
+  if (!(x.layout == truth.layout)) throw std::invalid_argument("trajectory_quality: the truth must have the reconstruction's layout");
+  TrajectoryQuality q;
+  const auto& n = x.layout.size;
+  double sum2 = 0;
+  std::size_t count = 0;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i)
+        if (region.contains(x.layout.centre_of(i, j, k))) {
+          const double d = x.at(i, j, k) - truth.at(i, j, k);
+          sum2 += d * d;
+          ++count;
+        }
+  q.rmse_per_mm = count ? std::sqrt(sum2 / static_cast<double>(count)) : 0.0;
+
+  double gradient = 0, truth_gradient = 0;
+  std::size_t steps = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    LineProfile p{axis, through, {}, {}};
+    std::array<int, 3> v = through;
+    for (v[axis] = 0; v[axis] < n[axis]; ++v[axis]) {
+      if (!region.contains(x.layout.centre_of(v[0], v[1], v[2]))) continue;
+      p.reconstruction.push_back(x.at(v[0], v[1], v[2]));
+      p.truth.push_back(truth.at(v[0], v[1], v[2]));
+    }
+    // Only where the truth has an edge: between edges a gradient is noise or streaks.
+    for (std::size_t s = 1; s < p.reconstruction.size(); ++s) {
+      if (std::abs(p.truth[s] - p.truth[s - 1]) < 1e-6f) continue;
+      gradient += std::abs(p.reconstruction[s] - p.reconstruction[s - 1]) / x.layout.voxel_mm[axis];
+      truth_gradient += std::abs(p.truth[s] - p.truth[s - 1]) / x.layout.voxel_mm[axis];
+      ++steps;
+    }
+    q.profiles.push_back(std::move(p));
+  }
+  if (steps) {
+    q.profile_gradient_per_mm2 = gradient / static_cast<double>(steps);
+    q.truth_profile_gradient_per_mm2 = truth_gradient / static_cast<double>(steps);
+  }
+  return q;
+}
+
+}  // namespace ctk

@@ -1,0 +1,58 @@
+#include "ctk/plan/view_planner.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ctk {
+
+namespace {
+constexpr double kDegree = M_PI / 180.0;
+}
+
+ViewPlanner::ViewPlanner(const PlannerOptions& options)
+    : options_(options), candidates_(HealpixSphere(options.candidate_nside).directions()), rng_(options.seed) {}
+
+void ViewPlanner::record_acquired(const Eigen::Vector3d& d) { acquired_.push_back(d.normalized()); }
+void ViewPlanner::record_unreachable(const Eigen::Vector3d& d) { unreachable_.push_back(d.normalized()); }
+
+void ViewPlanner::set_damage(const std::vector<double>& longest_path_mm) {
+  if (!longest_path_mm.empty() && longest_path_mm.size() != candidates_.size())
+    throw std::invalid_argument("set_damage: one value per candidate direction expected");
+  damage_ = longest_path_mm;
+}
+
+std::vector<CandidateWeight> ViewPlanner::weights() const {
+  std::vector<CandidateWeight> w(candidates_.size());
+  // Half the sphere's area shared among the planned views: their typical spacing.
+  const double g0 = std::sqrt(2.0 * M_PI / std::max(1, options_.planned_views));
+  const double cos_unreachable = std::cos(options_.unreachable_radius_deg * kDegree);
+  double least = 1e300;
+  for (std::size_t c = 0; c < candidates_.size(); ++c) {
+    const Eigen::Vector3d& d = candidates_[c];
+    for (const Eigen::Vector3d& u : unreachable_)
+      if (d.dot(u) >= cos_unreachable) w[c].reach = 0;
+    double nearest = 1e300;
+    for (const Eigen::Vector3d& a : acquired_) nearest = std::min(nearest, std::acos(std::min(1.0, std::abs(d.dot(a)))));
+    if (!acquired_.empty()) w[c].spread = 1.0 - std::exp(-(nearest / g0) * (nearest / g0));
+    if (!damage_.empty() && w[c].reach > 0) least = std::min(least, damage_[c] + options_.damage_floor_mm);
+  }
+  if (!damage_.empty())
+    for (std::size_t c = 0; c < candidates_.size(); ++c)
+      w[c].damage = std::pow(least / (damage_[c] + options_.damage_floor_mm), options_.damage_exponent);
+  return w;
+}
+
+std::optional<Eigen::Vector3d> ViewPlanner::next() {
+  const std::vector<CandidateWeight> w = weights();
+  std::vector<double> p;
+  double total = 0;
+  for (const CandidateWeight& c : w) {
+    p.push_back(c.weight());
+    total += p.back();
+  }
+  if (!(total > 0)) return std::nullopt;
+  std::discrete_distribution<std::size_t> draw(p.begin(), p.end());
+  return candidates_[draw(rng_)];
+}
+
+}  // namespace ctk

@@ -1,0 +1,158 @@
+// The planning loop end to end against the simulated lab (polychromatic, robot noise, every view
+// calibrated from its spheres), and the file exchange a real lab answers through.
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "../test_support.hpp"
+#include "ctk/geom/error.hpp"
+#include "ctk/geom/scan.hpp"
+#include "ctk/phantoms/builtin_phantoms.hpp"
+#include "ctk/phantoms/simulated_lab.hpp"
+#include "ctk/plan/planned_scan.hpp"
+
+namespace ctk {
+namespace {
+
+// The simulator as the lab, keeping each shot's true matrix for the test.
+class RecordingLab final : public Acquisition {
+ public:
+  explicit RecordingLab(SimulatedLab& lab) : lab_(lab) {}
+  AcquisitionAnswer acquire(const AcquisitionRequest& r) override {
+    LabShot shot = lab_.take(r.direction);
+    AcquisitionAnswer a;
+    a.acquired = shot.reached;
+    a.reason = shot.note;
+    a.joints = shot.joints;
+    a.counts = std::move(shot.image);
+    a.projection_file = "proj_" + std::to_string(r.view) + ".tif";
+    if (shot.true_P) truth[r.view] = *shot.true_P;
+    return a;
+  }
+  std::map<int, ProjectionMatrix> truth;
+
+ private:
+  SimulatedLab& lab_;
+};
+
+TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
+  ScanSimulation sim;
+  const Detector detector{360, 360, 1.2, 1.2};
+  sim.setup = reference_panda_setup(detector, 2150, 1360);
+  sim.holder = reference_helix_holder();
+  sim.sample = builtin_phantom("sample-1");
+  sim.spectrum = tube_spectrum(90, 2.0);
+  sim.seed = 3;
+  SimulatedLab lab(sim);
+  RecordingLab acquisition(lab);
+  const PlanningSetup setup{sim.setup, sim.holder,
+                            Image{360, 360, std::vector<float>(360 * 360, static_cast<float>(sim.counts.flat_counts + sim.counts.dark_counts))},
+                            Image{360, 360, std::vector<float>(360 * 360, static_cast<float>(sim.counts.dark_counts))}};
+  PlanningOptions o;
+  o.scout_nside = 1;
+  o.views = 28;
+  o.coarse_volume = VolumeLayout::centred({64, 64, 64}, Eigen::Vector3d::Constant(1.5));
+  o.reconstruction.binning = 2;
+  o.planner.planned_views = 28;
+  o.planner.seed = 2;
+  const PlanningResult r = plan_trajectory(acquisition, setup, o);
+  ASSERT_EQ(r.acquired(), 28);
+  EXPECT_GT(r.segmentation.voxels, 200u) << r.segmentation.note;
+
+  double scout_cos = 0, planned_cos = 0;
+  int scouts = 0, planned = 0;
+  int scout_requests = 0, fallbacks = 0;
+  for (const PlannedViewRecord& v : r.views) {
+    scout_requests += v.scout;
+    if (!v.acquired) {
+      EXPECT_NE(v.reason.find("unreachable"), std::string::npos) << v.reason;
+      continue;
+    }
+    if (!v.reason.empty()) {
+      // A view the spheres cannot calibrate keeps the robot's pose, and says so.
+      EXPECT_NE(v.reason.find("calibration failed"), std::string::npos) << v.reason;
+      ++fallbacks;
+    } else {
+      EXPECT_LT(v.calibration_rms_px, 0.5);
+    }
+    // The calibrated matrix puts the holder's centre where the true one does.
+    const ProjectionMatrix& truth = acquisition.truth.at(v.index);
+    for (const Eigen::Vector3d& X : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(20, 0, 30), Eigen::Vector3d(0, -20, -30)})
+      EXPECT_LT((v.P->project(X) - truth.project(X)).norm(), 0.5) << "request " << v.index;
+    // The plate's normal is the holder's u axis.
+    (v.scout ? scout_cos : planned_cos) += std::abs(v.requested.x());
+    ++(v.scout ? scouts : planned);
+  }
+  EXPECT_EQ(scout_requests, 12);
+  EXPECT_LE(fallbacks, 1);
+  EXPECT_GT(planned_cos / planned, scout_cos / scouts + 0.1) << "planned views look along the plate's normal more often";
+  EXPECT_EQ(r.step_seconds.size(), r.views.size() - 12);
+
+  const auto dir = testing::scratch_dir();
+  for (const PlannedViewRecord& v : r.views)
+    if (v.acquired) write_image_uint16(Image{360, 360, std::vector<float>(360 * 360, 5000.0f)}, dir / v.projection_file);
+  write_planned_scan(r, setup, dir);
+  const ScanDescription scan = read_scan(dir / "scan.json");
+  EXPECT_EQ(scan.projections.count, 28);
+  EXPECT_EQ(read_geometry(dir / "geometry.json").ok_views().size(), 28u);
+}
+
+TEST(LabExchange, RequestsAndAnswersThroughFiles) {
+  const auto dir = testing::scratch_dir();
+  std::thread lab([&] {
+    for (int view = 0; view < 3; ++view) {
+      while (!std::filesystem::exists(request_file(dir, view))) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      const AcquisitionRequest r = read_request(request_file(dir, view));
+      AcquisitionAnswer a;
+      if (view == 1) {
+        a.reason = "joint 4 at its limit";
+      } else {
+        a.acquired = true;
+        a.joints = {0.1, -0.2, 0.3, -2.0, 0.0, 1.5, 0.7};
+        a.projection_file = std::to_string(view) + ".tif";
+        // The image carries the request's direction so the test can tell the views apart.
+        write_image_uint16(Image{8, 6, std::vector<float>(48, static_cast<float>(1000 + 100 * r.direction.x()))}, dir / a.projection_file);
+      }
+      write_answer(dir, view, a);
+    }
+  });
+  FileExchangeAcquisition exchange(dir, 8, 6, std::chrono::seconds(20));
+  std::vector<AcquisitionAnswer> answers;
+  for (int view = 0; view < 3; ++view) {
+    AcquisitionRequest r;
+    r.view = view;
+    r.direction = Eigen::Vector3d(view, 1, 0).normalized();
+    answers.push_back(exchange.acquire(r));
+  }
+  lab.join();
+  EXPECT_TRUE(answers[0].acquired);
+  EXPECT_FALSE(answers[1].acquired);
+  EXPECT_EQ(answers[1].reason, "joint 4 at its limit");
+  EXPECT_NEAR(answers[2].counts.pixels[0], std::round(1000 + 100 * 2 / std::sqrt(5.0)), 0.5);
+  EXPECT_DOUBLE_EQ(answers[2].joints[3], -2.0);
+
+  // A malformed answer names its key; a lab that never answers times out.
+  write_answer(dir, 3, AcquisitionAnswer{});
+  std::string text;
+  {
+    std::ifstream in(answer_file(dir, 3));
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  text.replace(text.find("unreachable"), 11, "maybe");
+  testing::write_text(answer_file(dir, 3), text);
+  AcquisitionRequest r3;
+  r3.view = 3;
+  try {
+    exchange.acquire(r3);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("status"), std::string::npos) << e.what();
+  }
+  FileExchangeAcquisition impatient(dir, 8, 6, std::chrono::seconds(1));
+  AcquisitionRequest r9;
+  r9.view = 9;
+  EXPECT_THROW(impatient.acquire(r9), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace ctk

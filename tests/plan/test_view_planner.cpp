@@ -1,0 +1,167 @@
+// The planner's parts against what they must find: the absorbers of a known volume (and none in
+// a sample without contrast), the analytic path lengths through a plate from three directions,
+// draws that avoid the plate's plane yet stay spread and reproducible, refusals that rule out
+// only their neighbourhood, and a reconstruction that really continues where it stopped.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "ctk/plan/absorber_segmentation.hpp"
+#include "ctk/plan/direction_damage.hpp"
+#include "ctk/plan/incremental_reconstruction.hpp"
+#include "ctk/plan/view_planner.hpp"
+
+namespace ctk {
+namespace {
+
+constexpr double kDegree = M_PI / 180.0;
+
+// A 64^3 volume of 1 mm voxels: a plastic block, a 4 x 30 x 50 mm aluminium-like plate (normal
+// along x) beside it, and an aluminium ring outside the sample region (where the holder is).
+Volume plate_sample(bool with_plate) {
+  Volume v(VolumeLayout::centred({64, 64, 64}, Eigen::Vector3d::Constant(1.0)));
+  for (int k = 0; k < 64; ++k)
+    for (int j = 0; j < 64; ++j)
+      for (int i = 0; i < 64; ++i) {
+        const Eigen::Vector3d p = v.layout.centre_of(i, j, k);
+        float mu = 0;
+        if (std::abs(p.x() + 6) < 10 && std::abs(p.y()) < 9 && std::abs(p.z()) < 15) mu = 0.015f;
+        if (with_plate && std::abs(p.x() - 13) < 2 && std::abs(p.y()) < 15 && std::abs(p.z()) < 25) mu = 0.07f;
+        if (p.head<2>().norm() > 26 && p.head<2>().norm() < 29) mu = 0.075f;  // the holder's wall and spheres
+        v.at(i, j, k) = mu;
+      }
+  return v;
+}
+
+TEST(AbsorberSegmentation, FindsThePlateAndIgnoresTheHolder) {
+  const AbsorberSegmentation s = segment_absorbers(plate_sample(true));
+  // 4 x 30 x 50 voxel centres inside the plate.
+  EXPECT_EQ(s.voxels, 4u * 30u * 50u);
+  EXPECT_NEAR(s.bulk_level, 0.015, 1e-6);
+  EXPECT_NEAR(s.high_level, 0.07, 1e-6);
+  const Volume& m = s.absorbers;
+  EXPECT_EQ(m.at(32 + 13, 32, 32), 1.0f);
+  EXPECT_EQ(m.at(32 - 6, 32, 32), 0.0f);
+  EXPECT_EQ(m.at(32 + 27, 32, 32), 0.0f) << "the holder's wall is blanked";
+
+  const AbsorberSegmentation none = segment_absorbers(plate_sample(false));
+  EXPECT_EQ(none.voxels, 0u);
+  EXPECT_NE(none.note.find("no absorbers"), std::string::npos) << none.note;
+}
+
+TEST(DirectionDamage, LongestPathsThroughAPlateMatchItsEdges) {
+  const AbsorberSegmentation s = segment_absorbers(plate_sample(true));
+  const std::vector<DirectionDamage> d = direction_damage(
+      s, {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(), Eigen::Vector3d(1, 0, 1).normalized()});
+  // Cone-beam rays cross the plate almost along the axis: the path is its edge (within a voxel).
+  EXPECT_NEAR(d[0].longest_path_mm, 4.0, 1.0);
+  EXPECT_NEAR(d[1].longest_path_mm, 30.0, 1.5);
+  EXPECT_NEAR(d[2].longest_path_mm, 50.0, 2.0);
+  EXPECT_NEAR(d[3].longest_path_mm, 4.0 * std::sqrt(2.0), 1.5);
+  // The shadow along the plate's normal is the largest face, 30 x 50 mm.
+  EXPECT_GT(d[0].shadow_fraction, d[2].shadow_fraction);
+  // Nothing segmented: nothing is damaged.
+  for (const DirectionDamage& x : direction_damage(segment_absorbers(plate_sample(false)), {Eigen::Vector3d::UnitX()}))
+    EXPECT_EQ(x.longest_path_mm, 0.0);
+}
+
+// Damage of a plate with normal x, analytically: its thickness over |cos| of the angle to the
+// normal, capped by its extent.
+std::vector<double> plate_damage(const std::vector<Eigen::Vector3d>& candidates) {
+  std::vector<double> d;
+  for (const Eigen::Vector3d& c : candidates) d.push_back(std::min(50.0, 4.0 / std::max(1e-3, std::abs(c.x()))));
+  return d;
+}
+
+std::vector<Eigen::Vector3d> draw(ViewPlanner& planner, int count) {
+  std::vector<Eigen::Vector3d> chosen;
+  for (int i = 0; i < count; ++i) {
+    const auto next = planner.next();
+    if (!next) break;
+    planner.record_acquired(*next);
+    chosen.push_back(*next);
+  }
+  return chosen;
+}
+
+TEST(ViewPlanner, AvoidsThePlatePlaneStaysSpreadAndIsReproducible) {
+  PlannerOptions o;
+  o.planned_views = 60;
+  o.seed = 5;
+  ViewPlanner a(o);
+  a.set_damage(plate_damage(a.candidates()));
+  const std::vector<Eigen::Vector3d> chosen = draw(a, 40);
+  ASSERT_EQ(chosen.size(), 40u);
+  double mean_cos = 0;
+  int in_plane = 0;
+  for (const auto& c : chosen) {
+    mean_cos += std::abs(c.x()) / 40;
+    in_plane += std::abs(c.x()) < 0.2;  // paths of 20 mm and more
+  }
+  // Uniform directions give 0.5 (+- 0.05 over 40 draws) and 20 % within the plate's plane band.
+  EXPECT_GT(mean_cos, 0.6);
+  EXPECT_LE(in_plane, 2);
+  // Spread: no two views (or a view and another's opposite) closer than a third of the spacing.
+  const double g0 = std::sqrt(2 * M_PI / 60);
+  for (std::size_t i = 0; i < chosen.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j) EXPECT_GT(std::acos(std::min(1.0, std::abs(chosen[i].dot(chosen[j])))), g0 / 3);
+
+  ViewPlanner b(o);
+  b.set_damage(plate_damage(b.candidates()));
+  const std::vector<Eigen::Vector3d> again = draw(b, 40);
+  for (std::size_t i = 0; i < chosen.size(); ++i) EXPECT_EQ(chosen[i], again[i]);
+  o.seed = 6;
+  ViewPlanner c(o);
+  c.set_damage(plate_damage(c.candidates()));
+  EXPECT_NE(draw(c, 5).front(), chosen.front());
+
+  // Without absorbers the damage term is neutral: draws cover both the plane and the normal.
+  ViewPlanner free_planner(PlannerOptions{});
+  double free_cos = 0;
+  for (const auto& d : draw(free_planner, 40)) free_cos += std::abs(d.x()) / 40;
+  EXPECT_NEAR(free_cos, 0.5, 0.12);
+}
+
+TEST(ViewPlanner, ARefusalRulesOutItsNeighbourhoodOnly) {
+  ViewPlanner p(PlannerOptions{});
+  const Eigen::Vector3d refused = p.candidates()[300];
+  p.record_unreachable(refused);
+  const std::vector<CandidateWeight> w = p.weights();
+  int ruled_out = 0;
+  for (std::size_t c = 0; c < w.size(); ++c) {
+    const double angle = std::acos(std::min(1.0, p.candidates()[c].dot(refused)));
+    if (w[c].reach == 0) {
+      ++ruled_out;
+      EXPECT_LE(angle, 4.0 * kDegree);
+    } else if (angle < 10 * kDegree) {
+      EXPECT_GT(w[c].weight(), 0) << "a neighbour of a refused direction stays a candidate";
+    }
+  }
+  EXPECT_EQ(ruled_out, 1);
+}
+
+TEST(IncrementalReconstruction, EachUpdateContinuesWhereTheLastStopped) {
+  const Volume truth = plate_sample(true);
+  const Detector detector{96, 96, 2.0, 2.0};
+  const Intrinsics K = Intrinsics::from_setup(1500, detector, detector.centre_px());
+  IncrementalOptions o;
+  o.binning = 2;
+  o.first_update_iterations = 4;
+  o.iterations_per_update = 4;
+  IncrementalReconstruction recon(truth.layout, detector, o);
+  JosephProjector A;
+  for (int v = 0; v < 12; ++v) {
+    const ProjectionMatrix P = virtual_view(Eigen::Vector3d(std::cos(0.5 * v), std::sin(0.5 * v), 0.3 * std::sin(v)), K, 1000);
+    ProjectionStack y(1, detector.rows, detector.cols);
+    A.forward(truth, {P}, y);
+    recon.add_view(P, Image{detector.cols, detector.rows, y.data}, Image{});
+  }
+  const SolverReport first = recon.update();
+  const SolverReport second = recon.update();
+  EXPECT_NEAR(second.iterations.front().cost, first.iterations.back().cost, 1e-6 * first.iterations.back().cost);
+  EXPECT_LT(second.iterations.back().cost, 0.9 * first.iterations.back().cost);
+  EXPECT_EQ(recon.coarse_detector().cols, 48);
+}
+
+}  // namespace
+}  // namespace ctk

@@ -1,0 +1,337 @@
+// ctk plan: absorption-aware view planning on the sphere. Against the simulator (phantoms in,
+// a planned trajectory and its reconstruction out; --compare adds the whole-sphere and the random
+// trajectory of the same size, reconstructed alike and scored against the truth), or in lab mode
+// through request/answer files with an acquisition process (libplan/acquisition.hpp).
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "commands.hpp"
+#include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/scan.hpp"
+#include "ctk/geom/trajectory.hpp"
+#include "ctk/phantoms/builtin_phantoms.hpp"
+#include "ctk/phantoms/simulated_lab.hpp"
+#include "ctk/plan/plan_pictures.hpp"
+#include "ctk/plan/planned_scan.hpp"
+#include "ctk/proj/parallel.hpp"
+#include "ctk/proj/projection_reading.hpp"
+#include "ctk/recon/measurements.hpp"
+#include "ctk/recon/wls_cg.hpp"
+#include "progress.hpp"
+
+namespace ctk::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct PlanCommandOptions {
+  fs::path out = "plan";
+  std::vector<std::string> phantoms;  // simulation mode
+  fs::path lab, setup;                // lab mode
+  double sod_mm = 1360;
+  int views = 100, scout_nside = 2, candidate_nside = 8;
+  double damage_exponent = 2.0;
+  std::uint64_t seed = 1;
+  int cols = 720, rows = 720;
+  double pitch_mm = 0.6, sdd_mm = 2150;
+  double kvp = 90, filter_al_mm = 2.0, flat_counts = 1e4;
+  int coarse_size = 128;
+  double coarse_voxel_mm = 0.75;
+  int binning = 3;
+  bool compare = false;
+  int eval_size = 160, eval_iterations = 20, eval_binning = 2;
+  double eval_voxel_mm = 0.5, eval_lambda = 3.0;
+  bool compare_only = false;
+  int timeout_s = 600;
+};
+
+// The simulator as the acquisition side: each shot's counts are also written where the planned
+// scan will name them.
+class SimulatedAcquisition final : public Acquisition {
+ public:
+  SimulatedAcquisition(SimulatedLab& lab, fs::path folder) : lab_(lab), folder_(std::move(folder)) {
+    fs::create_directories(folder_ / "projections");
+  }
+  AcquisitionAnswer acquire(const AcquisitionRequest& r) override {
+    LabShot shot = lab_.take(r.direction);
+    AcquisitionAnswer a;
+    if (!shot.reached) {
+      a.reason = shot.note;
+      return a;
+    }
+    char name[64];
+    std::snprintf(name, sizeof name, "projections/proj_%04d.tif", r.view);
+    write_image_uint16(shot.image, folder_ / name);
+    a.acquired = true;
+    a.joints = shot.joints;
+    a.counts = std::move(shot.image);
+    a.projection_file = name;
+    return a;
+  }
+
+ private:
+  SimulatedLab& lab_;
+  fs::path folder_;
+};
+
+PlanningOptions planning_options(const PlanCommandOptions& o) {
+  PlanningOptions p;
+  p.scout_nside = o.scout_nside;
+  p.views = o.views;
+  p.coarse_volume = VolumeLayout::centred({o.coarse_size, o.coarse_size, o.coarse_size}, Eigen::Vector3d::Constant(o.coarse_voxel_mm));
+  p.planner.candidate_nside = o.candidate_nside;
+  p.planner.planned_views = o.views;
+  p.planner.damage_exponent = o.damage_exponent;
+  p.planner.damage_floor_mm = 2 * o.coarse_voxel_mm;
+  p.planner.seed = o.seed;
+  p.reconstruction.binning = o.binning;
+  return p;
+}
+
+ScanSimulation simulation_from(const PlanCommandOptions& o) {
+  ScanSimulation sim;
+  const Detector detector{o.cols, o.rows, o.pitch_mm, o.pitch_mm};
+  sim.setup = reference_panda_setup(detector, o.sdd_mm, o.sod_mm);
+  sim.holder = reference_helix_holder();
+  for (const std::string& name : o.phantoms) {
+    const Phantom p = fs::path(name).extension() == ".json" ? read_phantom(name) : builtin_phantom(name);
+    sim.sample.name += (sim.sample.name.empty() ? "" : " + ") + p.name;
+    sim.sample.add(p);
+  }
+  sim.spectrum = tube_spectrum(o.kvp, o.filter_al_mm);
+  sim.counts = {o.flat_counts, 100};
+  sim.seed = o.seed;
+  return sim;
+}
+
+PlanningSetup setup_from(const ScanSimulation& sim) {
+  const Detector& d = sim.setup.detector;
+  const std::size_t n = static_cast<std::size_t>(d.cols) * static_cast<std::size_t>(d.rows);
+  return {sim.setup, sim.holder, Image{d.cols, d.rows, std::vector<float>(n, static_cast<float>(sim.counts.flat_counts + sim.counts.dark_counts))},
+          Image{d.cols, d.rows, std::vector<float>(n, static_cast<float>(sim.counts.dark_counts))}};
+}
+
+// Lab mode: the declared setup comes from a ctk-scan/1 file of the lab (detector, frames, holder,
+// flat and dark); the isocentre distance from the command line.
+PlanningSetup setup_from_scan(const fs::path& file, double sod_mm) {
+  const ScanDescription scan = read_scan(file);
+  if (!scan.panda) throw InputError(file.string(), "pose_source", "lab mode needs a panda pose source (the robot's frames)");
+  if (!scan.holder) throw InputError(file.string(), "holder", "lab mode calibrates every view: the holder is required");
+  const std::optional<FlatDark> fd = read_flat_dark(scan);
+  if (!fd) throw InputError(file.string(), "projections.flat", "lab mode needs counts with flat and dark frames");
+  PlanningSetup s;
+  s.setup.detector = scan.detector;
+  s.setup.principal_point_px = scan.principal_point_px;
+  s.setup.source_to_detector_mm = scan.source_to_detector_mm;
+  s.setup.source_to_isocentre_mm = sod_mm;
+  s.setup.T_camera_base = scan.panda->T_camera_base;
+  s.setup.T_flange_holder = scan.panda->T_flange_holder;
+  s.holder = *scan.holder;
+  s.flat = fd->flat;
+  s.dark = fd->dark;
+  return s;
+}
+
+void print_view(const PlannedViewRecord& v, int wanted, int& acquired) {
+  if (v.acquired) ++acquired;
+  std::fprintf(stderr, "%s request %3d: %s, %d / %d acquired", v.scout ? "scout" : "plan ", v.index,
+               v.acquired ? "acquired" : ("refused (" + v.reason + ")").c_str(), acquired, wanted);
+  if (v.acquired) std::fprintf(stderr, ", calibration %.3f px", v.calibration_rms_px);
+  if (!v.scout) std::fprintf(stderr, ", predicted absorber path %.1f mm, planner %.2f s", v.damage_mm, v.planning_seconds);
+  std::fprintf(stderr, "\n");
+}
+
+void report_plan(const PlanningResult& r, const fs::path& folder) {
+  double worst = 0, sum = 0;
+  for (double s : r.step_seconds) {
+    worst = std::max(worst, s);
+    sum += s;
+  }
+  std::cout << folder.string() << ": " << r.acquired() << " views acquired in " << r.views.size() << " requests";
+  if (!r.step_seconds.empty())
+    std::cout << "; planner step " << sum / static_cast<double>(r.step_seconds.size()) << " s mean, " << worst << " s max";
+  std::cout << "; absorbers: " << (r.segmentation.voxels > 0 ? std::to_string(r.segmentation.voxels) + " coarse voxels" : r.segmentation.note)
+            << "\n";
+}
+
+// The truth of the sample at the layout's voxels (2 x 2 x 2 points per voxel).
+Volume voxelised(const Phantom& phantom, const VolumeLayout& layout) {
+  Volume v(layout);
+  const auto& n = layout.size;
+  parallel_for_dynamic(n[2], [&](int k) {
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) {
+        double sum = 0;
+        for (int s = 0; s < 8; ++s) {
+          const Eigen::Vector3d offset((s & 1) ? 0.25 : -0.25, (s & 2) ? 0.25 : -0.25, (s & 4) ? 0.25 : -0.25);
+          sum += phantom.attenuation_at(layout.centre_of(i, j, k) + offset.cwiseProduct(layout.voxel_mm));
+        }
+        v.at(i, j, k) = static_cast<float>(sum / 8);
+      }
+  });
+  return v;
+}
+
+// Every trajectory gets the same reconstruction: WLS-CG on a binned detector, gradient penalty.
+Volume evaluation_reconstruction(const fs::path& folder, const PlanCommandOptions& o) {
+  const ScanDescription scan = read_scan(folder / "scan.json");
+  const Geometry geometry = read_geometry(folder / "geometry.json");
+  const Measurements m = load_measurements(scan, geometry);
+  IncrementalOptions io;
+  io.binning = o.eval_binning;
+  io.first_update_iterations = o.eval_iterations;
+  io.lambda = o.eval_lambda;
+  IncrementalReconstruction recon(
+      VolumeLayout::centred({o.eval_size, o.eval_size, o.eval_size}, Eigen::Vector3d::Constant(o.eval_voxel_mm)), scan.detector, io);
+  const Detector& d = scan.detector;
+  for (int v = 0; v < m.line_integrals.views; ++v) {
+    const std::size_t n = m.line_integrals.pixels_per_view();
+    Image p{d.cols, d.rows, std::vector<float>(m.line_integrals.view(v), m.line_integrals.view(v) + n)};
+    Image w{d.cols, d.rows, std::vector<float>(m.weights.view(v), m.weights.view(v) + n)};
+    recon.add_view(m.matrices[static_cast<std::size_t>(v)], p, w);
+  }
+  recon.update();
+  write_volume_nrrd(recon.volume(), folder / "volume.nrrd");
+  return recon.volume();
+}
+
+// The whole-sphere and the random trajectory with as many views as the planned one.
+void acquire_others(const PlanCommandOptions& o, SimulatedLab& lab, const PlanningSetup& setup, int n) {
+  struct Run {
+    std::string name;
+    std::vector<Eigen::Vector3d> order;
+  };
+  std::vector<Run> others = {{"whole-sphere", whole_sphere_order(o.candidate_nside)},
+                             {"random", random_directions(6 * n, o.seed + 17)}};
+  for (const Run& run : others) {
+    PlanningOptions p = planning_options(o);
+    p.views = n;
+    p.fixed_directions = run.order;
+    p.max_attempts = static_cast<int>(run.order.size());
+    SimulatedAcquisition acquisition(lab, o.out / run.name);
+    Progress progress(run.name + " trajectory", "views acquired");
+    int acquired = 0;
+    const PlanningResult r = plan_trajectory(acquisition, setup, p, [&](const PlannedViewRecord& v) {
+      if (v.acquired) progress(++acquired, n);
+    });
+    write_planned_scan(r, setup, o.out / run.name);
+    report_plan(r, o.out / run.name);
+  }
+}
+
+void compare(const PlanCommandOptions& o, const Phantom& sample) {
+  const int n = read_scan(o.out / "planned" / "scan.json").projections.count;
+  const VolumeLayout layout = VolumeLayout::centred({o.eval_size, o.eval_size, o.eval_size}, Eigen::Vector3d::Constant(o.eval_voxel_mm));
+  const Volume truth = voxelised(sample, layout);
+  write_volume_nrrd(truth, o.out / "truth.nrrd");
+  const SampleRegion region;
+  const std::array<int, 3> through = centre_of_mass_voxel(truth, region);
+  std::vector<Volume> volumes;
+  std::vector<std::string> names = {"planned", "whole-sphere", "random"};
+  for (const std::string& name : names) {
+    std::cerr << "reconstructing " << name << " (" << o.eval_size << "^3 at " << o.eval_voxel_mm << " mm, " << o.eval_iterations
+              << " WLS-CG iterations) ...\n";
+    volumes.push_back(evaluation_reconstruction(o.out / name, o));
+  }
+  std::vector<ComparedTrajectory> compared;
+  nlohmann::json table = nlohmann::json::object();
+  std::cout << "trajectory      views  RMSE (1/mm)  profile gradient (1/mm^2)\n";
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const TrajectoryQuality q = trajectory_quality(volumes[i], truth, region, through);
+    compared.push_back({names[i], &volumes[i], q});
+    table[names[i]] = {{"views", n}, {"rmse_per_mm", q.rmse_per_mm}, {"profile_gradient_per_mm2", q.profile_gradient_per_mm2}};
+    std::printf("%-14s %6d  %11.5f  %11.5f\n", names[i].c_str(), n, q.rmse_per_mm, q.profile_gradient_per_mm2);
+  }
+  std::printf("truth's profile gradient: %.5f\n", compared.front().quality.truth_profile_gradient_per_mm2);
+  write_trajectory_comparison_png(compared, truth, o.out / "comparison.png");
+  const nlohmann::json j = {{"format", "ctk-plan-comparison/1"},
+                            {"sample", sample.name},
+                            {"spectrum", {{"kvp", o.kvp}, {"filter_al_mm", o.filter_al_mm}}},
+                            {"volume", {{"size", o.eval_size}, {"voxel_mm", o.eval_voxel_mm}, {"iterations", o.eval_iterations},
+                                        {"lambda", o.eval_lambda}, {"binning", o.eval_binning}}},
+                            {"profile_through_voxel", through},
+                            {"truth_profile_gradient_per_mm2", compared.front().quality.truth_profile_gradient_per_mm2},
+                            {"trajectories", table}};
+  write_text_atomically(o.out / "comparison.json", j.dump(2) + "\n");
+  std::cout << "comparison written to " << (o.out / "comparison.json").string() << " and comparison.png\n";
+}
+
+void run_plan(const PlanCommandOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  if (o.phantoms.empty() == o.lab.empty())
+    throw std::invalid_argument("give either --phantom (simulation) or --lab with --setup (lab mode)");
+  const PlanningOptions options = planning_options(o);
+  int acquired = 0;
+  auto on_view = [&](const PlannedViewRecord& v) { print_view(v, o.views, acquired); };
+  if (!o.lab.empty()) {
+    if (o.setup.empty()) throw std::invalid_argument("lab mode needs --setup (the lab's ctk-scan/1 file)");
+    const PlanningSetup setup = setup_from_scan(o.setup, o.sod_mm);
+    FileExchangeAcquisition acquisition(o.lab, setup.setup.detector.cols, setup.setup.detector.rows, std::chrono::seconds(o.timeout_s));
+    const PlanningResult r = plan_trajectory(acquisition, setup, options, on_view);
+    acquisition.finish();
+    write_planned_scan(r, setup, o.lab);
+    write_plan_map_png(r, o.lab / "plan-map.png");
+    write_volume_nrrd(r.coarse, o.lab / "coarse.nrrd");
+    report_plan(r, o.lab);
+    return;
+  }
+  if (o.compare_only) {
+    compare(o, simulation_from(o).sample);
+    return;
+  }
+  SimulatedLab lab(simulation_from(o));
+  const PlanningSetup setup = setup_from(lab.simulation());
+  const fs::path folder = o.out / "planned";
+  SimulatedAcquisition acquisition(lab, folder);
+  const PlanningResult r = plan_trajectory(acquisition, setup, options, on_view);
+  write_planned_scan(r, setup, folder);
+  write_plan_map_png(r, folder / "plan-map.png");
+  write_volume_nrrd(r.coarse, folder / "coarse.nrrd");
+  report_plan(r, folder);
+  if (o.compare) {
+    acquire_others(o, lab, setup, r.acquired());
+    compare(o, lab.simulation().sample);
+  }
+  std::cout << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s\n";
+}
+
+}  // namespace
+
+void register_plan(CLI::App& app) {
+  auto o = std::make_shared<PlanCommandOptions>();
+  CLI::App* cmd = app.add_subcommand("plan", "Plan a spherical trajectory that avoids looking through absorbers (simulation or lab)");
+  cmd->add_option("--out", o->out, "Output folder (simulation mode): planned/ and, with --compare, whole-sphere/, random/")->capture_default_str();
+  cmd->add_option("--phantom", o->phantoms, "Simulation mode: built-in phantoms or ctk-phantom/1 files in the holder");
+  cmd->add_option("--lab", o->lab, "Lab mode: the folder shared with the acquisition process (request/answer files)");
+  cmd->add_option("--setup", o->setup, "Lab mode: the lab's ctk-scan/1 file (detector, robot frames, holder, flat, dark)")->check(CLI::ExistingFile);
+  cmd->add_option("--timeout", o->timeout_s, "Lab mode: seconds to wait for each answer")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--sod", o->sod_mm, "Source-to-isocentre distance (mm)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--views", o->views, "Views to acquire, scout included")->check(CLI::Range(2, 10000))->capture_default_str();
+  cmd->add_option("--scout-nside", o->scout_nside, "HEALPix resolution of the scout (12 nside^2 directions)")->check(CLI::Range(1, 16))->capture_default_str();
+  cmd->add_option("--candidate-nside", o->candidate_nside, "HEALPix resolution of the candidate directions")->check(CLI::Range(1, 64))->capture_default_str();
+  cmd->add_option("--damage-exponent", o->damage_exponent, "s: how strongly long absorber paths are avoided")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--seed", o->seed, "Seed of the planner's draws (and of the simulation)")->capture_default_str();
+  cmd->add_option("--cols", o->cols, "Simulated detector columns")->check(CLI::Range(16, 100000))->capture_default_str();
+  cmd->add_option("--rows", o->rows, "Simulated detector rows")->check(CLI::Range(16, 100000))->capture_default_str();
+  cmd->add_option("--pitch", o->pitch_mm, "Simulated pixel pitch (mm)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--sdd", o->sdd_mm, "Simulated source-to-detector distance (mm)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--kvp", o->kvp, "Simulated tube voltage (polychromatic)")->check(CLI::Range(16.0, 150.0))->capture_default_str();
+  cmd->add_option("--filter-al-mm", o->filter_al_mm, "Simulated aluminium filter")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--flat-counts", o->flat_counts, "Simulated open-beam counts")->check(CLI::Range(1.0, 65000.0))->capture_default_str();
+  cmd->add_option("--coarse-size", o->coarse_size, "Voxels per axis of the planner's volume")->check(CLI::Range(8, 1024))->capture_default_str();
+  cmd->add_option("--coarse-voxel", o->coarse_voxel_mm, "Voxel size of the planner's volume (mm)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--binning", o->binning, "Detector binning of the planner's reconstruction")->check(CLI::Range(1, 64))->capture_default_str();
+  cmd->add_flag("--compare", o->compare, "Simulation mode: also acquire and reconstruct the whole-sphere and a random trajectory of the same size");
+  cmd->add_option("--eval-size", o->eval_size, "Voxels per axis of the comparison reconstructions")->check(CLI::Range(8, 2048))->capture_default_str();
+  cmd->add_option("--eval-voxel", o->eval_voxel_mm, "Voxel size of the comparison reconstructions (mm)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--eval-iterations", o->eval_iterations, "WLS-CG iterations of the comparison reconstructions")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("--eval-lambda", o->eval_lambda, "Gradient penalty of the comparison reconstructions")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_flag("--compare-only", o->compare_only, "Reconstruct and compare the trajectories already in --out (no acquisition)");
+  cmd->add_option("--eval-binning", o->eval_binning, "Detector binning of the comparison reconstructions")->check(CLI::Range(1, 64))->capture_default_str();
+  cmd->callback([o] { run_plan(*o); });
+}
+
+}  // namespace ctk::tools
