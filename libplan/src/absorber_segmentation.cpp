@@ -6,53 +6,46 @@
 
 namespace ctk {
 
-namespace {
-
-double percentile(std::vector<float> values, double q) {
-  if (values.empty()) return 0;
-  const auto k = static_cast<std::size_t>(std::clamp(q / 100.0, 0.0, 1.0) * static_cast<double>(values.size() - 1));
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-  return values[k];
-}
-
-}  // namespace
-
 bool SampleRegion::contains(const Eigen::Vector3d& p) const {
   return p.head<2>().norm() <= radius_mm && std::abs(p.z()) <= half_height_mm;
 }
 
 AbsorberSegmentation segment_absorbers(const Volume& x, const SegmentationOptions& options) {
-  AbsorberSegmentation s{Volume(x.layout), 0, 0, 0, 0, {}};
+  AbsorberSegmentation s{Volume(x.layout), 0, 0, 0, {}};
   const auto& n = x.layout.size;
   std::vector<std::size_t> inside;
-  std::vector<float> values;
+  std::vector<float> wall;
   for (int k = 0; k < n[2]; ++k)
     for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i)
-        if (options.region.contains(x.layout.centre_of(i, j, k))) {
-          inside.push_back(x.index(i, j, k));
-          values.push_back(x.data[inside.back()]);
-        }
-  s.high_level = percentile(values, options.high_percentile);
-  std::vector<float> material;
-  for (float v : values)
-    if (v > 0.1 * s.high_level) material.push_back(v);
-  s.bulk_level = percentile(material, 50);
-  if (!(s.high_level > 0) || !(s.bulk_level > 0)) {
-    s.note = "the sample region is empty";
+      for (int i = 0; i < n[0]; ++i) {
+        const Eigen::Vector3d p = x.layout.centre_of(i, j, k);
+        const double r = p.head<2>().norm();
+        if (options.region.contains(p)) inside.push_back(x.index(i, j, k));
+        else if (r >= options.wall_inner_mm && r <= options.wall_outer_mm && std::abs(p.z()) <= options.region.half_height_mm)
+          wall.push_back(x.at(i, j, k));
+      }
+  if (wall.empty()) {
+    s.note = "the holder's wall is not in the volume: no yardstick for absorbers";
     return s;
   }
-  if (s.high_level < options.min_contrast * s.bulk_level) {
-    s.note = "no absorbers: the densest parts (" + std::to_string(s.high_level) + "/mm) are less than " +
-             std::to_string(options.min_contrast) + " times the bulk (" + std::to_string(s.bulk_level) + "/mm)";
+  std::nth_element(wall.begin(), wall.begin() + static_cast<std::ptrdiff_t>(wall.size() / 2), wall.end());
+  s.wall_level = wall[wall.size() / 2];
+  if (!(s.wall_level > 0)) {
+    s.note = "the holder's wall is not reconstructed yet";
     return s;
   }
-  s.threshold = 0.5 * (s.high_level + s.bulk_level);
+  s.threshold = options.times_wall * s.wall_level;
   for (std::size_t i : inside)
     if (x.data[i] > s.threshold) {
       s.absorbers.data[i] = 1.0f;
       ++s.voxels;
     }
+  if (s.voxels < options.min_voxels) {
+    s.note = "no absorbers: " + std::to_string(s.voxels) + " voxels above " + std::to_string(options.times_wall) +
+             " times the holder wall's " + std::to_string(s.wall_level) + "/mm";
+    std::fill(s.absorbers.data.begin(), s.absorbers.data.end(), 0.0f);
+    s.voxels = 0;
+  }
   return s;
 }
 

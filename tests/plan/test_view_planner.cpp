@@ -17,17 +17,18 @@ namespace {
 constexpr double kDegree = M_PI / 180.0;
 
 // A 64^3 volume of 1 mm voxels: a plastic block, a 4 x 30 x 50 mm aluminium-like plate (normal
-// along x) beside it, and an aluminium ring outside the sample region (where the holder is).
-Volume plate_sample(bool with_plate) {
+// along x) beside it, and the holder's POM wall (25 to 28 mm from the axis) with a sphere in it.
+Volume plate_sample(bool with_plate, float block_mu = 0.015f) {
   Volume v(VolumeLayout::centred({64, 64, 64}, Eigen::Vector3d::Constant(1.0)));
   for (int k = 0; k < 64; ++k)
     for (int j = 0; j < 64; ++j)
       for (int i = 0; i < 64; ++i) {
         const Eigen::Vector3d p = v.layout.centre_of(i, j, k);
         float mu = 0;
-        if (std::abs(p.x() + 6) < 10 && std::abs(p.y()) < 9 && std::abs(p.z()) < 15) mu = 0.015f;
+        if (std::abs(p.x() + 6) < 10 && std::abs(p.y()) < 9 && std::abs(p.z()) < 15) mu = block_mu;
         if (with_plate && std::abs(p.x() - 13) < 2 && std::abs(p.y()) < 15 && std::abs(p.z()) < 25) mu = 0.07f;
-        if (p.head<2>().norm() > 26 && p.head<2>().norm() < 29) mu = 0.075f;  // the holder's wall and spheres
+        if (p.head<2>().norm() > 25 && p.head<2>().norm() < 28) mu = 0.027f;                   // the wall
+        if ((p - Eigen::Vector3d(0, 27.5, 3)).norm() < 1.5) mu = 0.075f;                          // a sphere
         v.at(i, j, k) = mu;
       }
   return v;
@@ -37,16 +38,17 @@ TEST(AbsorberSegmentation, FindsThePlateAndIgnoresTheHolder) {
   const AbsorberSegmentation s = segment_absorbers(plate_sample(true));
   // 4 x 30 x 50 voxel centres inside the plate.
   EXPECT_EQ(s.voxels, 4u * 30u * 50u);
-  EXPECT_NEAR(s.bulk_level, 0.015, 1e-6);
-  EXPECT_NEAR(s.high_level, 0.07, 1e-6);
+  EXPECT_NEAR(s.wall_level, 0.027, 1e-6);
   const Volume& m = s.absorbers;
   EXPECT_EQ(m.at(32 + 13, 32, 32), 1.0f);
   EXPECT_EQ(m.at(32 - 6, 32, 32), 0.0f);
-  EXPECT_EQ(m.at(32 + 27, 32, 32), 0.0f) << "the holder's wall is blanked";
+  EXPECT_EQ(m.at(32, 32 + 27, 35), 0.0f) << "the holder's sphere is blanked";
 
   const AbsorberSegmentation none = segment_absorbers(plate_sample(false));
   EXPECT_EQ(none.voxels, 0u);
   EXPECT_NE(none.note.find("no absorbers"), std::string::npos) << none.note;
+  // A denser plastic (PVC-like, 1.7 times the wall) is not an absorber either.
+  EXPECT_EQ(segment_absorbers(plate_sample(false, 0.046f)).voxels, 0u);
 }
 
 TEST(DirectionDamage, LongestPathsThroughAPlateMatchItsEdges) {

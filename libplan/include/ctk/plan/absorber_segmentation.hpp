@@ -1,10 +1,11 @@
 #pragma once
 // Which parts of a coarse reconstruction are dense enough to spoil the views that look through
 // them. Only the sample's region counts (inside the holder's bore: the tube and its spheres are
-// blanked). Rule: the absorbers' level is a high percentile of that region, the bulk's the median
-// of the material voxels (above a tenth of the high level); when the two differ by at least
-// `min_contrast`, voxels above the midpoint between them are absorbers. A sample without such a
-// contrast has no absorbers and every direction scores alike.
+// blanked). The yardstick is the holder itself: its POM wall is in every scan, reconstructed with
+// the same spectrum, blur and noise as the sample, so "denser than twice the wall" means the same
+// thing whatever the tube voltage (beam hardening raises every level alike) and picks out metals
+// and thick dense parts, not plastics, wood or a walnut's shell. A coarse volume's noise reaches
+// about half the wall's level; a handful of voxels above the threshold is noise, not an absorber.
 #include <string>
 
 #include "ctk/proj/volume.hpp"
@@ -19,17 +20,17 @@ struct SampleRegion {
 
 struct SegmentationOptions {
   SampleRegion region;
-  double high_percentile = 99.95;// of the region's voxels: the absorbers' level
-  double min_contrast = 2.5;      // high level / bulk level needed to call anything an absorber
+  double wall_inner_mm = 25.5, wall_outer_mm = 27.5;  // inside the reference holder's 3 mm POM wall
+  double times_wall = 2.0;        // absorbers attenuate more than this many times the wall
+  std::size_t min_voxels = 20;    // fewer above the threshold: noise, nothing segmented
 };
 
 struct AbsorberSegmentation {
-  Volume absorbers;             // 1 inside absorbers, 0 elsewhere (same layout as the input)
-  double bulk_level = 0;        // 1/mm
-  double high_level = 0;        // 1/mm
-  double threshold = 0;         // 1/mm; 0 when nothing was segmented
+  Volume absorbers;          // 1 inside absorbers, 0 elsewhere (same layout as the input)
+  double wall_level = 0;     // median of the holder wall's voxels, 1/mm
+  double threshold = 0;      // 1/mm
   std::size_t voxels = 0;
-  std::string note;             // why nothing was segmented
+  std::string note;          // why nothing was segmented
 };
 
 AbsorberSegmentation segment_absorbers(const Volume& reconstruction, const SegmentationOptions& options = {});
