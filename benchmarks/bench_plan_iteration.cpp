@@ -9,28 +9,11 @@
 #include <algorithm>
 
 #include "ctk/phantoms/builtin_phantoms.hpp"
-#include "ctk/phantoms/simulated_lab.hpp"
+#include "ctk/phantoms/simulated_acquisition.hpp"
 #include "ctk/plan/plan_trajectory.hpp"
 
 namespace ctk {
 namespace {
-
-class LabSide final : public Acquisition {
- public:
-  explicit LabSide(SimulatedLab& lab) : lab_(lab) {}
-  AcquisitionAnswer acquire(const AcquisitionRequest& r) override {
-    LabShot shot = lab_.take(r.direction);
-    AcquisitionAnswer a;
-    a.acquired = shot.reached;
-    a.reason = shot.note;
-    a.joints = shot.joints;
-    a.counts = std::move(shot.image);
-    return a;
-  }
-
- private:
-  SimulatedLab& lab_;
-};
 
 PlanningOptions default_planning(int views) {
   PlanningOptions o;
@@ -53,7 +36,7 @@ void BM_PlanningStep(benchmark::State& state) {
                             Image{720, 720, std::vector<float>(n, 100.0f)}};
   for (auto _ : state) {
     SimulatedLab lab(sim);
-    LabSide side(lab);
+    SimulatedAcquisition side(lab);
     const PlanningResult r = plan_trajectory(side, setup, default_planning(views));
     double sum = 0, worst = 0;
     for (double s : r.step_seconds) {

@@ -12,7 +12,7 @@
 #include "ctk/geom/scan.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
-#include "ctk/phantoms/simulated_lab.hpp"
+#include "ctk/phantoms/simulated_acquisition.hpp"
 #include "ctk/plan/plan_pictures.hpp"
 #include "ctk/plan/planned_scan.hpp"
 #include "ctk/proj/parallel.hpp"
@@ -46,35 +46,6 @@ struct PlanCommandOptions {
   double eval_voxel_mm = 0.5, eval_lambda = 3.0;
   bool compare_only = false;
   int timeout_s = 600;
-};
-
-// The simulator as the acquisition side: each shot's counts are also written where the planned
-// scan will name them.
-class SimulatedAcquisition final : public Acquisition {
- public:
-  SimulatedAcquisition(SimulatedLab& lab, fs::path folder) : lab_(lab), folder_(std::move(folder)) {
-    fs::create_directories(folder_ / "projections");
-  }
-  AcquisitionAnswer acquire(const AcquisitionRequest& r) override {
-    LabShot shot = lab_.take(r.direction);
-    AcquisitionAnswer a;
-    if (!shot.reached) {
-      a.reason = shot.note;
-      return a;
-    }
-    char name[64];
-    std::snprintf(name, sizeof name, "projections/proj_%04d.tif", r.view);
-    write_image_uint16(shot.image, folder_ / name);
-    a.acquired = true;
-    a.joints = shot.joints;
-    a.counts = std::move(shot.image);
-    a.projection_file = name;
-    return a;
-  }
-
- private:
-  SimulatedLab& lab_;
-  fs::path folder_;
 };
 
 PlanningOptions planning_options(const PlanCommandOptions& o) {

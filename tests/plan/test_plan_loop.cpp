@@ -8,32 +8,11 @@
 #include "ctk/geom/error.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
-#include "ctk/phantoms/simulated_lab.hpp"
+#include "ctk/phantoms/simulated_acquisition.hpp"
 #include "ctk/plan/planned_scan.hpp"
 
 namespace ctk {
 namespace {
-
-// The simulator as the lab, keeping each shot's true matrix for the test.
-class RecordingLab final : public Acquisition {
- public:
-  explicit RecordingLab(SimulatedLab& lab) : lab_(lab) {}
-  AcquisitionAnswer acquire(const AcquisitionRequest& r) override {
-    LabShot shot = lab_.take(r.direction);
-    AcquisitionAnswer a;
-    a.acquired = shot.reached;
-    a.reason = shot.note;
-    a.joints = shot.joints;
-    a.counts = std::move(shot.image);
-    a.projection_file = "proj_" + std::to_string(r.view) + ".tif";
-    if (shot.true_P) truth[r.view] = *shot.true_P;
-    return a;
-  }
-  std::map<int, ProjectionMatrix> truth;
-
- private:
-  SimulatedLab& lab_;
-};
 
 TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
   ScanSimulation sim;
@@ -44,7 +23,7 @@ TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
   sim.spectrum = tube_spectrum(90, 2.0);
   sim.seed = 3;
   SimulatedLab lab(sim);
-  RecordingLab acquisition(lab);
+  SimulatedAcquisition acquisition(lab);
   const PlanningSetup setup{sim.setup, sim.holder,
                             Image{360, 360, std::vector<float>(360 * 360, static_cast<float>(sim.counts.flat_counts + sim.counts.dark_counts))},
                             Image{360, 360, std::vector<float>(360 * 360, static_cast<float>(sim.counts.dark_counts))}};
@@ -76,7 +55,7 @@ TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
       EXPECT_LT(v.calibration_rms_px, 0.5);
     }
     // The calibrated matrix puts the holder's centre where the true one does.
-    const ProjectionMatrix& truth = acquisition.truth.at(v.index);
+    const ProjectionMatrix& truth = acquisition.true_matrices().at(v.index);
     for (const Eigen::Vector3d& X : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(20, 0, 30), Eigen::Vector3d(0, -20, -30)})
       EXPECT_LT((v.P->project(X) - truth.project(X)).norm(), 0.5) << "request " << v.index;
     // The plate's normal is the holder's u axis.

@@ -1,0 +1,28 @@
+#pragma once
+// The simulated lab as the view planner's acquisition side (target ctk::phantoms_plan, which
+// joins the simulator and libplan so neither depends on the other): each request becomes a shot;
+// its counts are written as a TIFF in `folder` (when given) under the name the planned scan will
+// use, and its true matrix is kept for whoever checks the calibration.
+#include <filesystem>
+#include <map>
+#include <optional>
+
+#include "ctk/phantoms/simulated_lab.hpp"
+#include "ctk/plan/acquisition.hpp"
+
+namespace ctk {
+
+class SimulatedAcquisition final : public Acquisition {
+ public:
+  explicit SimulatedAcquisition(SimulatedLab& lab, std::optional<std::filesystem::path> folder = std::nullopt);
+  AcquisitionAnswer acquire(const AcquisitionRequest& request) override;
+  /// True matrix of each acquired request.
+  const std::map<int, ProjectionMatrix>& true_matrices() const { return truth_; }
+
+ private:
+  SimulatedLab& lab_;
+  std::optional<std::filesystem::path> folder_;
+  std::map<int, ProjectionMatrix> truth_;
+};
+
+}  // namespace ctk
