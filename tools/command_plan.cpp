@@ -241,12 +241,17 @@ void run_plan(const PlanCommandOptions& o) {
     if (o.setup.empty()) throw std::invalid_argument("lab mode needs --setup (the lab's ctk-scan/1 file)");
     const PlanningSetup setup = setup_from_scan(o.setup, o.sod_mm);
     FileExchangeAcquisition acquisition(o.lab, setup.setup.detector.cols, setup.setup.detector.rows, std::chrono::seconds(o.timeout_s));
-    const PlanningResult r = plan_trajectory(acquisition, setup, options, on_view);
+    PlanningResult r = plan_trajectory(acquisition, setup, options, on_view);
     acquisition.finish();
-    write_planned_scan(r, setup, o.lab);
-    write_plan_map_png(r, o.lab / "plan-map.png");
-    write_volume_nrrd(r.coarse, o.lab / "coarse.nrrd");
-    report_plan(r, o.lab);
+    // The lab's folder is its own: the planned scan goes to --out and names the lab's images
+    // from there, so nothing the lab wrote is touched.
+    fs::create_directories(o.out);
+    for (PlannedViewRecord& v : r.views)
+      if (v.acquired) v.projection_file = fs::relative(fs::absolute(o.lab / v.projection_file), fs::absolute(o.out)).string();
+    write_planned_scan(r, setup, o.out);
+    write_plan_map_png(r, o.out / "plan-map.png");
+    write_volume_nrrd(r.coarse, o.out / "coarse.nrrd");
+    report_plan(r, o.out);
     return;
   }
   if (o.compare_only) {
@@ -274,7 +279,8 @@ void run_plan(const PlanCommandOptions& o) {
 void register_plan(CLI::App& app) {
   auto o = std::make_shared<PlanCommandOptions>();
   CLI::App* cmd = app.add_subcommand("plan", "Plan a spherical trajectory that avoids looking through absorbers (simulation or lab)");
-  cmd->add_option("--out", o->out, "Output folder (simulation mode): planned/ and, with --compare, whole-sphere/, random/")->capture_default_str();
+  cmd->add_option("--out", o->out, "Output folder: the planned scan (lab mode), or planned/ and, with --compare, whole-sphere/ and random/")
+      ->capture_default_str();
   cmd->add_option("--phantom", o->phantoms, "Simulation mode: built-in phantoms or ctk-phantom/1 files in the holder");
   cmd->add_option("--lab", o->lab, "Lab mode: the folder shared with the acquisition process (request/answer files)");
   cmd->add_option("--setup", o->setup, "Lab mode: the lab's ctk-scan/1 file (detector, robot frames, holder, flat, dark)")->check(CLI::ExistingFile);
