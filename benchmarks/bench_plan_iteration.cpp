@@ -31,9 +31,7 @@ void BM_PlanningStep(benchmark::State& state) {
   sim.holder = reference_helix_holder();
   sim.sample = builtin_phantom("sample-1");
   sim.spectrum = tube_spectrum(90, 2.0);
-  const std::size_t n = 720 * 720;
-  const PlanningSetup setup{sim.setup, sim.holder, Image{720, 720, std::vector<float>(n, 10100.0f)},
-                            Image{720, 720, std::vector<float>(n, 100.0f)}};
+  const PlanningSetup setup = planning_setup(sim);
   for (auto _ : state) {
     SimulatedLab lab(sim);
     SimulatedAcquisition side(lab);

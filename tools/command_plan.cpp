@@ -78,13 +78,6 @@ ScanSimulation simulation_from(const PlanCommandOptions& o) {
   return sim;
 }
 
-PlanningSetup setup_from(const ScanSimulation& sim) {
-  const Detector& d = sim.setup.detector;
-  const std::size_t n = static_cast<std::size_t>(d.cols) * static_cast<std::size_t>(d.rows);
-  return {sim.setup, sim.holder, Image{d.cols, d.rows, std::vector<float>(n, static_cast<float>(sim.counts.flat_counts + sim.counts.dark_counts))},
-          Image{d.cols, d.rows, std::vector<float>(n, static_cast<float>(sim.counts.dark_counts))}};
-}
-
 // Lab mode: the declared setup comes from a ctk-scan/1 file of the lab (detector, frames, holder,
 // flat and dark); the isocentre distance from the command line.
 PlanningSetup setup_from_scan(const fs::path& file, double sod_mm) {
@@ -259,7 +252,7 @@ void run_plan(const PlanCommandOptions& o) {
     return;
   }
   SimulatedLab lab(simulation_from(o));
-  const PlanningSetup setup = setup_from(lab.simulation());
+  const PlanningSetup setup = planning_setup(lab.simulation());
   const fs::path folder = o.out / "planned";
   SimulatedAcquisition acquisition(lab, folder);
   const PlanningResult r = plan_trajectory(acquisition, setup, options, on_view);

@@ -57,11 +57,9 @@ std::size_t write_projection(const ScanSimulation& sim, const Phantom& phantom, 
 }
 
 void write_flat_and_dark(const ScanSimulation& sim, const fs::path& folder) {
-  const Detector& d = sim.setup.detector;
-  const std::size_t n = static_cast<std::size_t>(d.cols) * static_cast<std::size_t>(d.rows);
-  write_image_uint16({d.cols, d.rows, std::vector<float>(n, static_cast<float>(sim.counts.dark_counts + sim.counts.flat_counts))},
-                     folder / "flat.tif");
-  write_image_uint16({d.cols, d.rows, std::vector<float>(n, static_cast<float>(sim.counts.dark_counts))}, folder / "dark.tif");
+  const OpenBeamFrames frames = open_beam_frames(sim);
+  write_image_uint16(frames.flat, folder / "flat.tif");
+  write_image_uint16(frames.dark, folder / "dark.tif");
 }
 
 }  // namespace
@@ -79,6 +77,13 @@ Image simulated_image(const ScanSimulation& sim, const Phantom& phantom, const T
   const std::size_t n = draw_counts(counts, sim.counts, rng);
   if (saturated) *saturated = n;
   return counts;
+}
+
+OpenBeamFrames open_beam_frames(const ScanSimulation& sim) {
+  const Detector& d = sim.setup.detector;
+  const std::size_t n = static_cast<std::size_t>(d.cols) * static_cast<std::size_t>(d.rows);
+  return {Image{d.cols, d.rows, std::vector<float>(n, static_cast<float>(sim.counts.dark_counts + sim.counts.flat_counts))},
+          Image{d.cols, d.rows, std::vector<float>(n, static_cast<float>(sim.counts.dark_counts))}};
 }
 
 Phantom simulated_phantom(const ScanSimulation& sim, const TrueScan& truth) {

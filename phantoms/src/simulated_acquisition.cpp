@@ -27,4 +27,9 @@ AcquisitionAnswer SimulatedAcquisition::acquire(const AcquisitionRequest& r) {
   return a;
 }
 
+PlanningSetup planning_setup(const ScanSimulation& sim) {
+  OpenBeamFrames frames = open_beam_frames(sim);
+  return {sim.setup, sim.holder, std::move(frames.flat), std::move(frames.dark)};
+}
+
 }  // namespace ctk

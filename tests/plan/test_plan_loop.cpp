@@ -24,9 +24,7 @@ TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
   sim.seed = 3;
   SimulatedLab lab(sim);
   SimulatedAcquisition acquisition(lab);
-  const PlanningSetup setup{sim.setup, sim.holder,
-                            Image{360, 360, std::vector<float>(360 * 360, static_cast<float>(sim.counts.flat_counts + sim.counts.dark_counts))},
-                            Image{360, 360, std::vector<float>(360 * 360, static_cast<float>(sim.counts.dark_counts))}};
+  const PlanningSetup setup = planning_setup(sim);
   PlanningOptions o;
   o.scout_nside = 1;
   o.views = 28;

@@ -18,6 +18,12 @@ struct SimulationReport {
   std::size_t saturated_pixels = 0;
 };
 
+/// The averaged, noise-free flat (dark + flat counts) and dark frames of a counts scan.
+struct OpenBeamFrames {
+  Image flat, dark;
+};
+OpenBeamFrames open_beam_frames(const ScanSimulation& simulation);
+
 /// Everything in the beam: the true holder (when in the beam) and the sample.
 Phantom simulated_phantom(const ScanSimulation& simulation, const TrueScan& truth);
 RenderOptions simulated_render_options(const ScanSimulation& simulation);

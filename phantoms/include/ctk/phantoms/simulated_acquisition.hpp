@@ -8,7 +8,7 @@
 #include <optional>
 
 #include "ctk/phantoms/simulated_lab.hpp"
-#include "ctk/plan/acquisition.hpp"
+#include "ctk/plan/plan_trajectory.hpp"
 
 namespace ctk {
 
@@ -24,5 +24,9 @@ class SimulatedAcquisition final : public Acquisition {
   std::optional<std::filesystem::path> folder_;
   std::map<int, ProjectionMatrix> truth_;
 };
+
+/// What the planner is told about a simulated setup: the declared geometry and holder, and the
+/// open-beam frames.
+PlanningSetup planning_setup(const ScanSimulation& simulation);
 
 }  // namespace ctk
