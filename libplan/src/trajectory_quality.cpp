@@ -38,6 +38,27 @@ TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const
         }
   q.rmse_per_mm = count ? std::sqrt(sum2 / static_cast<double>(count)) : 0.0;
 
+  // Every pair of neighbouring voxels in the region across which the truth changes.
+  double all_gradient = 0, all_truth = 0;
+  std::size_t edges = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const int di = axis == 0, dj = axis == 1, dk = axis == 2;
+    for (int k = dk; k < n[2]; ++k)
+      for (int j = dj; j < n[1]; ++j)
+        for (int i = di; i < n[0]; ++i) {
+          const float t0 = truth.at(i - di, j - dj, k - dk), t1 = truth.at(i, j, k);
+          if (std::abs(t1 - t0) < 1e-6f) continue;
+          if (!region.contains(x.layout.centre_of(i, j, k)) || !region.contains(x.layout.centre_of(i - di, j - dj, k - dk))) continue;
+          all_gradient += std::abs(x.at(i, j, k) - x.at(i - di, j - dj, k - dk)) / x.layout.voxel_mm[axis];
+          all_truth += std::abs(t1 - t0) / x.layout.voxel_mm[axis];
+          ++edges;
+        }
+  }
+  if (edges) {
+    q.edge_gradient_per_mm2 = all_gradient / static_cast<double>(edges);
+    q.truth_edge_gradient_per_mm2 = all_truth / static_cast<double>(edges);
+  }
+
   double gradient = 0, truth_gradient = 0;
   std::size_t steps = 0;
   for (int axis = 0; axis < 3; ++axis) {

@@ -1,0 +1,59 @@
+// The comparison's figures against what they must be on volumes made to measure: an exact copy
+// scores no error and the truth's own edge gradient, a brighter copy a proportionally steeper
+// one, a blurred copy a shallower one, and the three-profile figure agrees with the all-lines one
+// on a cube (every line through it crosses the same edges).
+#include <gtest/gtest.h>
+
+#include "ctk/plan/trajectory_quality.hpp"
+
+namespace ctk {
+namespace {
+
+// 32^3 voxels of 0.5 mm with an 8-voxel cube of 0.05 /mm in the middle.
+Volume cube() {
+  Volume v(VolumeLayout::centred({32, 32, 32}, Eigen::Vector3d::Constant(0.5)));
+  for (int k = 12; k < 20; ++k)
+    for (int j = 12; j < 20; ++j)
+      for (int i = 12; i < 20; ++i) v.at(i, j, k) = 0.05f;
+  return v;
+}
+
+// Neighbour averaging (1/4, 1/2, 1/4) along x.
+Volume blurred_along_x(const Volume& v) {
+  Volume b = v;
+  const auto& n = v.layout.size;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 1; i + 1 < n[0]; ++i) b.at(i, j, k) = 0.25f * v.at(i - 1, j, k) + 0.5f * v.at(i, j, k) + 0.25f * v.at(i + 1, j, k);
+  return b;
+}
+
+TEST(TrajectoryQuality, EdgeGradientsFollowContrastAndSharpness) {
+  const Volume truth = cube();
+  const SampleRegion region;
+  const std::array<int, 3> through = centre_of_mass_voxel(truth, region);
+  EXPECT_EQ(through, (std::array<int, 3>{16, 16, 16}));
+
+  const TrajectoryQuality same = trajectory_quality(truth, truth, region, through);
+  EXPECT_EQ(same.rmse_per_mm, 0.0);
+  // Every edge is a full step of 0.05 /mm over 0.5 mm.
+  EXPECT_NEAR(same.truth_edge_gradient_per_mm2, 0.1, 1e-6);
+  EXPECT_NEAR(same.edge_gradient_per_mm2, 0.1, 1e-6);
+  EXPECT_NEAR(same.profile_gradient_per_mm2, 0.1, 1e-6);
+
+  Volume brighter = truth;
+  for (float& x : brighter.data) x *= 1.2f;
+  const TrajectoryQuality b = trajectory_quality(brighter, truth, region, through);
+  EXPECT_NEAR(b.edge_gradient_per_mm2, 0.12, 1e-6);
+  EXPECT_NEAR(b.rmse_per_mm, 0.01 * std::sqrt(512.0 / 32768.0), 1e-6);  // 0.01 on the cube's 512 of 32768 voxels
+
+  // Blurring along x halves the steps across the x faces (1/4 -> 3/4 of the step); across the y
+  // and z faces the first and last columns keep 3/4 of theirs, the six between all of it:
+  // (1/2 + 2 x (2 x 3/4 + 6) / 8) / 3 of the truth's.
+  const TrajectoryQuality s = trajectory_quality(blurred_along_x(truth), truth, region, through);
+  EXPECT_NEAR(s.edge_gradient_per_mm2, 0.1 * (0.5 + 2 * 7.5 / 8) / 3, 1e-6);
+  EXPECT_NEAR(s.profile_gradient_per_mm2, 0.1 * (0.5 + 1 + 1) / 3, 1e-6);
+}
+
+}  // namespace
+}  // namespace ctk
