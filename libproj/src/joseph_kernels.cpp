@@ -147,79 +147,305 @@ HWY_INLINE void interior_range(const RayTable& t, std::size_t r, std::size_t n, 
   }
 }
 
-// Slices any of the N rays starting at r visits.
-HWY_INLINE void slice_range(const RayTable& t, std::size_t r, std::size_t n, int& k_lo, int& k_hi) {
-  k_lo = 1 << 30;
-  k_hi = -(1 << 30);
+// What a kernel needs to know about one bundle of N neighbouring rays before marching it.
+struct Bundle {
+  std::size_t r = 0;       // first entry
+  int k_lo = 0, k_hi = -1;  // slices any lane visits
+  int in_lo = 0, in_hi = -1;  // slices on the fast path (interior_range)
+  bool pairs = false;      // corners b and b + 1 adjacent in memory for every lane
+  bool window = false;     // pairs, one axis for every lane: rows of the slice can be loaded whole
+};
+
+// The bundle at entry r, restricted to lanes of dominant `axis` (all lanes when axis < 0).
+HWY_INLINE Bundle bundle_at(const RayTable& t, std::size_t r, std::size_t n, int axis) {
+  Bundle b;
+  b.r = r;
+  b.k_lo = 1 << 30;
+  b.k_hi = -(1 << 30);
+  bool all_on_axis = true;
+  b.pairs = true;
   for (std::size_t l = 0; l < n; ++l) {
-    if (t.k_last[r + l] < t.k_first[r + l]) continue;
-    k_lo = std::min(k_lo, t.k_first[r + l]);
-    k_hi = std::max(k_hi, t.k_last[r + l]);
+    const std::size_t i = r + l;
+    b.pairs = b.pairs && t.stride_b[i] == 1;
+    if (axis >= 0 && t.axis[i] != axis) {
+      all_on_axis = false;
+      continue;
+    }
+    if (t.k_last[i] < t.k_first[i]) continue;
+    b.k_lo = std::min(b.k_lo, t.k_first[i]);
+    b.k_hi = std::max(b.k_hi, t.k_last[i]);
+  }
+  b.window = b.pairs && n >= 4 && t.n_b[r] >= static_cast<int>(2 * n);
+  for (std::size_t l = 1; l < n && b.window; ++l) b.window = t.axis[r + l] == t.axis[r];
+  interior_range(t, r, n, axis, b.in_lo, b.in_hi);
+  // The fast path needs every lane on the axis (others would touch voxels outside the slab).
+  if (!all_on_axis) b.in_lo = 1 << 30;
+  return b;
+}
+
+// The two floats at volume[index] and volume[index + 1] for every lane, as (first, second): one
+// 64-bit gather per pair instead of two 32-bit ones (gathers cost per element loaded).
+template <class DF>
+HWY_INLINE void gather_pairs(DF df, const float* HWY_RESTRICT volume, hn::Vec<hn::RebindToSigned<DF>> index,
+                             hn::Vec<DF>& first, hn::Vec<DF>& second) {
+#if HWY_TARGET == HWY_SCALAR
+  first = hn::GatherIndex(df, volume, index);
+  second = hn::GatherIndex(df, volume, hn::Add(index, hn::Set(hn::RebindToSigned<DF>(), 1)));
+#else
+  const hn::Repartition<double, DF> dd;
+  const hn::RebindToSigned<decltype(dd)> dl;
+  const hn::Rebind<std::int32_t, decltype(dd)> dh;
+  const auto* base = reinterpret_cast<const double*>(volume);
+  const auto lo = hn::BitCast(df, hn::GatherOffset(dd, base, hn::ShiftLeft<2>(hn::PromoteTo(dl, hn::LowerHalf(dh, index)))));
+  const auto hi = hn::BitCast(df, hn::GatherOffset(dd, base, hn::ShiftLeft<2>(hn::PromoteTo(dl, hn::UpperHalf(dh, index)))));
+  first = hn::ConcatEven(df, hi, lo);
+  second = hn::ConcatOdd(df, hi, lo);
+#endif
+}
+
+// Sum over the four corners of volume value times weight.
+template <class DF>
+HWY_INLINE hn::Vec<DF> interpolate(DF df, const float* HWY_RESTRICT volume, const Corners<DF>& c) {
+  auto s = hn::Mul(hn::GatherIndex(df, volume, c.index[0]), c.weight[0]);
+  s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[1]), c.weight[1], s);
+  s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[2]), c.weight[2], s);
+  return hn::MulAdd(hn::GatherIndex(df, volume, c.index[3]), c.weight[3], s);
+}
+
+// The same for interior corners of a bundle whose corners b and b + 1 are adjacent.
+template <class DF>
+HWY_INLINE hn::Vec<DF> interpolate_pairs(DF df, const float* HWY_RESTRICT volume, const Corners<DF>& c) {
+  hn::Vec<DF> v0, v1, v2, v3;
+  gather_pairs(df, volume, c.index[0], v0, v1);
+  gather_pairs(df, volume, c.index[2], v2, v3);
+  auto s = hn::Mul(v0, c.weight[0]);
+  s = hn::MulAdd(v1, c.weight[1], s);
+  s = hn::MulAdd(v2, c.weight[2], s);
+  return hn::MulAdd(v3, c.weight[3], s);
+}
+
+// Lanes of `lo` (pos < N) or `hi` (pos - N otherwise), pos in [0, 2N): a two-table permute.
+template <class DF>
+HWY_INLINE hn::Vec<DF> lookup_window(DF df, hn::Vec<DF> lo, hn::Vec<DF> hi, hn::Vec<hn::RebindToSigned<DF>> pos) {
+#if HWY_TARGET <= HWY_AVX3
+  (void)df;
+  return hn::Vec<DF>{_mm512_permutex2var_ps(lo.raw, pos.raw, hi.raw)};
+#else
+  const hn::RebindToSigned<DF> di;
+  const auto n = hn::Set(di, static_cast<std::int32_t>(hn::Lanes(df)));
+  const auto idx = hn::IndicesFromVec(df, hn::And(pos, hn::Sub(n, hn::Set(di, 1))));
+  return hn::IfThenElse(hn::RebindMask(df, hn::Lt(pos, n)), hn::TableLookupLanes(lo, idx), hn::TableLookupLanes(hi, idx));
+#endif
+}
+
+// The interior sample of a window bundle (Bundle::window) without gathers, when its lanes fall in
+// a window of 2N voxels along b and at most two neighbouring values of c: the slice's rows
+// there are loaded whole and each lane picks its corners by permutes. False (and `sample`
+// untouched) when the lanes spread wider; the caller then gathers.
+template <class DF>
+HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r, int k,
+                                   hn::Vec<DF>& sample) {
+#if HWY_TARGET == HWY_SCALAR
+  (void)df, (void)t, (void)volume, (void)r, (void)k, (void)sample;
+  return false;
+#else
+  const hn::RebindToSigned<DF> di;
+  const int N = static_cast<int>(hn::Lanes(df));
+  const SamplePosition<DF> p = position_at(df, t, r, k);
+  // Lanes are monotone along a detector row: the window starts at the smaller end.
+  int x0 = std::min(hn::GetLane(p.ib), hn::ExtractLane(p.ib, static_cast<std::size_t>(N - 1))) - 1;
+  const int c0 = std::min(hn::GetLane(p.ic), hn::ExtractLane(p.ic, static_cast<std::size_t>(N - 1)));
+  x0 = std::min(std::max(x0, 0), t.n_b[r] - 2 * N);
+  const auto pos = hn::Sub(p.ib, hn::Set(di, x0)), pos1 = hn::Add(pos, hn::Set(di, 1));
+  const auto dc = hn::Sub(p.ic, hn::Set(di, c0));
+  const auto limit = hn::Set(di, 2 * N);
+  const auto zero = hn::Zero(di), one = hn::Set(di, 1);
+  const auto upper = hn::Eq(dc, one);  // lanes whose corner c sits one row up
+  if (!hn::AllTrue(di, hn::And(hn::Gt(pos, hn::Set(di, -1)), hn::Lt(pos1, limit))) ||
+      !hn::AllTrue(di, hn::Or(hn::Eq(dc, zero), upper)))
+    return false;
+  const std::ptrdiff_t sc = t.stride_c[r];
+  const float* row = volume + static_cast<std::ptrdiff_t>(k) * t.stride_a[r] + static_cast<std::ptrdiff_t>(c0) * sc + x0;
+  const auto r0lo = hn::LoadU(df, row), r0hi = hn::LoadU(df, row + N);
+  const auto r1lo = hn::LoadU(df, row + sc), r1hi = hn::LoadU(df, row + sc + N);
+  auto c00 = lookup_window(df, r0lo, r0hi, pos), c10 = lookup_window(df, r0lo, r0hi, pos1);
+  auto c01 = lookup_window(df, r1lo, r1hi, pos), c11 = lookup_window(df, r1lo, r1hi, pos1);
+  if (!hn::AllFalse(di, upper)) {  // some lanes one row up: shift them by a row
+    const auto up = hn::RebindMask(df, upper);
+    const auto r2lo = hn::LoadU(df, row + 2 * sc), r2hi = hn::LoadU(df, row + 2 * sc + N);
+    c00 = hn::IfThenElse(up, c01, c00);
+    c10 = hn::IfThenElse(up, c11, c10);
+    c01 = hn::IfThenElse(up, lookup_window(df, r2lo, r2hi, pos), c01);
+    c11 = hn::IfThenElse(up, lookup_window(df, r2lo, r2hi, pos1), c11);
+  }
+  auto s = hn::Mul(c00, hn::Mul(p.gb, p.gc));
+  s = hn::MulAdd(c10, hn::Mul(p.fb, p.gc), s);
+  s = hn::MulAdd(c01, hn::Mul(p.gb, p.fc), s);
+  sample = hn::MulAdd(c11, hn::Mul(p.fb, p.fc), s);
+  return true;
+#endif
+}
+
+#if HWY_TARGET <= HWY_AVX3
+// The adjoint of interpolate_window for 16 lanes, without a scatter: each lane's four corner
+// weights times `value` are placed at their voxels of a window of 32 voxels along b (expand
+// puts lane after lane at the set bits of a mask), in the slice's rows c0 .. c0 + 2, which are
+// then updated whole. Lanes on the same voxel (rays closer than a voxel) are first summed
+// into one. False (and nothing written) when the lanes spread wider, or three share a voxel.
+HWY_INLINE bool scatter_window(const RayTable& t, float* HWY_RESTRICT volume, std::size_t r, int k,
+                               hn::Vec<hn::ScalableTag<float>> value) {
+  const hn::ScalableTag<float> df;
+  const hn::RebindToSigned<decltype(df)> di;
+  constexpr int N = 16;
+  const auto p = position_at(df, t, r, k);
+  const int ib_first = hn::GetLane(p.ib), ib_last = hn::ExtractLane(p.ib, N - 1);
+  const int c0 = std::min(hn::GetLane(p.ic), hn::ExtractLane(p.ic, N - 1));
+  const int x0 = std::min(std::max(std::min(ib_first, ib_last), 0), t.n_b[r] - 2 * N);
+  auto pos = hn::Sub(p.ib, hn::Set(di, x0)), dc = hn::Sub(p.ic, hn::Set(di, c0));
+  __m512 w[4] = {hn::Mul(hn::Mul(p.gb, p.gc), value).raw, hn::Mul(hn::Mul(p.fb, p.gc), value).raw,
+                 hn::Mul(hn::Mul(p.gb, p.fc), value).raw, hn::Mul(hn::Mul(p.fb, p.fc), value).raw};
+  if (ib_last < ib_first) {  // lanes in increasing b
+    pos = hn::Reverse(di, pos), dc = hn::Reverse(di, dc);
+    for (auto& v : w) v = hn::Reverse(df, hn::Vec<decltype(df)>{v}).raw;
+  }
+  const __m512i P = pos.raw, C = dc.raw;
+  // Every lane inside the window (with its b + 1 corner) and on row c0 or c0 + 1; b never
+  // decreasing from lane to lane.
+  const __mmask16 inside = _mm512_cmpge_epi32_mask(P, _mm512_setzero_si512()) &
+                           _mm512_cmplt_epi32_mask(P, _mm512_set1_epi32(2 * N - 1)) &
+                           _mm512_cmpge_epi32_mask(C, _mm512_setzero_si512()) & _mm512_cmple_epi32_mask(C, _mm512_set1_epi32(1));
+  const __m512i P_next = _mm512_alignr_epi32(P, P, 1);  // lane l holds P[l + 1] (l < N - 1)
+  if (inside != 0xFFFF || (_mm512_cmpge_epi32_mask(P_next, P) & 0x7FFF) != 0x7FFF) return false;
+  // A lane on the same voxel as the lane before it takes that lane's weights; that lane is dropped.
+  const __m512i key = _mm512_add_epi32(P, _mm512_slli_epi32(C, 6));
+  const __m512i key_prev = _mm512_alignr_epi32(key, _mm512_set1_epi32(-1), 15);  // lane l holds key[l - 1]
+  const __mmask16 same_as_prev = _mm512_cmpeq_epi32_mask(key, key_prev);
+  if ((same_as_prev & (same_as_prev << 1)) != 0) return false;
+  const auto keep = static_cast<__mmask16>(~(same_as_prev >> 1));
+  for (auto& v : w) v = _mm512_mask_add_ps(
+           v, same_as_prev, v, _mm512_castsi512_ps(_mm512_alignr_epi32(_mm512_castps_si512(v), _mm512_setzero_si512(), 15)));
+  // Puts the kept lanes of `lanes` at the window voxels whose bits are set in `at`, in order.
+  auto place = [](__mmask16 lanes, std::uint32_t at, __m512 v, __m512& lo, __m512& hi) {
+    const __m512 packed = _mm512_maskz_compress_ps(lanes, v);
+    const auto lo_bits = static_cast<__mmask16>(at & 0xFFFFu), hi_bits = static_cast<__mmask16>(at >> 16);
+    lo = _mm512_maskz_expand_ps(lo_bits, packed);
+    const __m512i from = _mm512_add_epi32(_mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+                                          _mm512_set1_epi32(_mm_popcnt_u32(lo_bits)));
+    hi = _mm512_maskz_expand_ps(hi_bits, _mm512_permutexvar_ps(from, packed));
+  };
+  const __mmask16 upper = _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(1));
+  const std::ptrdiff_t sc = t.stride_c[r];
+  float* base = volume + static_cast<std::ptrdiff_t>(k) * t.stride_a[r] + static_cast<std::ptrdiff_t>(c0) * sc + x0;
+  for (int layer = 0; layer < 2; ++layer) {  // lanes whose corner c is row c0, then c0 + 1
+    const auto lanes = static_cast<__mmask16>(keep & (layer == 0 ? ~upper : upper));
+    if (lanes == 0) continue;
+    const auto bits = static_cast<std::uint32_t>(
+        _mm512_reduce_or_epi32(_mm512_maskz_sllv_epi32(lanes, _mm512_set1_epi32(1), P)));
+    float* row = base + layer * sc;
+    for (int q = 0; q < 2; ++q, row += sc) {  // corner c, then c + 1
+      __m512 a_lo, a_hi, b_lo, b_hi;
+      place(lanes, bits, w[2 * q], a_lo, a_hi);
+      place(lanes, bits << 1, w[2 * q + 1], b_lo, b_hi);
+      _mm512_storeu_ps(row, _mm512_add_ps(_mm512_loadu_ps(row), _mm512_add_ps(a_lo, b_lo)));
+      _mm512_storeu_ps(row + N, _mm512_add_ps(_mm512_loadu_ps(row + N), _mm512_add_ps(a_hi, b_hi)));
+    }
+  }
+  return true;
+}
+#endif
+
+// volume[index] += weight * value over the four corners of every lane, lane by lane (lanes
+// often share a voxel). A zero weight touches nothing, which also keeps lanes of other axes
+// out of voxels outside the slab. (A gather, add and scatter per corner was tried: 1.7x
+// slower on Zen 5, the next corner's gather waiting for the scatter's stores.)
+template <class DF>
+HWY_INLINE void scatter_add(DF df, const Corners<DF>& c, hn::Vec<DF> value, float* HWY_RESTRICT volume) {
+  const hn::RebindToSigned<DF> di;
+  const int N = static_cast<int>(hn::Lanes(df));
+  HWY_ALIGN std::int32_t index[4][kMaxLanes];
+  HWY_ALIGN float weight[4][kMaxLanes];
+  for (int q = 0; q < 4; ++q) {
+    hn::Store(c.index[q], di, index[q]);
+    hn::Store(hn::Mul(c.weight[q], value), df, weight[q]);
+  }
+  for (int l = 0; l < N; ++l)
+    for (int q = 0; q < 4; ++q)
+      if (weight[q][l] != 0.0f) volume[index[q][l]] += weight[q][l];
+}
+
+// The same for interior corners, where every lane is on the slab's axis and every corner inside
+// the volume: no test per corner, and corners 1 to 3 are offsets of corner 0.
+template <class DF>
+HWY_INLINE void scatter_add_interior(DF df, const Corners<DF>& c, hn::Vec<DF> value, float* HWY_RESTRICT volume) {
+  const hn::RebindToSigned<DF> di;
+  const int N = static_cast<int>(hn::Lanes(df));
+  HWY_ALIGN std::int32_t index[kMaxLanes];
+  HWY_ALIGN float weight[4][kMaxLanes];
+  hn::Store(c.index[0], di, index);
+  for (int q = 0; q < 4; ++q) hn::Store(hn::Mul(c.weight[q], value), df, weight[q]);
+  const std::int32_t db = hn::GetLane(hn::Sub(c.index[1], c.index[0])), dc = hn::GetLane(hn::Sub(c.index[2], c.index[0]));
+  for (int l = 0; l < N; ++l) {
+    float* v = volume + index[l];
+    v[0] += weight[0][l];
+    v[db] += weight[1][l];
+    v[dc] += weight[2][l];
+    v[db + dc] += weight[3][l];
   }
 }
 
+// Bundles go one at a time, every slice of one before the next. (Marching the bundles of a
+// column strip in consecutive rows together, slice by slice, was tried for locality: 25 %
+// slower, the per-sample state no longer staying in registers.)
 void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY_RESTRICT out) {
   const hn::ScalableTag<float> df;
-  const std::size_t N = hn::Lanes(df);
-  const auto all = hn::FirstN(df, N);
-  for (std::size_t r = 0; r < static_cast<std::size_t>(t.count); r += N) {
-    int k_lo, k_hi;
-    slice_range(t, r, N, k_lo, k_hi);
-    int in_lo, in_hi;
-    interior_range(t, r, N, -1, in_lo, in_hi);
-    auto sum = hn::Zero(df);
-    auto accumulate = [&](const Corners<hn::ScalableTag<float>>& c) {
-      auto s = hn::Mul(hn::GatherIndex(df, volume, c.index[0]), c.weight[0]);
-      s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[1]), c.weight[1], s);
-      s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[2]), c.weight[2], s);
-      s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[3]), c.weight[3], s);
-      sum = hn::Add(sum, s);
-    };
-    for (int k = k_lo; k <= k_hi; ++k) {
-      if (k == in_lo && in_lo <= in_hi) {
-        for (; k <= in_hi; ++k) accumulate(interior_corners_at(df, t, r, k));
-        if (k > k_hi) break;
+  const int N = static_cast<int>(hn::Lanes(df));
+  const auto all = hn::FirstN(df, static_cast<std::size_t>(N));
+  for (int slot = 0; slot < t.views; ++slot) {
+    for (int row = 0; row < t.rows; ++row) {
+      for (int col = 0; col < t.row_stride; col += N) {
+        const Bundle b = bundle_at(t, t.entry(slot, row, col), static_cast<std::size_t>(N), -1);
+        auto sum = hn::Zero(df);
+        for (int k = b.k_lo; k <= b.k_hi; ++k) {
+          if (k >= b.in_lo && k <= b.in_hi) {
+            hn::Vec<decltype(df)> sample;
+            if (!b.window || !interpolate_window(df, t, volume, b.r, k, sample)) {
+              const auto c = interior_corners_at(df, t, b.r, k);
+              sample = b.pairs ? interpolate_pairs(df, volume, c) : interpolate(df, volume, c);
+            }
+            sum = hn::Add(sum, sample);
+          } else {
+            sum = hn::Add(sum, interpolate(df, volume, corners_at(df, t, b.r, k, all)));
+          }
+        }
+        hn::StoreU(hn::Mul(sum, hn::LoadU(df, t.weight.data() + b.r)), df, out + b.r);
       }
-      accumulate(corners_at(df, t, r, k, all));
     }
-    hn::StoreU(hn::Mul(sum, hn::LoadU(df, t.weight.data() + r)), df, out + r);
   }
 }
 
 void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RESTRICT volume) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
-  const std::size_t N = hn::Lanes(df);
-  HWY_ALIGN std::int32_t index[4][kMaxLanes];
-  HWY_ALIGN float weight[4][kMaxLanes];
-  for (std::size_t r = 0; r < static_cast<std::size_t>(t.count); r += N) {
-    const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(di, t.axis.data() + r), hn::Set(di, axis)));
-    if (hn::AllFalse(df, on_axis)) continue;
-    int k_lo, k_hi;
-    slice_range(t, r, N, k_lo, k_hi);
-    k_lo = std::max(k_lo, k_begin);
-    k_hi = std::min(k_hi, k_end - 1);
-    const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
-    int in_lo, in_hi;
-    interior_range(t, r, N, axis, in_lo, in_hi);
-    // The fast path needs every lane on this axis (others would scatter outside the slab).
-    if (!hn::AllTrue(df, on_axis)) in_lo = 1 << 30;
-    auto scatter = [&](const Corners<hn::ScalableTag<float>>& c) {
-      for (int q = 0; q < 4; ++q) {
-        hn::Store(c.index[q], di, index[q]);
-        hn::Store(hn::Mul(c.weight[q], value), df, weight[q]);
-      }
-      // Scalar scatter: neighbouring lanes often share a voxel. A zero weight is skipped, which
-      // also keeps lanes of other axes from touching voxels outside this slab.
-      for (std::size_t l = 0; l < N; ++l)
-        for (int q = 0; q < 4; ++q)
-          if (weight[q][l] != 0.0f) volume[index[q][l]] += weight[q][l];
-    };
-    for (int k = k_lo; k <= k_hi; ++k) {
-      if (k >= in_lo && k <= in_hi) {
-        scatter(interior_corners_at(df, t, r, k));
-      } else {
-        scatter(corners_at(df, t, r, k, on_axis));
+  const int N = static_cast<int>(hn::Lanes(df));
+  for (int slot = 0; slot < t.views; ++slot) {
+    for (int row = 0; row < t.rows; ++row) {
+      for (int col = 0; col < t.row_stride; col += N) {
+        const std::size_t r = t.entry(slot, row, col);
+        const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(di, t.axis.data() + r), hn::Set(di, axis)));
+        if (hn::AllFalse(df, on_axis)) continue;
+        const Bundle b = bundle_at(t, r, static_cast<std::size_t>(N), axis);
+        const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
+        const int k_lo = std::max(b.k_lo, k_begin), k_hi = std::min(b.k_hi, k_end - 1);
+        for (int k = k_lo; k <= k_hi; ++k) {
+          if (k >= b.in_lo && k <= b.in_hi) {
+#if HWY_TARGET <= HWY_AVX3
+            if (b.window && scatter_window(t, volume, r, k, value)) continue;
+#endif
+            scatter_add_interior(df, interior_corners_at(df, t, r, k), value, volume);
+          } else {
+            scatter_add(df, corners_at(df, t, r, k, on_axis), value, volume);
+          }
+        }
       }
     }
   }

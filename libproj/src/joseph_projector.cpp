@@ -29,18 +29,20 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
 #pragma omp parallel num_threads(threads())
   {
     detail::RayTable table;
-    table.resize(rows_per_block * y.cols);
+    table.shape(1, rows_per_block, y.cols);
     std::vector<float> out(table.pb_mid.size());
 #pragma omp for schedule(dynamic, 1)
     for (int item = 0; item < items; ++item) {
       // Views vary fastest: the same detector rows of neighbouring views see nearly the same
       // band of the volume, which then stays in cache.
       const int v = item % y.views, row_begin = (item / y.views) * rows_per_block;
-      const int rays = std::min(rows_per_block, y.rows - row_begin) * y.cols;
-      table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, row_begin, y.cols, 0, rays);
-      table.pad(rays);
+      table.rows = std::min(rows_per_block, y.rows - row_begin);
+      table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, 0, row_begin, y.cols, 0,
+                 table.rows * y.cols);
       detail::forward_rays(table, x.data.data(), out.data());
-      std::copy(out.begin(), out.begin() + rays, y.view(v) + static_cast<std::size_t>(row_begin) * static_cast<std::size_t>(y.cols));
+      for (int row = 0; row < table.rows; ++row)
+        std::copy_n(out.begin() + static_cast<std::ptrdiff_t>(table.entry(0, row, 0)), y.cols,
+                    y.view(v) + static_cast<std::size_t>(row_begin + row) * static_cast<std::size_t>(y.cols));
     }
   }
 }
@@ -54,16 +56,17 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
   const int n_threads = threads();
   // Several views share one table, so the threads meet at a barrier once per batch rather than
   // once per view (barriers dominate small problems, and cost dearly when cores are shared).
-  const int per_view = (rows_per_block * y.cols + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes;
+  const int per_view = rows_per_block * ((y.cols + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes);
   const int batch = std::clamp(kBackTableRays / per_view, 1, y.views);
   detail::RayTable table;  // shared: filled together, then read by every slab task
-  table.resize(batch * per_view);
+  table.shape(batch, rows_per_block, y.cols);
 #pragma omp parallel num_threads(n_threads)
   {
     // Views innermost, as in forward(): a band of the volume stays in cache across views.
     for (int block = 0; block < blocks; ++block) {
       const int row_begin = block * rows_per_block;
-      const int count = std::min(rows_per_block, y.rows - row_begin) * y.cols;
+      const int rows = std::min(rows_per_block, y.rows - row_begin);
+      const int count = rows * y.cols;
       const int chunk = (count + n_threads - 1) / n_threads;
       for (int v0 = 0; v0 < y.views; v0 += batch) {
         const int in_batch = std::min(batch, y.views - v0);
@@ -71,12 +74,14 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
         for (int task = 0; task < in_batch * n_threads; ++task) {
           const int slot = task / n_threads, part = task % n_threads, v = v0 + slot;
           const int begin = std::min(count, part * chunk), end = std::min(count, begin + chunk);
-          const int offset = slot * per_view;
-          table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, row_begin, y.cols, begin, end, offset);
+          table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, slot, row_begin, y.cols, begin,
+                     end);
           const float* values = y.view(v) + static_cast<std::size_t>(row_begin) * static_cast<std::size_t>(y.cols);
-          std::copy(values + begin, values + end, table.value.begin() + offset + begin);
-          if (part == n_threads - 1) table.empty(offset + count, offset + per_view);
-          if (task == 0) table.count = in_batch * per_view;
+          for (int r = begin; r < end; ++r) table.value[table.entry(slot, r / y.cols, r % y.cols)] = values[r];
+          if (task == 0) {
+            table.views = in_batch;
+            table.rows = rows;
+          }
         }
         // A sample at slice k writes only slice k of its dominant axis: slabs are disjoint.
         for (int axis = 0; axis < 3; ++axis) {

@@ -2,18 +2,24 @@
 
 namespace ctk::detail {
 
-void RayTable::resize(int capacity) {
-  const auto n = static_cast<std::size_t>((capacity + kMaxLanes - 1) / kMaxLanes * kMaxLanes);
+void RayTable::shape(int view_count, int row_count, int cols) {
+  views = view_count;
+  rows = row_count;
+  row_stride = (cols + kMaxLanes - 1) / kMaxLanes * kMaxLanes;
+  view_stride = rows * row_stride;
+  const auto n = static_cast<std::size_t>(views) * static_cast<std::size_t>(view_stride);
   for (auto* v : {&pb_mid, &beta_b, &pc_mid, &beta_c, &weight, &k_mid, &value}) v->assign(n, 0.0f);
   for (auto* v : {&k_first, &k_last, &axis, &stride_a, &stride_b, &stride_c, &n_b, &n_c}) v->assign(n, 0);
+  empty(0, n);
 }
 
-void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int row_begin, int cols, int ray_begin, int ray_end,
-                    int offset) {
+void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int slot, int row_begin, int cols, int ray_begin,
+                    int ray_end) {
   const auto strides = layout.strides();
   for (int r = ray_begin; r < ray_end; ++r) {
-    const auto i = static_cast<std::size_t>(offset + r);
-    const MarchedRay m = march_ray(rays, layout, r % cols, row_begin + r / cols);
+    const int row = r / cols, col = r % cols;
+    const std::size_t i = entry(slot, row, col);
+    const MarchedRay m = march_ray(rays, layout, col, row_begin + row);
     const auto [b, c] = other_axes(m.axis);
     pb_mid[i] = static_cast<float>(m.pb_mid);
     beta_b[i] = static_cast<float>(m.beta_b);
@@ -29,17 +35,12 @@ void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int row_be
     stride_c[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(c)]);
     n_b[i] = layout.size[static_cast<std::size_t>(b)];
     n_c[i] = layout.size[static_cast<std::size_t>(c)];
+    if (col == cols - 1) empty(i + 1, entry(slot, row + 1, 0));
   }
 }
 
-void RayTable::pad(int used) {
-  count = (used + kMaxLanes - 1) / kMaxLanes * kMaxLanes;
-  empty(used, count);
-}
-
-void RayTable::empty(int begin, int end) {
-  for (int r = begin; r < end; ++r) {
-    const auto i = static_cast<std::size_t>(r);
+void RayTable::empty(std::size_t begin, std::size_t end) {
+  for (std::size_t i = begin; i < end; ++i) {
     pb_mid[i] = beta_b[i] = pc_mid[i] = beta_c[i] = weight[i] = k_mid[i] = value[i] = 0.0f;
     k_first[i] = 0;
     k_last[i] = -1;

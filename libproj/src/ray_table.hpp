@@ -1,6 +1,9 @@
 #pragma once
-// Private to libproj: the rays of a few detector rows, in float, structure-of-arrays so that
-// SIMD lanes load neighbouring rays at once. Both fast kernels read the same table.
+// Private to libproj: the rays of a few detector rows of one or more views, in float,
+// structure-of-arrays so that SIMD lanes load neighbouring rays at once. Each detector row is
+// padded to a multiple of kMaxLanes, so a SIMD bundle never straddles two rows and the bundles
+// of one column strip in consecutive rows march through neighbouring voxels. Both fast kernels
+// read the same table.
 #include <cstdint>
 #include <vector>
 
@@ -8,27 +11,33 @@
 
 namespace ctk::detail {
 
-inline constexpr int kMaxLanes = 16;  // widest float vector (AVX-512); tables are padded to it
+inline constexpr int kMaxLanes = 16;  // widest float vector (AVX-512); rows are padded to it
 
 struct RayTable {
-  int count = 0;   // rays in use (padded up to a multiple of kMaxLanes with empty rays)
+  int views = 0;        // views in use, each at slot * view_stride
+  int rows = 0;         // detector rows in use per view
+  int row_stride = 0;   // entries per row: the columns rounded up to kMaxLanes, the rest empty
+  int view_stride = 0;  // entries per view: the row capacity times row_stride
   std::vector<float> pb_mid, beta_b, pc_mid, beta_c, weight, k_mid, value;
   std::vector<std::int32_t> k_first, k_last, axis, stride_a, stride_b, stride_c, n_b, n_c;
 
-  void resize(int capacity);
-  /// Rays numbered from pixel (0, row_begin), row by row over `cols` columns; fills entries
-  /// offset + [ray_begin, ray_end) only, so threads can fill one table together, and several
-  /// views can share a table (each at its own offset).
-  void fill(const ViewRays& rays, const VolumeLayout& layout, int row_begin, int cols, int ray_begin, int ray_end,
-            int offset = 0);
-  /// Marks entries [begin, end) empty.
-  void empty(int begin, int end);
-  /// Uses `used` rays: count becomes the next multiple of kMaxLanes, the rest marked empty.
-  void pad(int used);
+  /// Room for `views` views of `rows` rows of `cols` columns; views and rows in use are set to that.
+  void shape(int views, int rows, int cols);
+  std::size_t entry(int slot, int row, int col) const {
+    return static_cast<std::size_t>(slot) * static_cast<std::size_t>(view_stride) +
+           static_cast<std::size_t>(row) * static_cast<std::size_t>(row_stride) + static_cast<std::size_t>(col);
+  }
+  /// The rays of one view in slot `slot`, numbered r = row * cols + col from pixel (0, row_begin);
+  /// fills r in [ray_begin, ray_end) only (and the padding of each row it completes), so threads
+  /// can fill one table together.
+  void fill(const ViewRays& rays, const VolumeLayout& layout, int slot, int row_begin, int cols, int ray_begin,
+            int ray_end);
+  /// Marks entries [begin, end) empty: they touch nothing and project to zero.
+  void empty(std::size_t begin, std::size_t end);
 };
 
 // Kernels (Highway, dispatched to the widest SIMD unit at run time).
-/// out[r] = line integral of ray r, for r in [0, table.count) (a multiple of kMaxLanes).
+/// out[e] = line integral of the ray at entry e, for every entry in use (out sized like the table).
 void forward_rays(const RayTable& table, const float* volume, float* out);
 /// volume += A' y for the rays of dominant `axis`, slices [k_begin, k_end) only; y is
 /// table.value (each ray's projection value).
