@@ -203,13 +203,17 @@ HWY_INLINE void gather_pairs(DF df, const float* HWY_RESTRICT volume, hn::Vec<hn
 #endif
 }
 
+// The sample from its four corner values, in the same order on every path.
+template <class V>
+HWY_INLINE V weigh(V v0, V v1, V v2, V v3, const V (&weight)[4]) {
+  return hn::MulAdd(v3, weight[3], hn::MulAdd(v2, weight[2], hn::MulAdd(v1, weight[1], hn::Mul(v0, weight[0]))));
+}
+
 // Sum over the four corners of volume value times weight.
 template <class DF>
 HWY_INLINE hn::Vec<DF> interpolate(DF df, const float* HWY_RESTRICT volume, const Corners<DF>& c) {
-  auto s = hn::Mul(hn::GatherIndex(df, volume, c.index[0]), c.weight[0]);
-  s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[1]), c.weight[1], s);
-  s = hn::MulAdd(hn::GatherIndex(df, volume, c.index[2]), c.weight[2], s);
-  return hn::MulAdd(hn::GatherIndex(df, volume, c.index[3]), c.weight[3], s);
+  return weigh(hn::GatherIndex(df, volume, c.index[0]), hn::GatherIndex(df, volume, c.index[1]),
+               hn::GatherIndex(df, volume, c.index[2]), hn::GatherIndex(df, volume, c.index[3]), c.weight);
 }
 
 // The same for interior corners of a bundle whose corners b and b + 1 are adjacent.
@@ -218,10 +222,7 @@ HWY_INLINE hn::Vec<DF> interpolate_pairs(DF df, const float* HWY_RESTRICT volume
   hn::Vec<DF> v0, v1, v2, v3;
   gather_pairs(df, volume, c.index[0], v0, v1);
   gather_pairs(df, volume, c.index[2], v2, v3);
-  auto s = hn::Mul(v0, c.weight[0]);
-  s = hn::MulAdd(v1, c.weight[1], s);
-  s = hn::MulAdd(v2, c.weight[2], s);
-  return hn::MulAdd(v3, c.weight[3], s);
+  return weigh(v0, v1, v2, v3, c.weight);
 }
 
 // Lanes of `lo` (pos < N) or `hi` (pos - N otherwise), pos in [0, 2N): a two-table permute.
@@ -278,10 +279,8 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
     c01 = hn::IfThenElse(up, lookup_window(df, r2lo, r2hi, pos), c01);
     c11 = hn::IfThenElse(up, lookup_window(df, r2lo, r2hi, pos1), c11);
   }
-  auto s = hn::Mul(c00, hn::Mul(p.gb, p.gc));
-  s = hn::MulAdd(c10, hn::Mul(p.fb, p.gc), s);
-  s = hn::MulAdd(c01, hn::Mul(p.gb, p.fc), s);
-  sample = hn::MulAdd(c11, hn::Mul(p.fb, p.fc), s);
+  const hn::Vec<DF> weight[4] = {hn::Mul(p.gb, p.gc), hn::Mul(p.fb, p.gc), hn::Mul(p.gb, p.fc), hn::Mul(p.fb, p.fc)};
+  sample = weigh(c00, c10, c01, c11, weight);
   return true;
 #endif
 }
