@@ -51,6 +51,16 @@ HWY_INLINE SamplePosition<DF> position_at(DF df, const RayTable& t, std::size_t 
   return s;
 }
 
+// The bilinear weights of corners (b, c), (b + 1, c), (b, c + 1), (b + 1, c + 1): every path
+// (masked, interior, row window, both directions) takes them from here.
+template <class DF>
+HWY_INLINE void bilinear_weights(const SamplePosition<DF>& p, hn::Vec<DF> (&weight)[4]) {
+  weight[0] = hn::Mul(p.gb, p.gc);
+  weight[1] = hn::Mul(p.fb, p.gc);
+  weight[2] = hn::Mul(p.gb, p.fc);
+  weight[3] = hn::Mul(p.fb, p.fc);
+}
+
 template <class DF>
 HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k, hn::Mask<DF> lanes) {
   const hn::RebindToSigned<DF> di;
@@ -86,10 +96,11 @@ HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k
   out.index[1] = hn::Add(base, hn::Add(ob1, oc0));
   out.index[2] = hn::Add(base, hn::Add(ob0, oc1));
   out.index[3] = hn::Add(base, hn::Add(ob1, oc1));
-  out.weight[0] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc0)), hn::Mul(p.gb, p.gc));
-  out.weight[1] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc0)), hn::Mul(p.fb, p.gc));
-  out.weight[2] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc1)), hn::Mul(p.gb, p.fc));
-  out.weight[3] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc1)), hn::Mul(p.fb, p.fc));
+  bilinear_weights(p, out.weight);
+  out.weight[0] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc0)), out.weight[0]);
+  out.weight[1] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc0)), out.weight[1]);
+  out.weight[2] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc1)), out.weight[2]);
+  out.weight[3] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc1)), out.weight[3]);
   return out;
 }
 
@@ -108,10 +119,7 @@ HWY_INLINE Corners<DF> interior_corners_at(DF df, const RayTable& t, std::size_t
   out.index[1] = hn::Add(i00, sb);
   out.index[2] = hn::Add(i00, sc);
   out.index[3] = hn::Add(out.index[1], sc);
-  out.weight[0] = hn::Mul(p.gb, p.gc);
-  out.weight[1] = hn::Mul(p.fb, p.gc);
-  out.weight[2] = hn::Mul(p.gb, p.fc);
-  out.weight[3] = hn::Mul(p.fb, p.fc);
+  bilinear_weights(p, out.weight);
   return out;
 }
 
@@ -239,6 +247,17 @@ HWY_INLINE hn::Vec<DF> lookup_window(DF df, hn::Vec<DF> lo, hn::Vec<DF> hi, hn::
 #endif
 }
 
+// Where a window bundle's lanes sit in slice k: the first voxel x0 of the 2N-voxel window along
+// b (kept inside the row) and the lower row c0. Lanes are monotone along a detector row, so the
+// ends decide; the kernels then check every lane against the window.
+template <class DF>
+HWY_INLINE void window_origin(DF df, const SamplePosition<DF>& p, int n_b, int& x0, int& c0) {
+  const auto last = hn::Lanes(df) - 1;
+  const int N = static_cast<int>(hn::Lanes(df));
+  x0 = std::min(std::max(std::min(hn::GetLane(p.ib), hn::ExtractLane(p.ib, last)), 0), n_b - 2 * N);
+  c0 = std::min(hn::GetLane(p.ic), hn::ExtractLane(p.ic, last));
+}
+
 // The interior sample of a window bundle (Bundle::window) without gathers, when its lanes fall in
 // a window of 2N voxels along b and at most two neighbouring values of c: the slice's rows
 // there are loaded whole and each lane picks its corners by permutes. False (and `sample`
@@ -253,10 +272,8 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
   const hn::RebindToSigned<DF> di;
   const int N = static_cast<int>(hn::Lanes(df));
   const SamplePosition<DF> p = position_at(df, t, r, k);
-  // Lanes are monotone along a detector row: the window starts at the smaller end.
-  int x0 = std::min(hn::GetLane(p.ib), hn::ExtractLane(p.ib, static_cast<std::size_t>(N - 1))) - 1;
-  const int c0 = std::min(hn::GetLane(p.ic), hn::ExtractLane(p.ic, static_cast<std::size_t>(N - 1)));
-  x0 = std::min(std::max(x0, 0), t.n_b[r] - 2 * N);
+  int x0, c0;
+  window_origin(df, p, t.n_b[r], x0, c0);
   const auto pos = hn::Sub(p.ib, hn::Set(di, x0)), pos1 = hn::Add(pos, hn::Set(di, 1));
   const auto dc = hn::Sub(p.ic, hn::Set(di, c0));
   const auto limit = hn::Set(di, 2 * N);
@@ -279,7 +296,8 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
     c01 = hn::IfThenElse(up, lookup_window(df, r2lo, r2hi, pos), c01);
     c11 = hn::IfThenElse(up, lookup_window(df, r2lo, r2hi, pos1), c11);
   }
-  const hn::Vec<DF> weight[4] = {hn::Mul(p.gb, p.gc), hn::Mul(p.fb, p.gc), hn::Mul(p.gb, p.fc), hn::Mul(p.fb, p.fc)};
+  hn::Vec<DF> weight[4];
+  bilinear_weights(p, weight);
   sample = weigh(c00, c10, c01, c11, weight);
   return true;
 #endif
@@ -297,13 +315,14 @@ HWY_INLINE bool scatter_window(const RayTable& t, float* HWY_RESTRICT volume, st
   const hn::RebindToSigned<decltype(df)> di;
   constexpr int N = 16;
   const auto p = position_at(df, t, r, k);
-  const int ib_first = hn::GetLane(p.ib), ib_last = hn::ExtractLane(p.ib, N - 1);
-  const int c0 = std::min(hn::GetLane(p.ic), hn::ExtractLane(p.ic, N - 1));
-  const int x0 = std::min(std::max(std::min(ib_first, ib_last), 0), t.n_b[r] - 2 * N);
+  int x0, c0;
+  window_origin(df, p, t.n_b[r], x0, c0);
   auto pos = hn::Sub(p.ib, hn::Set(di, x0)), dc = hn::Sub(p.ic, hn::Set(di, c0));
-  __m512 w[4] = {hn::Mul(hn::Mul(p.gb, p.gc), value).raw, hn::Mul(hn::Mul(p.fb, p.gc), value).raw,
-                 hn::Mul(hn::Mul(p.gb, p.fc), value).raw, hn::Mul(hn::Mul(p.fb, p.fc), value).raw};
-  if (ib_last < ib_first) {  // lanes in increasing b
+  hn::Vec<decltype(df)> bilinear[4];
+  bilinear_weights(p, bilinear);
+  __m512 w[4];
+  for (int q = 0; q < 4; ++q) w[q] = hn::Mul(bilinear[q], value).raw;
+  if (hn::ExtractLane(p.ib, N - 1) < hn::GetLane(p.ib)) {  // lanes in increasing b
     pos = hn::Reverse(di, pos), dc = hn::Reverse(di, dc);
     for (auto& v : w) v = hn::Reverse(df, hn::Vec<decltype(df)>{v}).raw;
   }
