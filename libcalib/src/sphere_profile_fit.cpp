@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <vector>
 
@@ -11,84 +12,183 @@ namespace ctk {
 
 namespace {
 
-// The value part of an automatic-differentiation number, for decisions that need no derivative.
-double value_of(double x) { return x; }
-template <int N>
-double value_of(const ceres::Jet<double, N>& x) {
-  return x.a;
-}
+// The window's pixels: measured values against the background (plane + scaled known shape) plus
+// each ball's pixel-averaged chord profile. The model is a sum of square roots, so its derivatives
+// are written out: automatic differentiation cost several times more here, in the fit that
+// dominates a view's calibration.
+// Parameter blocks: the balls' centres (u, v each); their discs (radius, amplitude each); the
+// background {a, b, c, s}: a + b du + c dv + s shape.
+class WindowCost : public ceres::CostFunction {
+ public:
+  WindowCost(std::vector<Eigen::Vector2d> offsets, std::vector<double> values, std::vector<double> shape, int balls,
+             int subsamples)
+      : offsets_(std::move(offsets)), values_(std::move(values)), shape_(std::move(shape)), balls_(balls), subsamples_(subsamples) {
+    mutable_parameter_block_sizes()->assign({2 * balls, 2 * balls, 4});
+    set_num_residuals(static_cast<int>(values_.size()));
+  }
 
-// The window's pixels: measured values against background plane + pixel-averaged chord profile.
-struct WindowResidual {
-  std::vector<Eigen::Vector2d> offsets;  // pixel centres relative to the window's centre
-  std::vector<double> values;
-  int subsamples;
-
-  template <typename T>
-  bool operator()(const T* centre, const T* disc, const T* plane, T* residual) const {
-    // disc = {radius, amplitude}; plane = {a, b, c}: a + b du + c dv.
-    const T r2 = disc[0] * disc[0];
-    const double step = 1.0 / subsamples, first = -0.5 + 0.5 * step;
-    const T scale = T(2.0 / (subsamples * subsamples)) * disc[1];
-    for (std::size_t k = 0; k < values.size(); ++k) {
-      const double du = offsets[k].x(), dv = offsets[k].y();
-      T sum(0.0);
-      // Most of the window lies wholly outside the disc: nothing to average there.
-      const double cx = du - value_of(centre[0]), cy = dv - value_of(centre[1]);
-      const double reach = value_of(disc[0]) + 0.7072;  // + half a pixel's diagonal
-      if (cx * cx + cy * cy < reach * reach) {
-        for (int i = 0; i < subsamples; ++i) {
-          const T y = T(dv + first + i * step) - centre[1];
-          for (int j = 0; j < subsamples; ++j) {
-            const T x = T(du + first + j * step) - centre[0];
-            const T inside = r2 - x * x - y * y;
-            if (inside > T(0.0)) sum += sqrt(inside);
+  bool Evaluate(double const* const* p, double* residual, double** jacobians) const override {
+    const double* centre = p[0];
+    const double* disc = p[1];
+    const double* background = p[2];
+    const int n = num_residuals(), width = 2 * balls_;
+    double* j_centre = jacobians ? jacobians[0] : nullptr;
+    double* j_disc = jacobians ? jacobians[1] : nullptr;
+    double* j_background = jacobians ? jacobians[2] : nullptr;
+    if (j_centre) std::fill(j_centre, j_centre + n * width, 0.0);
+    if (j_disc) std::fill(j_disc, j_disc + n * width, 0.0);
+    const double step = 1.0 / subsamples_, first = -0.5 + 0.5 * step;
+    const double weight = 2.0 / (subsamples_ * subsamples_);  // chord = 2 sqrt(.), averaged
+    for (int k = 0; k < n; ++k) {
+      const auto ku = static_cast<std::size_t>(k);
+      const double du = offsets_[ku].x(), dv = offsets_[ku].y();
+      double model = background[0] + background[1] * du + background[2] * dv + background[3] * shape_[ku];
+      if (j_background) {
+        double* row = j_background + 4 * k;
+        row[0] = -1;
+        row[1] = -du;
+        row[2] = -dv;
+        row[3] = -shape_[ku];
+      }
+      for (int b = 0; b < balls_; ++b) {
+        const double cu = centre[2 * b], cv = centre[2 * b + 1], radius = disc[2 * b], amplitude = disc[2 * b + 1];
+        // Most of the window lies wholly outside a given disc: nothing to average there.
+        const double reach = radius + 0.7072;  // + half a pixel's diagonal
+        if ((du - cu) * (du - cu) + (dv - cv) * (dv - cv) >= reach * reach) continue;
+        double chord = 0, d_u = 0, d_v = 0, d_radius = 0;  // sums of sqrt and of its derivatives / 1
+        for (int i = 0; i < subsamples_; ++i) {
+          const double y = dv + first + i * step - cv;
+          for (int j = 0; j < subsamples_; ++j) {
+            const double x = du + first + j * step - cu;
+            const double inside = radius * radius - x * x - y * y;
+            if (inside <= 0) continue;
+            const double root = std::sqrt(inside);
+            chord += root;
+            d_u += x / root;  // d root / d cu
+            d_v += y / root;
+            d_radius += radius / root;
           }
         }
+        model += weight * amplitude * chord;
+        if (j_centre) {
+          j_centre[k * width + 2 * b] = -weight * amplitude * d_u;
+          j_centre[k * width + 2 * b + 1] = -weight * amplitude * d_v;
+        }
+        if (j_disc) {
+          j_disc[k * width + 2 * b] = -weight * amplitude * d_radius;
+          j_disc[k * width + 2 * b + 1] = -weight * chord;
+        }
       }
-      residual[k] = T(values[k]) - (plane[0] + plane[1] * T(du) + plane[2] * T(dv) + scale * sum);
+      residual[k] = values_[ku] - model;
     }
     return true;
   }
+
+ private:
+  std::vector<Eigen::Vector2d> offsets_;  // pixel centres relative to the window's reference point
+  std::vector<double> values_;
+  std::vector<double> shape_;             // the known background shape, pixel-averaged (0 if none)
+  int balls_;
+  int subsamples_;
 };
+
+// The known shape averaged over the pixel at (column c, row r); the wall's silhouette has an
+// infinite slope, so a finer grid than the discs' is used.
+double pixel_average(const BackgroundShape& shape, int c, int r) {
+  constexpr int kSubsamples = 4;
+  double sum = 0;
+  for (int i = 0; i < kSubsamples; ++i)
+    for (int j = 0; j < kSubsamples; ++j) sum += shape({c - 0.5 + (j + 0.5) / kSubsamples, r - 0.5 + (i + 0.5) / kSubsamples});
+  return sum / (kSubsamples * kSubsamples);
+}
 
 }  // namespace
 
-bool refine_by_profile_fit(const Image& im, double radius_px, SphereDetection& detection, const ProfileFitOptions& o) {
-  const Eigen::Vector2d start = detection.uv;
+std::vector<bool> refine_cluster_by_profile_fit(const Image& im, double radius_px, std::span<SphereDetection> spheres,
+                                                const ProfileFitOptions& o, const BackgroundShape& shape) {
+  const int n = static_cast<int>(spheres.size());
+  std::vector<bool> refined(spheres.size(), false);
+  if (n == 0) return refined;
   const double reach = radius_px + o.margin_px;
-  const int c0 = static_cast<int>(std::floor(start.x() - reach)), c1 = static_cast<int>(std::ceil(start.x() + reach));
-  const int r0 = static_cast<int>(std::floor(start.y() - reach)), r1 = static_cast<int>(std::ceil(start.y() + reach));
-  if (c0 < 0 || r0 < 0 || c1 >= im.cols || r1 >= im.rows) return false;
+  // The window: every pixel within `reach` of some ball's start, in a box that must lie on the image.
+  Eigen::AlignedBox2d box;
+  for (const auto& s : spheres) box.extend(s.uv);
+  const Eigen::Vector2d origin = spheres[0].uv;
+  const int c0 = static_cast<int>(std::floor(box.min().x() - reach)), c1 = static_cast<int>(std::ceil(box.max().x() + reach));
+  const int r0 = static_cast<int>(std::floor(box.min().y() - reach)), r1 = static_cast<int>(std::ceil(box.max().y() + reach));
+  if (c0 < 0 || r0 < 0 || c1 >= im.cols || r1 >= im.rows) return refined;
 
-  // Parameters relative to the starting centre keep the numbers small and well scaled.
-  double centre[2] = {0, 0}, disc[2] = {radius_px, 0}, plane[3] = {0, 0, 0};
-  // Start the amplitude from the peak above the window's lowest pixel.
-  double low = 1e300, high = -1e300;
-  auto* window = new WindowResidual{{}, {}, o.subsamples};
+  std::vector<Eigen::Vector2d> offsets;
+  std::vector<double> values, shape_values;
+  std::vector<bool> clear;  // no ball within a pixel of it: what the starting background is fitted to
   for (int r = r0; r <= r1; ++r)
     for (int c = c0; c <= c1; ++c) {
-      const double du = c - start.x(), dv = r - start.y();
-      if (std::hypot(du, dv) > reach) continue;
-      const double value = im.pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c)];
-      low = std::min(low, value);
-      high = std::max(high, value);
-      window->offsets.emplace_back(du, dv);
-      window->values.push_back(value);
+      const Eigen::Vector2d pixel(c, r);
+      double nearest = 1e300;
+      for (const auto& s : spheres) nearest = std::min(nearest, (pixel - s.uv).norm());
+      if (nearest > reach) continue;
+      offsets.push_back(pixel - origin);
+      values.push_back(im.pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c)]);
+      shape_values.push_back(shape ? pixel_average(shape, c, r) : 0.0);
+      clear.push_back(nearest > radius_px + 1);
     }
-  const int pixels = static_cast<int>(window->values.size());
+  const int pixels = static_cast<int>(values.size());
+
+  // Parameters relative to the reference point keep the numbers small and well scaled. The
+  // background starts from a linear fit to the pixels clear of the balls; each amplitude from the
+  // highest pixel above it near that ball.
+  std::vector<double> centre(2 * spheres.size()), disc(2 * spheres.size());
+  double background[4] = {0, 0, 0, 0};
+  const int terms = shape ? 4 : 3;
+  Eigen::MatrixXd A(pixels, terms);
+  Eigen::VectorXd b(pixels), weight(pixels);
+  for (int k = 0; k < pixels; ++k) {
+    const auto ku = static_cast<std::size_t>(k);
+    A.row(k).head<3>() << 1.0, offsets[ku].x(), offsets[ku].y();
+    if (shape) A(k, 3) = shape_values[ku];
+    b(k) = values[ku];
+    weight(k) = clear[ku] ? 1.0 : 0.0;
+  }
+  const Eigen::VectorXd start_background = (weight.asDiagonal() * A).colPivHouseholderQr().solve(weight.cwiseProduct(b));
+  for (int t = 0; t < terms; ++t) background[t] = start_background(t);
+  const Eigen::VectorXd above = b - A * start_background;
+  for (int s = 0; s < n; ++s) {
+    const auto su = static_cast<std::size_t>(s);
+    const Eigen::Vector2d start = spheres[su].uv - origin;
+    centre[2 * su] = start.x();
+    centre[2 * su + 1] = start.y();
+    double peak = 1e-6;
+    for (int k = 0; k < pixels; ++k)
+      if ((offsets[static_cast<std::size_t>(k)] - start).norm() < radius_px) peak = std::max(peak, above(k));
+    disc[2 * su] = radius_px;
+    disc[2 * su + 1] = peak / (2 * radius_px);
+  }
+
+  auto* cost = new WindowCost(std::move(offsets), std::move(values), std::move(shape_values), n, o.subsamples);
   ceres::Problem problem;
-  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<WindowResidual, ceres::DYNAMIC, 2, 2, 3>(window, pixels), nullptr,
-                           centre, disc, plane);
-  plane[0] = low;
-  disc[1] = std::max(high - low, 1e-6) / (2 * radius_px);
-  problem.SetParameterLowerBound(disc, 0, 0.5 * radius_px);
-  problem.SetParameterUpperBound(disc, 0, 2.0 * radius_px);
-  const ceres::Solver::Summary summary = solve_small_problem(problem, 25);
-  const Eigen::Vector2d move(centre[0], centre[1]);
-  if (!summary.IsSolutionUsable() || !(disc[1] > 0) || !(move.norm() <= o.max_move_px)) return false;
-  detection.uv = start + move;
-  return true;
+  problem.AddResidualBlock(cost, nullptr, {centre.data(), disc.data(), background});
+  if (!shape) problem.SetManifold(background, new ceres::SubsetManifold(4, {3}));
+  for (int s = 0; s < n; ++s) {
+    problem.SetParameterLowerBound(disc.data(), 2 * s, 0.5 * radius_px);
+    problem.SetParameterUpperBound(disc.data(), 2 * s, 2.0 * radius_px);
+  }
+  const ceres::Solver::Summary summary = solve_small_problem(problem, 25 + 5 * n);
+  if (!summary.IsSolutionUsable()) return refined;
+  for (int s = 0; s < n; ++s) {
+    const auto su = static_cast<std::size_t>(s);
+    const Eigen::Vector2d uv = origin + Eigen::Vector2d(centre[2 * su], centre[2 * su + 1]);
+    const double radius = disc[2 * su], amplitude = disc[2 * su + 1];
+    if (!(amplitude > 0) || !((uv - spheres[su].uv).norm() <= o.max_move_px)) continue;
+    spheres[su].uv = uv;
+    spheres[su].strength = 4 * M_PI / 3 * amplitude * radius * radius * radius;  // the ball's chords summed
+    refined[su] = true;
+  }
+  return refined;
+}
+
+bool refine_by_profile_fit(const Image& im, double radius_px, SphereDetection& detection, const ProfileFitOptions& o,
+                           const BackgroundShape& shape) {
+  return refine_cluster_by_profile_fit(im, radius_px, std::span<SphereDetection>(&detection, 1), o, shape)[0];
 }
 
 }  // namespace ctk

@@ -16,29 +16,95 @@ constexpr double kGrazingCosine = 0.3;  // |radial . ray| below: the sphere sits
 
 struct Prediction {
   std::vector<Eigen::Vector2d> uv;
-  std::vector<bool> usable;  // on the detector with room for the background ring, not overlapping
+  std::vector<bool> visible;  // on the detector with room for the background ring (and, without a
+                              // declared wall, not on its silhouette)
+  std::vector<bool> usable;   // visible and apart from every other sphere
 };
+
+// Two spheres closer than this share pixels of their centroid windows.
+double touching_distance_px(double radius_px) { return 2 * radius_px + 4; }
 
 Prediction predict(const Eigen::Matrix3d& K, const Rigid& T, const Holder& holder, const Detector& detector, double radius_px) {
   Prediction p;
-  std::vector<bool> visible;
   // The source in the holder frame: rays to spheres on the holder's silhouette graze the wall,
-  // whose steep edge there defeats a planar background; those spheres are left out.
+  // whose steep edge there defeats a planar background; unless the wall is declared (then the
+  // profile fit models its shadow), those spheres are left out.
   const Eigen::Vector3d source = T.inverse().translation();
   for (const auto& X : holder.spheres_mm) {
     const Eigen::Vector3d c = K * (T * X);
     p.uv.push_back(c.head<2>() / c.z());
     const Eigen::Vector3d radial(X.x(), X.y(), 0), ray = (X - source).normalized();
-    const bool grazing = radial.norm() > 0 && std::abs(radial.normalized().dot(ray)) < kGrazingCosine;
-    visible.push_back(c.z() > 0 && detector.contains(p.uv.back(), radius_px + 6) && !grazing);
+    const bool grazing = !holder.wall && radial.norm() > 0 && std::abs(radial.normalized().dot(ray)) < kGrazingCosine;
+    p.visible.push_back(c.z() > 0 && detector.contains(p.uv.back(), radius_px + 6) && !grazing);
   }
-  // Two spheres closer than this share pixels of their centroid windows: neither is used.
-  const double apart = 2 * radius_px + 4;
-  p.usable = visible;
+  const double apart = touching_distance_px(radius_px);
+  p.usable = p.visible;
   for (std::size_t i = 0; i < p.uv.size(); ++i)
     for (std::size_t j = i + 1; j < p.uv.size(); ++j)
       if ((p.uv[i] - p.uv[j]).norm() < apart) p.usable[i] = p.usable[j] = false;
   return p;
+}
+
+// Spheres the detector missed or the match left out (mostly pairs whose projections touch, and
+// spheres on the wall's silhouette, where the image is a ridge rather than a bump) are looked for
+// where the fitted pose predicts them. Touching ones are fitted together; a ball is kept when it
+// is as strong as the matched ones (within 30 % of their median). Balls closer than a radius
+// cannot be told apart and are left out.
+void recover_missed_spheres(const Image& image, const Prediction& p, double radius_px, std::vector<double> strengths,
+                            const BackgroundShape& wall_shadow, const std::optional<RadialDistortion>& distortion,
+                            std::vector<SphereMatch>& matches, const std::vector<SphereMatch>& dropped,
+                            std::vector<SphereDetection>& measured, std::vector<SphereDetection>& detections) {
+  if (strengths.empty()) return;
+  std::nth_element(strengths.begin(), strengths.begin() + static_cast<std::ptrdiff_t>(strengths.size() / 2), strengths.end());
+  const double typical = strengths[strengths.size() / 2];
+  const std::size_t n = p.uv.size();
+  std::vector<bool> taken(n, false), candidate(n);
+  for (const auto& m : matches) taken[static_cast<std::size_t>(m.sphere)] = true;
+  for (const auto& m : dropped) taken[static_cast<std::size_t>(m.sphere)] = true;
+  for (std::size_t k = 0; k < n; ++k) candidate[k] = p.visible[k] && !taken[k];
+  const double apart = touching_distance_px(radius_px);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) {
+      const double d = (p.uv[i] - p.uv[j]).norm();
+      if (d < radius_px || (d < apart && (taken[i] || taken[j]))) candidate[i] = candidate[j] = false;
+    }
+  // Clusters: candidates linked by touching neighbours (a flood fill over the pairs).
+  std::vector<int> cluster(n, -1);
+  int clusters = 0;
+  for (std::size_t seed = 0; seed < n; ++seed) {
+    if (!candidate[seed] || cluster[seed] >= 0) continue;
+    std::vector<std::size_t> stack{seed};
+    cluster[seed] = clusters;
+    while (!stack.empty()) {
+      const std::size_t i = stack.back();
+      stack.pop_back();
+      for (std::size_t j = 0; j < n; ++j)
+        if (candidate[j] && cluster[j] < 0 && (p.uv[i] - p.uv[j]).norm() < apart) {
+          cluster[j] = clusters;
+          stack.push_back(j);
+        }
+    }
+    ++clusters;
+  }
+  for (int c = 0; c < clusters; ++c) {
+    std::vector<std::size_t> members;
+    std::vector<SphereDetection> found;
+    for (std::size_t k = 0; k < n; ++k)
+      if (cluster[k] == c) {
+        members.push_back(k);
+        SphereDetection d;
+        d.uv = distortion ? distortion->measured_from_ideal(p.uv[k]) : p.uv[k];
+        found.push_back(d);
+      }
+    const std::vector<bool> refined = refine_cluster_by_profile_fit(image, radius_px, found, {}, wall_shadow);
+    for (std::size_t m = 0; m < members.size(); ++m) {
+      if (!refined[m] || std::abs(found[m].strength - typical) > 0.3 * typical) continue;
+      measured.push_back(found[m]);
+      if (distortion) found[m].uv = distortion->ideal_from_measured(found[m].uv);
+      detections.push_back(found[m]);
+      matches.push_back({static_cast<int>(members[m]), static_cast<int>(detections.size() - 1), (found[m].uv - p.uv[members[m]]).norm()});
+    }
+  }
 }
 
 }  // namespace
@@ -79,6 +145,21 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
     }
     return fit_pose(K, start, X, uv, o.robust_px);
   };
+  // Spheres whose centre a nearby edge of the sample has pulled (background not planar) leave
+  // residuals far beyond the rest: those beyond 3 robust deviations (at least 0.25 px) are dropped
+  // and the pose refitted once.
+  auto drop_outliers = [&](Attempt& a) {
+    std::vector<double> r = a.fit.residual_px;
+    std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
+    const double limit = std::max(0.25, 3 * 1.4826 * r[r.size() / 2]);
+    std::vector<SphereMatch> kept, dropped;
+    for (std::size_t i = 0; i < a.matches.size(); ++i) (a.fit.residual_px[i] <= limit ? kept : dropped).push_back(a.matches[i]);
+    if (!dropped.empty() && static_cast<int>(kept.size()) >= o.min_spheres) {
+      a.matches = std::move(kept);
+      a.dropped.insert(a.dropped.end(), dropped.begin(), dropped.end());
+      a.fit = fit_matches(a.fit.T_camera_holder, a.matches);
+    }
+  };
   const Prediction first = predict(K, initial, holder, detector, radius_px);
   auto attempt = [&](const Eigen::Vector2d& shift) {
     Attempt a;
@@ -99,19 +180,7 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
     // apart, so a pose turned further from it than the guess can be wrong is refused.
     if (rotation_angle_deg(a.fit.T_camera_holder.linear() * initial.linear().transpose()) > o.max_first_guess_error_deg)
       return Attempt{};
-    // Spheres whose centre a nearby edge of the sample has pulled (background not planar) leave
-    // residuals far beyond the rest: drop those beyond 3 robust deviations (at least 0.25 px) and
-    // refit once.
-    std::vector<double> r = a.fit.residual_px;
-    std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
-    const double limit = std::max(0.25, 3 * 1.4826 * r[r.size() / 2]);
-    std::vector<SphereMatch> kept, dropped;
-    for (std::size_t i = 0; i < a.matches.size(); ++i) (a.fit.residual_px[i] <= limit ? kept : dropped).push_back(a.matches[i]);
-    if (!dropped.empty() && static_cast<int>(kept.size()) >= o.min_spheres) {
-      a.matches = std::move(kept);
-      a.dropped = std::move(dropped);
-      a.fit = fit_matches(pose, a.matches);
-    }
+    drop_outliers(a);
     return a;
   };
   const int visible = static_cast<int>(std::count(first.usable.begin(), first.usable.end(), true));
@@ -134,14 +203,30 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
     return out;
   }
   // The matched spheres' centres from their whole profiles, then the final fit. A sphere whose
-  // profile fit fails keeps its centroid.
+  // profile fit fails keeps its centroid. A declared wall's shadow, seen from the pose fitted so
+  // far, is part of the background.
+  BackgroundShape wall_shadow;
+  if (holder.wall) {
+    const Rigid holder_from_camera = best.fit.T_camera_holder.inverse();
+    const Eigen::Matrix3d K_inverse = K.inverse();
+    wall_shadow = [&, holder_from_camera, K_inverse](const Eigen::Vector2d& measured_uv) {
+      const Eigen::Vector2d uv = distortion ? distortion->ideal_from_measured(measured_uv) : measured_uv;
+      const Eigen::Vector3d ray = holder_from_camera.linear() * (K_inverse * uv.homogeneous());
+      return holder.wall->chord_mm(holder_from_camera.translation(), ray);
+    };
+  }
+  std::vector<double> strengths;
   for (const auto* list : {&best.matches, &best.dropped})
     for (const auto& m : *list) {
       const auto i = static_cast<std::size_t>(m.detection);
-      refine_by_profile_fit(image, radius_px, measured[i]);
+      refine_by_profile_fit(image, radius_px, measured[i], {}, wall_shadow);
       undistort(i);
+      strengths.push_back(measured[i].strength);
     }
+  recover_missed_spheres(image, predict(K, best.fit.T_camera_holder, holder, detector, radius_px), radius_px, strengths,
+                         wall_shadow, distortion, best.matches, best.dropped, measured, detections);
   best.fit = fit_matches(best.fit.T_camera_holder, best.matches);
+  drop_outliers(best);
   const std::vector<SphereMatch>& matches = best.matches;
   const PoseFit& fit = best.fit;
   out.spheres_used = static_cast<int>(matches.size());

@@ -46,7 +46,20 @@ Holder Holder::on_helix(const Helix& helix, double sphere_diameter_mm, int count
 
 Holder reference_helix_holder() {
   const Helix helix{28.0, 4 * M_PI / 80.0, 0.0};
-  return Holder::on_helix(helix, 2.0, 50, -40.0, 40.0);
+  Holder holder = Holder::on_helix(helix, 2.0, 50, -40.0, 40.0);
+  holder.wall = HolderWall{25.0, 28.0};
+  return holder;
+}
+
+double HolderWall::chord_mm(const Eigen::Vector3d& point, const Eigen::Vector3d& direction) const {
+  // Across the axis the line is a 2D line at distance d from the centre; a circle of radius r
+  // cuts 2 sqrt(r^2 - d^2) of it, and the 3D path is longer by 1 / |direction across the axis|.
+  const Eigen::Vector2d across = direction.head<2>() / direction.norm();
+  const double s = across.norm();
+  if (s < 1e-12) return 0;  // along the axis: never through the wall's cross-section twice
+  const double d = std::abs(point.x() * across.y() - point.y() * across.x()) / s;
+  auto chord = [d](double r) { return d < r ? 2 * std::sqrt(r * r - d * d) : 0.0; };
+  return (chord(outer_radius_mm) - chord(inner_radius_mm)) / s;
 }
 
 double Holder::tau_min() const {

@@ -100,7 +100,7 @@ ProjectionSet read_projections(const JsonNode& node, const ScanDescription& scan
 }
 
 Holder read_holder(const JsonNode& node) {
-  node.warn_unknown_keys({"helix", "sphere_diameter_mm", "spheres_mm"});
+  node.warn_unknown_keys({"helix", "sphere_diameter_mm", "spheres_mm", "wall"});
   Holder h;
   const JsonNode helix = node.at("helix");
   helix.warn_unknown_keys({"radius_mm", "rho_rad_per_mm", "phase_rad"});
@@ -111,6 +111,13 @@ Holder read_holder(const JsonNode& node) {
   const JsonNode spheres = node.at("spheres_mm");
   for (std::size_t i = 0; i < spheres.size(); ++i) h.spheres_mm.push_back(spheres.at(i).vector3());
   if (h.spheres_mm.empty()) spheres.fail("expected at least one sphere centre");
+  if (node.has("wall")) {
+    const JsonNode wall = node.at("wall");
+    wall.warn_unknown_keys({"inner_radius_mm", "outer_radius_mm"});
+    h.wall = HolderWall{wall.at("inner_radius_mm").positive_number(), wall.at("outer_radius_mm").positive_number()};
+    if (!(h.wall->outer_radius_mm > h.wall->inner_radius_mm))
+      wall.at("outer_radius_mm").fail("expected more than inner_radius_mm");
+  }
   return h;
 }
 
@@ -229,6 +236,8 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
                      {"phase_rad", h.helix.phase_rad}}},
                    {"sphere_diameter_mm", h.sphere_diameter_mm},
                    {"spheres_mm", spheres}};
+    if (h.wall)
+      j["holder"]["wall"] = {{"inner_radius_mm", h.wall->inner_radius_mm}, {"outer_radius_mm", h.wall->outer_radius_mm}};
   }
   return j;
 }

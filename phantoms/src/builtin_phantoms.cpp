@@ -33,10 +33,11 @@ void made_of(Phantom& p, std::size_t first, const char* material) {
 
 Phantom helix_holder_phantom(const Holder& holder) {
   Phantom p{"helix-holder", {}};
-  const double height = 118.0, inner_radius = 25.0, wall = 3.0;
-  p.primitives.push_back(Primitive::cylinder(Vector3d::Zero(), inner_radius + wall, height, kIdentity, material::pom,
+  const double height = 118.0;
+  const HolderWall wall = holder.wall.value_or(HolderWall{25.0, 28.0});
+  p.primitives.push_back(Primitive::cylinder(Vector3d::Zero(), wall.outer_radius_mm, height, kIdentity, material::pom,
                                              "POM tube"));
-  p.primitives.push_back(Primitive::cylinder(Vector3d::Zero(), inner_radius, height, kIdentity, -material::pom,
+  p.primitives.push_back(Primitive::cylinder(Vector3d::Zero(), wall.inner_radius_mm, height, kIdentity, -material::pom,
                                              "POM tube bore"));
   made_of(p, 0, "pom");
   const std::size_t spheres = p.primitives.size();

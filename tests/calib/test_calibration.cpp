@@ -54,6 +54,47 @@ PoseErrors compare_with_truth(const ScanCalibration& c, const std::filesystem::p
   return e;
 }
 
+// The smallest rotation RMS any unbiased per-view estimator can reach (Cramer-Rao): the spheres
+// each view used, with centres scattering `sigma_px` per axis, through the true projection.
+double rotation_bound_deg(const ScanCalibration& c, const std::filesystem::path& dir, const Holder& holder, double sigma_px) {
+  const nlohmann::json truth = read_json_file(dir / "truth.json");
+  double sum = 0;
+  int n = 0;
+  for (std::size_t v = 0; v < c.views.size(); ++v) {
+    const ViewCalibration& view = c.views[v];
+    if (view.status != ViewStatus::ok) continue;
+    const Rigid T_true = rigid_from_json(JsonNode(truth.at("views").at(v).at("T_camera_holder"), "truth.json", "T"));
+    const Intrinsics K = view.P->decompose().intrinsics;
+    // Pose perturbation: rotation vector (camera frame) then translation.
+    auto project = [&](const Eigen::Matrix<double, 6, 1>& x, const Eigen::Vector3d& X) {
+      Rigid T = T_true;
+      T.linear() = rotation_from_vector(x.head<3>()) * T_true.linear();
+      T.translation() += x.tail<3>();
+      return ProjectionMatrix::compose(K, T).project(X);
+    };
+    Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+    for (const int k : view.spheres) {
+      const Eigen::Vector3d& X = holder.spheres_mm[static_cast<std::size_t>(k)];
+      Eigen::Matrix<double, 2, 6> J;
+      for (int q = 0; q < 6; ++q) {
+        Eigen::Matrix<double, 6, 1> h = Eigen::Matrix<double, 6, 1>::Zero();
+        h(q) = 1e-6;
+        J.col(q) = (project(h, X) - project(-h, X)) / 2e-6;
+      }
+      information += J.transpose() * J / (sigma_px * sigma_px);
+    }
+    sum += information.inverse().topLeftCorner<3, 3>().trace();
+    ++n;
+  }
+  return std::sqrt(sum / n) * 180 / M_PI;
+}
+
+double mean_spheres_used(const ScanCalibration& c) {
+  double sum = 0;
+  for (const auto& v : c.views) sum += v.spheres_used;
+  return sum / static_cast<double>(c.views.size());
+}
+
 // Every view must be calibrated; returns the median reprojection RMS.
 double median_rms_of_all_ok(const ScanCalibration& c) {
   std::vector<double> rms;
@@ -78,10 +119,25 @@ TEST(Calibration, RecoversEveryPoseToMicrometresAcrossTheBeam) {
             << " um), rotation RMS " << e.rotation_rms_deg << " deg (max " << e.rotation_max_deg << "); " << c.views.size() / c.seconds << " views/s\n";
   EXPECT_LE(median_rms, 0.10);
   EXPECT_LE(e.across_rms_mm, 0.01);
-  // The issue asks 0.01 deg. At 10^4 counts the 2 mm aluminium spheres' centres scatter by
-  // ~0.045 px per axis (photon noise; the noise-free floor is 0.02 px), which leaves ~0.013 deg in
-  // the rotations about axes across the beam; the next test shows 0.01 deg once the data allows.
-  EXPECT_LE(e.rotation_rms_deg, 0.016);
+  // The declared wall lets the spheres on its silhouette be used, and touching pairs are fitted
+  // together: nearly all 50 (without both, about 31 were).
+  const double used = mean_spheres_used(c);
+  // The issue asks 0.01 deg. At 10^4 counts a 2 mm aluminium sphere's centre scatters by 0.043 px
+  // per axis (the profile fit's test; the photons' own limit for this profile); with all 50
+  // spheres that bounds any unbiased estimate near 0.011 deg. The fit must come close to it.
+  const double bound = rotation_bound_deg(c, dir, scan.holder.value(), 0.043);
+  std::cout << used << " spheres per view; rotation bound for their photon noise " << bound << " deg RMS\n";
+  EXPECT_GE(used, 45);
+  EXPECT_LE(e.rotation_rms_deg, 1.15 * bound);
+  EXPECT_LE(e.rotation_rms_deg, 0.0125);
+  // A holder declared without its wall: the spheres on the silhouette are left out, the rest
+  // calibrate as well as before.
+  ScanDescription wall_unknown = scan;
+  wall_unknown.holder->wall.reset();
+  const ScanCalibration without = calibrate_scan(wall_unknown, {});
+  EXPECT_LE(median_rms_of_all_ok(without), 0.10);
+  EXPECT_LE(compare_with_truth(without, dir).across_rms_mm, 0.01);
+  EXPECT_LT(mean_spheres_used(without), used - 5);
   // Depth is weakly observable: its reported uncertainty is much larger than across the beam.
   EXPECT_GT(c.views[0].translation_sigma_mm[2], 10 * c.views[0].translation_sigma_mm[0]);
 }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 namespace ctk {
@@ -49,6 +50,32 @@ TEST(Helix, ClosestPointOnProjectedHelixIsContinuousAndExact) {
     P.project(helix.at(q.tau), &J);
     const Eigen::Vector2d dir = J * helix.tangent(q.tau);
     EXPECT_LT(std::abs((q.uv - near).dot(dir.normalized())), 1e-6);
+  }
+}
+
+TEST(HolderWall, ChordIsThePathInsideTheShell) {
+  const HolderWall wall{25.0, 28.0};
+  // Across the axis: twice the wall; between the radii: the outer circle's chord; outside: none.
+  EXPECT_NEAR(wall.chord_mm({-100, 0, 5}, {1, 0, 0}), 6.0, 1e-12);
+  EXPECT_NEAR(wall.chord_mm({-100, 26, 0}, {3, 0, 0}), 2 * std::sqrt(28.0 * 28 - 26 * 26), 1e-12);
+  EXPECT_EQ(wall.chord_mm({-100, 28.5, 0}, {1, 0, 0}), 0.0);
+  // Tilted 45 deg towards the axis: the same cross-section, a longer path; along the axis: none.
+  EXPECT_NEAR(wall.chord_mm({0, 0, 0}, {1, 0, 1}), 6.0 * std::sqrt(2.0), 1e-12);
+  EXPECT_EQ(wall.chord_mm({26, 0, 0}, {0, 0, 1}), 0.0);
+  // Random lines against marching along them in 1 um steps and counting the steps inside.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < 10; ++i) {
+    const Eigen::Vector3d point(30 * u(rng), 30 * u(rng), 10 * u(rng));
+    const Eigen::Vector3d direction = Eigen::Vector3d(u(rng), u(rng), 0.5 * u(rng)).normalized();
+    double inside = 0;
+    const double step = 1e-3;
+    for (double s = -150; s < 150; s += step) {
+      const Eigen::Vector3d x = point + (s + 0.5 * step) * direction;
+      const double r = std::hypot(x.x(), x.y());
+      if (r >= 25.0 && r < 28.0) inside += step;
+    }
+    EXPECT_NEAR(wall.chord_mm(point, 2.5 * direction), inside, 0.01) << i;
   }
 }
 

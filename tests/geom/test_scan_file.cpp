@@ -174,6 +174,23 @@ TEST(ScanFile, DistortionAndDriftExtensions) {
   expect_error_naming(file, [](nlohmann::json& j) { j["source_drift_mm_per_100_views"] = "fast"; }, "source_drift_mm_per_100_views");
 }
 
+TEST(ScanFile, HolderWallExtension) {
+  const auto file = write_valid_scan(testing::scratch_dir());
+  const ScanDescription scan = read_scan(file);
+  ASSERT_TRUE(scan.holder->wall);  // the reference holder declares its tube
+  EXPECT_EQ(scan.holder->wall->inner_radius_mm, 25.0);
+  EXPECT_EQ(scan.holder->wall->outer_radius_mm, 28.0);
+  expect_error_naming(file, [](nlohmann::json& j) { j["holder"]["wall"]["outer_radius_mm"] = 20.0; }, "holder.wall.outer_radius_mm");
+  write_scan(scan, file);
+  expect_error_naming(file, [](nlohmann::json& j) { j["holder"]["wall"].erase("inner_radius_mm"); }, "holder.wall.inner_radius_mm");
+  write_scan(scan, file);
+  // Without the key the holder has no wall, as before the extension.
+  nlohmann::json j = read_json_file(file);
+  j["holder"].erase("wall");
+  testing::write_text(file, j.dump(2));
+  EXPECT_FALSE(read_scan(file).holder->wall);
+}
+
 TEST(ScanFile, UnknownKeysWarn) {
   const auto file = write_valid_scan(testing::scratch_dir());
   nlohmann::json j = read_json_file(file);

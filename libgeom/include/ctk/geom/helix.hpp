@@ -2,6 +2,7 @@
 // The calibration holder: a helix of metal spheres in the holder frame H (scan-format.md):
 // h(tau) = (r cos(rho tau + phi), r sin(rho tau + phi), tau).
 #include <Eigen/Core>
+#include <optional>
 #include <vector>
 
 #include "ctk/geom/projection_matrix.hpp"
@@ -19,10 +20,23 @@ struct Helix {
   double nearest_tau(const Eigen::Vector3d& p) const;
 };
 
+/// The tube that carries the spheres, coaxial with the helix (the holder's w axis). Its ends lie
+/// far beyond the spheres, so it is treated as infinitely long.
+struct HolderWall {
+  double inner_radius_mm = 0;
+  double outer_radius_mm = 0;
+
+  /// Path length (mm) inside the wall along the line through `point` with direction `direction`.
+  double chord_mm(const Eigen::Vector3d& point, const Eigen::Vector3d& direction) const;
+};
+
 struct Holder {
   Helix helix;
   double sphere_diameter_mm = 0;
   std::vector<Eigen::Vector3d> spheres_mm;  // declared centres, holder frame
+  /// When declared, calibration models the wall's shadow under each sphere, so spheres seen on the
+  /// wall's steep silhouette can be used too.
+  std::optional<HolderWall> wall;
 
   /// n spheres equally spaced in tau over [tau_begin, tau_end] — how a helix holder is designed.
   static Holder on_helix(const Helix& helix, double sphere_diameter_mm, int count, double tau_begin,
@@ -32,7 +46,8 @@ struct Holder {
 };
 
 /// The toolkit's reference holder: 50 spheres of 2 mm on a helix of radius 28 mm making two
-/// turns over 80 mm (rho = 4 pi / 80 rad/mm), centred on the holder origin.
+/// turns over 80 mm (rho = 4 pi / 80 rad/mm), centred on the holder origin, on the outside of a
+/// tube of inner radius 25 mm and outer radius 28 mm.
 Holder reference_helix_holder();
 
 struct HelixPoint {

@@ -18,8 +18,9 @@ inline constexpr double pvc = 0.046;        // 1.38 g/cm3 (chlorine raises it)
 inline constexpr double abs_plastic = 0.020;  // toy bricks, 1.05 g/cm3
 }  // namespace material
 
-/// The helix holder: a POM tube (inner diameter 50 mm, 3 mm wall, 118 mm tall, axis +w, centred
-/// on the holder origin) carrying one aluminium sphere at each of `holder.spheres_mm`.
+/// The helix holder: a POM tube (`holder.wall`, by default inner diameter 50 mm and a 3 mm wall;
+/// 118 mm tall, axis +w, centred on the holder origin) carrying one aluminium sphere at each of
+/// `holder.spheres_mm`.
 Phantom helix_holder_phantom(const Holder& holder);
 /// Modified 3-D Shepp-Logan (the higher-contrast variant): the unit-cube table scaled to
 /// `half_size_mm`, densities times `attenuation_scale_per_mm`.
