@@ -202,9 +202,9 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
                  " detections near the first-guess pose (at least " + std::to_string(o.min_spheres) + " spheres needed)";
     return out;
   }
-  // The matched spheres' centres from their whole profiles, then the final fit. A sphere whose
-  // profile fit fails keeps its centroid. A declared wall's shadow, seen from the pose fitted so
-  // far, is part of the background.
+  // The matched spheres' centres from their whole profiles, then the spheres missed so far, then
+  // the final fit and outlier drop. A sphere whose profile fit fails keeps its centroid. A declared
+  // wall's shadow, seen from the pose fitted so far, is part of the background.
   BackgroundShape wall_shadow;
   if (holder.wall) {
     const Rigid holder_from_camera = best.fit.T_camera_holder.inverse();

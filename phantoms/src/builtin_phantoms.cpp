@@ -34,7 +34,8 @@ void made_of(Phantom& p, std::size_t first, const char* material) {
 Phantom helix_holder_phantom(const Holder& holder) {
   Phantom p{"helix-holder", {}};
   const double height = 118.0;
-  const HolderWall wall = holder.wall.value_or(HolderWall{25.0, 28.0});
+  // A holder declared without its wall is simulated on the reference holder's tube.
+  const HolderWall wall = holder.wall.value_or(*reference_helix_holder().wall);
   p.primitives.push_back(Primitive::cylinder(Vector3d::Zero(), wall.outer_radius_mm, height, kIdentity, material::pom,
                                              "POM tube"));
   p.primitives.push_back(Primitive::cylinder(Vector3d::Zero(), wall.inner_radius_mm, height, kIdentity, -material::pom,
