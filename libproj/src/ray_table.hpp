@@ -20,6 +20,11 @@ struct RayTable {
   int view_stride = 0;  // entries per view: the row capacity times row_stride
   std::vector<float> pb_mid, beta_b, pc_mid, beta_c, weight, k_mid, value;
   std::vector<std::int32_t> k_first, k_last, axis, stride_a, stride_b, stride_c, n_b, n_c;
+  // The grid the kernels address: voxel (k, b, c) of the rays' axes is at
+  // (k - origin_a) stride_a + (b - origin_b) stride_b + (c - origin_c) stride_c, and only
+  // 0 <= b - origin_b < n_b, 0 <= c - origin_c < n_c exist. Zero for the volume itself; a
+  // tile's corner when the rays are marched through a transposed copy of part of it.
+  int origin_a = 0, origin_b = 0, origin_c = 0;
 
   /// Room for `views` views of `rows` rows of `cols` columns; views and rows in use are set to that.
   void shape(int views, int rows, int cols);
@@ -34,6 +39,8 @@ struct RayTable {
             int ray_end);
   /// Marks entries [begin, end) empty: they touch nothing and project to zero.
   void empty(std::size_t begin, std::size_t end);
+  /// Copies `n` entries of `from`, starting at `from_entry`, to this table at `to_entry`.
+  void copy_entries(const RayTable& from, std::size_t from_entry, std::size_t to_entry, std::size_t n);
 };
 
 // Kernels (Highway, dispatched to the widest SIMD unit at run time).
