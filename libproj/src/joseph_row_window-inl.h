@@ -1,0 +1,175 @@
+// Per SIMD target: the row window. When a bundle's lanes lie within 2N neighbouring voxels of
+// a contiguous axis and two neighbouring rows, a sample loads those rows whole and picks its
+// corners by permutes (forward), and the back projection places its weights into the rows
+// whole; no gathers, no scatters.
+#if defined(CTK_PROJ_JOSEPH_ROW_WINDOW_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef CTK_PROJ_JOSEPH_ROW_WINDOW_INL_H_
+#undef CTK_PROJ_JOSEPH_ROW_WINDOW_INL_H_
+#else
+#define CTK_PROJ_JOSEPH_ROW_WINDOW_INL_H_
+#endif
+
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <cstdint>
+
+#include "joseph_samples-inl.h"
+#include "ray_table.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace ctk::detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+// Lanes of `lo` (pos < N) or `hi` (pos - N otherwise), pos in [0, 2N): a two-table permute.
+template <class DF>
+HWY_INLINE hn::Vec<DF> lookup_window(DF df, hn::Vec<DF> lo, hn::Vec<DF> hi, hn::Vec<hn::RebindToSigned<DF>> pos) {
+#if HWY_TARGET <= HWY_AVX3
+  (void)df;
+  return hn::Vec<DF>{_mm512_permutex2var_ps(lo.raw, pos.raw, hi.raw)};
+#else
+  const hn::RebindToSigned<DF> di;
+  const auto n = hn::Set(di, static_cast<std::int32_t>(hn::Lanes(df)));
+  const auto idx = hn::IndicesFromVec(df, hn::And(pos, hn::Sub(n, hn::Set(di, 1))));
+  return hn::IfThenElse(hn::RebindMask(df, hn::Lt(pos, n)), hn::TableLookupLanes(lo, idx), hn::TableLookupLanes(hi, idx));
+#endif
+}
+
+// Where a window bundle's lanes sit in slice k: the first voxel x0 of the 2N-voxel window along
+// b (kept inside the row) and the lower row c0. Lanes are monotone along a detector row, so the
+// ends decide; the kernels then check every lane against the window.
+template <class DF>
+HWY_INLINE void window_origin(DF df, const SamplePosition<DF>& p, int n_b, int& x0, int& c0) {
+  const auto last = hn::Lanes(df) - 1;
+  const int N = static_cast<int>(hn::Lanes(df));
+  x0 = std::min(std::max(std::min(hn::GetLane(p.ib), hn::ExtractLane(p.ib, last)), 0), n_b - 2 * N);
+  c0 = std::min(hn::GetLane(p.ic), hn::ExtractLane(p.ic, last));
+}
+
+// The interior sample of a window bundle (Bundle::window) without gathers, when its lanes fall in
+// a window of 2N voxels along b and at most two neighbouring values of c: the slice's rows
+// there are loaded whole and each lane picks its corners by permutes. False (and `sample`
+// untouched) when the lanes spread wider; the caller then gathers.
+template <class DF>
+HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r, int k,
+                                   hn::Vec<DF>& sample) {
+#if HWY_TARGET == HWY_SCALAR
+  (void)df, (void)t, (void)volume, (void)r, (void)k, (void)sample;
+  return false;
+#else
+  const hn::RebindToSigned<DF> di;
+  const int N = static_cast<int>(hn::Lanes(df));
+  const SamplePosition<DF> p = position_at(df, t, r, k);
+  int x0, c0;
+  window_origin(df, p, t.n_b[r], x0, c0);
+  const auto pos = hn::Sub(p.ib, hn::Set(di, x0)), pos1 = hn::Add(pos, hn::Set(di, 1));
+  const auto dc = hn::Sub(p.ic, hn::Set(di, c0));
+  const auto limit = hn::Set(di, 2 * N);
+  const auto zero = hn::Zero(di), one = hn::Set(di, 1);
+  const auto upper = hn::Eq(dc, one);  // lanes whose corner c sits one row up
+  if (!hn::AllTrue(di, hn::And(hn::Gt(pos, hn::Set(di, -1)), hn::Lt(pos1, limit))) ||
+      !hn::AllTrue(di, hn::Or(hn::Eq(dc, zero), upper)))
+    return false;
+  const std::ptrdiff_t sc = t.stride_c[r];
+  const float* row = volume + static_cast<std::ptrdiff_t>(k - t.origin_a) * t.stride_a[r] + static_cast<std::ptrdiff_t>(c0) * sc + x0;
+  const auto r0lo = hn::LoadU(df, row), r0hi = hn::LoadU(df, row + N);
+  const auto r1lo = hn::LoadU(df, row + sc), r1hi = hn::LoadU(df, row + sc + N);
+  auto c00 = lookup_window(df, r0lo, r0hi, pos), c10 = lookup_window(df, r0lo, r0hi, pos1);
+  auto c01 = lookup_window(df, r1lo, r1hi, pos), c11 = lookup_window(df, r1lo, r1hi, pos1);
+  if (!hn::AllFalse(di, upper)) {  // some lanes one row up: shift them by a row
+    const auto up = hn::RebindMask(df, upper);
+    const auto r2lo = hn::LoadU(df, row + 2 * sc), r2hi = hn::LoadU(df, row + 2 * sc + N);
+    c00 = hn::IfThenElse(up, c01, c00);
+    c10 = hn::IfThenElse(up, c11, c10);
+    c01 = hn::IfThenElse(up, lookup_window(df, r2lo, r2hi, pos), c01);
+    c11 = hn::IfThenElse(up, lookup_window(df, r2lo, r2hi, pos1), c11);
+  }
+  hn::Vec<DF> weight[4];
+  bilinear_weights(p, weight);
+  sample = weigh(c00, c10, c01, c11, weight);
+  return true;
+#endif
+}
+
+#if HWY_TARGET <= HWY_AVX3
+// The adjoint of interpolate_window for 16 lanes, without a scatter: each lane's four corner
+// weights times `value` are placed at their voxels of a window of 32 voxels along b (expand
+// puts lane after lane at the set bits of a mask), in the slice's rows c0 .. c0 + 2, which are
+// then updated whole. Lanes on the same voxel (rays closer than a voxel) are first summed
+// into one. False (and nothing written) when the lanes spread wider, or three share a voxel.
+HWY_INLINE bool scatter_window(const RayTable& t, float* HWY_RESTRICT volume, std::size_t r, int k,
+                               hn::Vec<hn::ScalableTag<float>> value) {
+  const hn::ScalableTag<float> df;
+  const hn::RebindToSigned<decltype(df)> di;
+  constexpr int N = 16;
+  const auto p = position_at(df, t, r, k);
+  int x0, c0;
+  window_origin(df, p, t.n_b[r], x0, c0);
+  auto pos = hn::Sub(p.ib, hn::Set(di, x0)), dc = hn::Sub(p.ic, hn::Set(di, c0));
+  hn::Vec<decltype(df)> bilinear[4];
+  bilinear_weights(p, bilinear);
+  __m512 w[4];
+  for (int q = 0; q < 4; ++q) w[q] = hn::Mul(bilinear[q], value).raw;
+  if (hn::ExtractLane(p.ib, N - 1) < hn::GetLane(p.ib)) {  // lanes in increasing b
+    pos = hn::Reverse(di, pos), dc = hn::Reverse(di, dc);
+    for (auto& v : w) v = hn::Reverse(df, hn::Vec<decltype(df)>{v}).raw;
+  }
+  const __m512i P = pos.raw, C = dc.raw;
+  // Every lane inside the window (with its b + 1 corner) and on row c0 or c0 + 1; b never
+  // decreasing from lane to lane.
+  const __mmask16 inside = _mm512_cmpge_epi32_mask(P, _mm512_setzero_si512()) &
+                           _mm512_cmplt_epi32_mask(P, _mm512_set1_epi32(2 * N - 1)) &
+                           _mm512_cmpge_epi32_mask(C, _mm512_setzero_si512()) & _mm512_cmple_epi32_mask(C, _mm512_set1_epi32(1));
+  const __m512i P_next = _mm512_alignr_epi32(P, P, 1);  // lane l holds P[l + 1] (l < N - 1)
+  if (inside != 0xFFFF || (_mm512_cmpge_epi32_mask(P_next, P) & 0x7FFF) != 0x7FFF) return false;
+  // A lane on the same voxel as the lane before it takes that lane's weights; that lane is dropped.
+  const __m512i key = _mm512_add_epi32(P, _mm512_slli_epi32(C, 6));
+  const __m512i key_prev = _mm512_alignr_epi32(key, _mm512_set1_epi32(-1), 15);  // lane l holds key[l - 1]
+  const __mmask16 same_as_prev = _mm512_cmpeq_epi32_mask(key, key_prev);
+  if ((same_as_prev & (same_as_prev << 1)) != 0) return false;
+  const auto keep = static_cast<__mmask16>(~(same_as_prev >> 1));
+  for (auto& v : w) v = _mm512_mask_add_ps(
+           v, same_as_prev, v, _mm512_castsi512_ps(_mm512_alignr_epi32(_mm512_castps_si512(v), _mm512_setzero_si512(), 15)));
+  // Which lane feeds each of the 32 window voxels: the kept lanes' numbers, in order, expanded
+  // to the voxels they occupy (lanes are sorted along b). The weights are then placed with
+  // permutes: one compress and two expands per row pair instead of per corner (each costs
+  // about five cycles on Zen 5, a permute about two).
+  const __m512i lane_number = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const __mmask16 upper = _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(1));
+  const std::ptrdiff_t sc = t.stride_c[r];
+  float* base = volume + static_cast<std::ptrdiff_t>(k - t.origin_a) * t.stride_a[r] + static_cast<std::ptrdiff_t>(c0) * sc + x0;
+  for (int layer = 0; layer < 2; ++layer) {  // lanes whose corner c is row c0, then c0 + 1
+    const auto lanes = static_cast<__mmask16>(keep & (layer == 0 ? ~upper : upper));
+    if (lanes == 0) continue;
+    const auto bits = static_cast<std::uint32_t>(
+        _mm512_reduce_or_epi32(_mm512_maskz_sllv_epi32(lanes, _mm512_set1_epi32(1), P)));
+    const auto bits_lo = static_cast<__mmask16>(bits & 0xFFFFu), bits_hi = static_cast<__mmask16>(bits >> 16);
+    const __m512i kept = lanes == 0xFFFF ? lane_number : _mm512_maskz_compress_epi32(lanes, lane_number);
+    const __m512i from_lo = _mm512_maskz_expand_epi32(bits_lo, kept);
+    const __m512i from_hi = _mm512_maskz_expand_epi32(
+        bits_hi, _mm512_permutexvar_epi32(_mm512_add_epi32(lane_number, _mm512_set1_epi32(_mm_popcnt_u32(bits_lo))), kept));
+    // Corner b + 1 sits one voxel further: the same map shifted up by one voxel.
+    const __m512i from1_lo = _mm512_alignr_epi32(from_lo, _mm512_setzero_si512(), 15);
+    const __m512i from1_hi = _mm512_alignr_epi32(from_hi, from_lo, 15);
+    const auto bits1 = bits << 1;
+    const auto bits1_lo = static_cast<__mmask16>(bits1 & 0xFFFFu), bits1_hi = static_cast<__mmask16>(bits1 >> 16);
+    float* row = base + layer * sc;
+    for (int q = 0; q < 2; ++q, row += sc) {  // corner c, then c + 1
+      const __m512 lo = _mm512_add_ps(_mm512_maskz_permutexvar_ps(bits_lo, from_lo, w[2 * q]),
+                                      _mm512_maskz_permutexvar_ps(bits1_lo, from1_lo, w[2 * q + 1]));
+      const __m512 hi = _mm512_add_ps(_mm512_maskz_permutexvar_ps(bits_hi, from_hi, w[2 * q]),
+                                      _mm512_maskz_permutexvar_ps(bits1_hi, from1_hi, w[2 * q + 1]));
+      _mm512_storeu_ps(row, _mm512_add_ps(_mm512_loadu_ps(row), lo));
+      _mm512_storeu_ps(row + N, _mm512_add_ps(_mm512_loadu_ps(row + N), hi));
+    }
+  }
+  return true;
+}
+#endif
+
+}  // namespace HWY_NAMESPACE
+}  // namespace ctk::detail
+HWY_AFTER_NAMESPACE();
+
+#endif

@@ -1,0 +1,209 @@
+// Per SIMD target: tiles for rays along x. The volume's contiguous axis is x, so rays marching
+// along it find their neighbours' corners a row or a plane away; a tile is a small transposed
+// copy of 16 slices in which they march like rays along y.
+#if defined(CTK_PROJ_JOSEPH_TILES_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef CTK_PROJ_JOSEPH_TILES_INL_H_
+#undef CTK_PROJ_JOSEPH_TILES_INL_H_
+#else
+#define CTK_PROJ_JOSEPH_TILES_INL_H_
+#endif
+
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <cstddef>
+
+#include "joseph_samples-inl.h"
+#include "ray_table.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace ctk::detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+// Rays along x step across the volume's contiguous axis: neighbouring rays' corners are a row
+// (y) or a plane (z) apart and have to be gathered one by one. So the bundles of one column
+// strip of a table (one per detector row) are marched through a tile instead: the slices of 16
+// steps, copied with y contiguous (a transposition), where the row-window paths apply as they
+// do to rays along y and z. Voxels outside the volume are zeros in the tile, as the masked
+// paths make them. A tile is at most kTileSlices x kTileMaxHeight x kTileMaxWidth floats (96 kB).
+constexpr int kTileSlices = 16;
+constexpr int kTileMaxWidth = 64, kTileMaxHeight = 24;
+
+struct Tile {
+  int k0 = 0, slices = 0;  // x range k0 .. k0 + slices - 1
+  int y0 = 0, width = 0;   // y range, contiguous; a multiple of 16 and at least 32
+  int z0 = 0, height = 0;  // z range
+  float* data = nullptr;   // [slice][z][y]
+  std::size_t row(int kk, int zz) const {
+    return (static_cast<std::size_t>(kk) * static_cast<std::size_t>(height) + static_cast<std::size_t>(zz)) *
+           static_cast<std::size_t>(width);
+  }
+};
+
+// Where the volume's voxels are for rays along x (their b is y, their c is z).
+struct XGrid {
+  std::ptrdiff_t stride_y = 0, stride_z = 0;
+  int ny = 0, nz = 0;
+};
+
+#if HWY_TARGET <= HWY_AVX3
+// In place: row j of the input becomes column j.
+HWY_INLINE void transpose16(__m512 (&r)[16]) {
+  __m512 t[16];
+  for (int i = 0; i < 8; ++i) {
+    t[2 * i] = _mm512_unpacklo_ps(r[2 * i], r[2 * i + 1]);
+    t[2 * i + 1] = _mm512_unpackhi_ps(r[2 * i], r[2 * i + 1]);
+  }
+  const auto lo64 = [](__m512 a, __m512 b) {
+    return _mm512_castpd_ps(_mm512_unpacklo_pd(_mm512_castps_pd(a), _mm512_castps_pd(b)));
+  };
+  const auto hi64 = [](__m512 a, __m512 b) {
+    return _mm512_castpd_ps(_mm512_unpackhi_pd(_mm512_castps_pd(a), _mm512_castps_pd(b)));
+  };
+  for (int i = 0; i < 4; ++i) {  // r[4i + j]: rows 4i .. 4i + 3 of column j of each 4-column block
+    r[4 * i] = lo64(t[4 * i], t[4 * i + 2]);
+    r[4 * i + 1] = hi64(t[4 * i], t[4 * i + 2]);
+    r[4 * i + 2] = lo64(t[4 * i + 1], t[4 * i + 3]);
+    r[4 * i + 3] = hi64(t[4 * i + 1], t[4 * i + 3]);
+  }
+  for (int i = 0; i < 4; ++i) {
+    t[i] = _mm512_shuffle_f32x4(r[i], r[4 + i], 0x88);
+    t[4 + i] = _mm512_shuffle_f32x4(r[i], r[4 + i], 0xdd);
+    t[8 + i] = _mm512_shuffle_f32x4(r[8 + i], r[12 + i], 0x88);
+    t[12 + i] = _mm512_shuffle_f32x4(r[8 + i], r[12 + i], 0xdd);
+  }
+  for (int i = 0; i < 4; ++i) {
+    r[i] = _mm512_shuffle_f32x4(t[i], t[8 + i], 0x88);
+    r[8 + i] = _mm512_shuffle_f32x4(t[i], t[8 + i], 0xdd);
+    r[4 + i] = _mm512_shuffle_f32x4(t[4 + i], t[12 + i], 0x88);
+    r[12 + i] = _mm512_shuffle_f32x4(t[4 + i], t[12 + i], 0xdd);
+  }
+}
+#endif
+
+// tile = the volume in the tile's box (zero outside the volume).
+HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid& g, const Tile& tile) {
+  for (int zz = 0; zz < tile.height; ++zz) {
+    const int z = tile.z0 + zz;
+    const bool z_in = z >= 0 && z < g.nz;
+#if HWY_TARGET <= HWY_AVX3
+    const auto slices = static_cast<__mmask16>((1u << tile.slices) - 1u);
+    for (int yb = 0; yb < tile.width; yb += 16) {
+      __m512 r[16];
+      for (int j = 0; j < 16; ++j) {
+        const int y = tile.y0 + yb + j;
+        if (!z_in || y < 0 || y >= g.ny) {
+          r[j] = _mm512_setzero_ps();
+          continue;
+        }
+        const float* x_row = volume + tile.k0 + y * g.stride_y + z * g.stride_z;
+        r[j] = _mm512_maskz_loadu_ps(slices, x_row);
+        // The strip's next tile reads the next 16 voxels of the same rows: each row is its own
+        // stream, too many for the hardware prefetcher to follow.
+        _mm_prefetch(reinterpret_cast<const char*>(x_row + kTileSlices), _MM_HINT_T0);
+      }
+      transpose16(r);
+      for (int kk = 0; kk < tile.slices; ++kk) _mm512_storeu_ps(tile.data + tile.row(kk, zz) + yb, r[kk]);
+    }
+#else
+    for (int kk = 0; kk < tile.slices; ++kk)
+      for (int yy = 0; yy < tile.width; ++yy) {
+        const int y = tile.y0 + yy;
+        tile.data[tile.row(kk, zz) + static_cast<std::size_t>(yy)] =
+            z_in && y >= 0 && y < g.ny ? volume[tile.k0 + kk + y * g.stride_y + z * g.stride_z] : 0.0f;
+      }
+#endif
+  }
+}
+
+// volume += tile, inside the volume.
+HWY_INLINE void add_tile(const Tile& tile, const XGrid& g, float* HWY_RESTRICT volume) {
+  for (int zz = 0; zz < tile.height; ++zz) {
+    const int z = tile.z0 + zz;
+    if (z < 0 || z >= g.nz) continue;
+#if HWY_TARGET <= HWY_AVX3
+    const auto slices = static_cast<__mmask16>((1u << tile.slices) - 1u);
+    for (int yb = 0; yb < tile.width; yb += 16) {
+      __m512 r[16];
+      for (int kk = 0; kk < 16; ++kk)
+        r[kk] = kk < tile.slices ? _mm512_loadu_ps(tile.data + tile.row(kk, zz) + yb) : _mm512_setzero_ps();
+      transpose16(r);
+      for (int j = 0; j < 16; ++j) {
+        const int y = tile.y0 + yb + j;
+        if (y < 0 || y >= g.ny) continue;
+        float* v = volume + tile.k0 + y * g.stride_y + z * g.stride_z;
+        _mm512_mask_storeu_ps(v, slices, _mm512_add_ps(_mm512_maskz_loadu_ps(slices, v), r[j]));
+      }
+    }
+#else
+    for (int kk = 0; kk < tile.slices; ++kk)
+      for (int yy = 0; yy < tile.width; ++yy) {
+        const int y = tile.y0 + yy;
+        if (y >= 0 && y < g.ny)
+          volume[tile.k0 + kk + y * g.stride_y + z * g.stride_z] += tile.data[tile.row(kk, zz) + static_cast<std::size_t>(yy)];
+      }
+#endif
+  }
+}
+
+// A bundle whose rays (those that meet the volume, at least one) all run along x.
+HWY_INLINE bool along_x(const RayTable& t, std::size_t r, std::size_t n) {
+  bool any = false;
+  for (std::size_t l = 0; l < n; ++l) {
+    if (t.k_last[r + l] < t.k_first[r + l]) continue;
+    if (t.axis[r + l] != 0) return false;
+    any = true;
+  }
+  return any;
+}
+
+enum class TileFit { nothing, fits, too_large };
+
+// The box of voxels (corners included) the lanes at entries[0 .. count) of `t` touch in slices
+// [k0, k1], as the tile's y and z ranges; nothing when no lane has a sample there.
+template <class DF>
+HWY_INLINE TileFit tile_box(DF df, const RayTable& t, const std::size_t* entries, int count, int k0, int k1, Tile& tile) {
+  const hn::RebindToSigned<DF> di;
+  constexpr int kFar = 1 << 30;
+  auto lo_b = hn::Set(di, kFar), hi_b = hn::Set(di, -kFar), lo_c = lo_b, hi_c = hi_b;
+  for (int i = 0; i < count; ++i) {
+    const std::size_t r = entries[i];
+    const auto ka = hn::Max(hn::LoadU(di, t.k_first.data() + r), hn::Set(di, k0));
+    const auto kb = hn::Min(hn::LoadU(di, t.k_last.data() + r), hn::Set(di, k1));
+    const auto valid = hn::Lt(ka, hn::Add(kb, hn::Set(di, 1)));
+    // The sample moves linearly with k: its ends bound it. Same arithmetic as the kernels.
+    const auto pa = position_at(df, t, r, hn::ConvertTo(df, ka)), pb = position_at(df, t, r, hn::ConvertTo(df, kb));
+    lo_b = hn::IfThenElse(valid, hn::Min(lo_b, hn::Min(pa.ib, pb.ib)), lo_b);
+    hi_b = hn::IfThenElse(valid, hn::Max(hi_b, hn::Max(pa.ib, pb.ib)), hi_b);
+    lo_c = hn::IfThenElse(valid, hn::Min(lo_c, hn::Min(pa.ic, pb.ic)), lo_c);
+    hi_c = hn::IfThenElse(valid, hn::Max(hi_c, hn::Max(pa.ic, pb.ic)), hi_c);
+  }
+  const int y0 = hn::GetLane(hn::MinOfLanes(di, lo_b)), y1 = hn::GetLane(hn::MaxOfLanes(di, hi_b)) + 1;
+  const int z0 = hn::GetLane(hn::MinOfLanes(di, lo_c)), z1 = hn::GetLane(hn::MaxOfLanes(di, hi_c)) + 1;
+  if (y1 < y0) return TileFit::nothing;
+  tile.y0 = y0;
+  tile.width = std::max(32, (y1 - y0 + 16) / 16 * 16);
+  tile.z0 = z0;
+  tile.height = z1 - z0 + 1;
+  return tile.width <= kTileMaxWidth && tile.height <= kTileMaxHeight ? TileFit::fits : TileFit::too_large;
+}
+
+// The copies of a column strip's bundles (in `local`, one row each) address the tile.
+HWY_INLINE void address_tile(RayTable& local, int count, const Tile& tile) {
+  local.origin_a = tile.k0;
+  local.origin_b = tile.y0;
+  local.origin_c = tile.z0;
+  const std::size_t n = static_cast<std::size_t>(count) * static_cast<std::size_t>(local.row_stride);
+  std::fill_n(local.stride_a.begin(), n, tile.width * tile.height);
+  std::fill_n(local.stride_b.begin(), n, 1);
+  std::fill_n(local.stride_c.begin(), n, tile.width);
+  std::fill_n(local.n_b.begin(), n, tile.width);
+  std::fill_n(local.n_c.begin(), n, tile.height);
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace ctk::detail
+HWY_AFTER_NAMESPACE();
+
+#endif
