@@ -144,18 +144,26 @@ Problem row_window_problem() {
   return p;
 }
 
-// On every SIMD target this CPU runs (AVX-512, AVX2, SSE4 ...), not only the one dispatch picks:
-// the row window is 2 x lanes wide, and its back projection differs between targets.
-TEST(JosephProjector, RowWindowPathsAgreeWithTheReferenceAndAreAdjoint) {
+// Runs `check` on every SIMD target this CPU runs (AVX-512, AVX2, SSE4), not only the one
+// dispatch picks: the row window is 2 x lanes wide, and its back projection differs between
+// targets, as do the tiles' transpositions.
+template <typename Check>
+void on_every_simd_target(Check&& check) {
   const std::int64_t supported = hwy::SupportedTargets();
   for (const std::int64_t target : {HWY_AVX3, HWY_AVX2, HWY_SSE4}) {
     if ((supported & target) == 0) continue;
     hwy::SetSupportedTargetsForTest(target);
     SCOPED_TRACE(JosephProjector::simd_target());
-    EXPECT_LT(expect_fast_matches_reference(row_window_problem(), 7), 1e-5);
-    for (std::uint64_t seed : {4u, 5u}) expect_fast_matches_reference(random_problem(seed), seed);
+    check();
   }
   hwy::SetSupportedTargetsForTest(0);  // back to what the CPU has
+}
+
+TEST(JosephProjector, RowWindowPathsAgreeWithTheReferenceAndAreAdjoint) {
+  on_every_simd_target([] {
+    EXPECT_LT(expect_fast_matches_reference(row_window_problem(), 7), 1e-5);
+    for (std::uint64_t seed : {4u, 5u}) expect_fast_matches_reference(random_problem(seed), seed);
+  });
 }
 
 // Rays along x through a volume long in y: the fast projector marches them through small
@@ -178,12 +186,8 @@ Problem rays_along_x_problem() {
 }
 
 TEST(JosephProjector, RaysAlongXThroughTilesAgreeWithTheReferenceAndAreAdjoint) {
-  const std::int64_t supported = hwy::SupportedTargets();
   const Problem p = rays_along_x_problem();
-  for (const std::int64_t target : {HWY_AVX3, HWY_AVX2, HWY_SSE4}) {
-    if ((supported & target) == 0) continue;
-    hwy::SetSupportedTargetsForTest(target);
-    SCOPED_TRACE(JosephProjector::simd_target());
+  on_every_simd_target([&] {
     EXPECT_LT(expect_fast_matches_reference(p, 11), 1e-5);
     // Slabs of the back projection that cut tiles short, on one thread and on three.
     Volume x(p.layout);
@@ -197,8 +201,7 @@ TEST(JosephProjector, RaysAlongXThroughTilesAgreeWithTheReferenceAndAreAdjoint) 
       A.back(y, p.views, Aty);
       EXPECT_LT(std::abs(dot(Ax.data, y.data) - dot(x.data, Aty.data)) / (norm(Ax.data) * norm(y.data)), 1e-5);
     }
-  }
-  hwy::SetSupportedTargetsForTest(0);
+  });
 }
 
 TEST(JosephProjector, RaysMissingTheVolumeGiveZero) {
