@@ -103,6 +103,17 @@ HWY_INLINE void prepare_strip(DF df, const RayTable& t, XStrip& s, RayTable& loc
   s.volume_found = false;
 }
 
+// What a kernel call needs to march strips along x: the strip, copies of its rays, a tile.
+struct StripWorkspace {
+  XStrip strip;
+  RayTable local;
+  std::vector<float> tile_data;
+  void reserve(int rows, int lanes) {
+    local.shape(1, std::min(rows, XStrip::kMaxBundles), lanes);
+    tile_data.resize(static_cast<std::size_t>(kTileSlices * kTileMaxHeight * kTileMaxWidth));
+  }
+};
+
 HWY_INLINE const Bundle* volume_bundles(const RayTable& t, std::size_t lanes, int axis, XStrip& s) {
   if (!s.volume_found)
     for (int i = 0; i < s.count; ++i) s.volume[i] = bundle_at(t, s.entries[i], lanes, axis);
@@ -124,13 +135,15 @@ HWY_INLINE void for_each_chunk(int k_lo, int k_hi, int k_begin, int k_end, F&& f
 }
 
 template <class DF>
-HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRICT volume, XStrip& s, RayTable& local,
-                              float* tile_data, float* HWY_RESTRICT out) {
+HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRICT volume, StripWorkspace& w,
+                              float* HWY_RESTRICT out) {
+  XStrip& s = w.strip;
+  RayTable& local = w.local;
   prepare_strip(df, t, s, local);
   HWY_ALIGN float sums[XStrip::kMaxBundles * kMaxLanes] = {};
   const XGrid g = x_grid(t, s.entries[0]);
   Tile tile;
-  tile.data = tile_data;
+  tile.data = w.tile_data.data();
   for_each_chunk(s.k_lo, s.k_hi, 0, 1 << 30, [&](int k0, int k1) {
     const TileFit fit = tile_box(df, t, s.entries, s.count, k0, k1, tile);
     if (fit == TileFit::nothing) return;
@@ -156,13 +169,15 @@ HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRIC
 }
 
 template <class DF>
-HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, XStrip& s, RayTable& local,
-                           float* tile_data, float* HWY_RESTRICT volume) {
+HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, StripWorkspace& w,
+                           float* HWY_RESTRICT volume) {
+  XStrip& s = w.strip;
+  RayTable& local = w.local;
   prepare_strip(df, t, s, local);
   const auto all = hn::FirstN(df, hn::Lanes(df));
   const XGrid g = x_grid(t, s.entries[0]);
   Tile tile;
-  tile.data = tile_data;
+  tile.data = w.tile_data.data();
   for_each_chunk(s.k_lo, s.k_hi, k_begin, k_end, [&](int k0, int k1) {
     const TileFit fit = tile_box(df, t, s.entries, s.count, k0, k1, tile);
     if (fit == TileFit::nothing) return;
@@ -197,10 +212,9 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, XSt
 void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY_RESTRICT out) {
   const hn::ScalableTag<float> df;
   const int N = static_cast<int>(hn::Lanes(df));
-  RayTable local;
-  local.shape(1, std::min(t.rows, XStrip::kMaxBundles), N);
-  std::vector<float> tile_data(static_cast<std::size_t>(kTileSlices * kTileMaxHeight * kTileMaxWidth));
-  XStrip strip;
+  StripWorkspace w;
+  w.reserve(t.rows, N);
+  XStrip& strip = w.strip;
   for (int slot = 0; slot < t.views; ++slot) {
     for (int col = 0; col < t.row_stride; col += N) {
       strip.count = 0;
@@ -214,7 +228,7 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
         hn::StoreU(hn::Mul(march_forward(df, t, volume, b, b.k_lo, b.k_hi), hn::LoadU(df, t.weight.data() + r)), df,
                    out + r);
       }
-      if (strip.count > 0) forward_strip(df, t, volume, strip, local, tile_data.data(), out);
+      if (strip.count > 0) forward_strip(df, t, volume, w, out);
     }
   }
 }
@@ -223,13 +237,9 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
   const int N = static_cast<int>(hn::Lanes(df));
-  RayTable local;
-  std::vector<float> tile_data;
-  if (axis == 0) {
-    local.shape(1, std::min(t.rows, XStrip::kMaxBundles), N);
-    tile_data.resize(static_cast<std::size_t>(kTileSlices * kTileMaxHeight * kTileMaxWidth));
-  }
-  XStrip strip;
+  StripWorkspace w;
+  if (axis == 0) w.reserve(t.rows, N);
+  XStrip& strip = w.strip;
   for (int slot = 0; slot < t.views; ++slot) {
     for (int col = 0; col < t.row_stride; col += N) {
       strip.count = 0;
@@ -245,7 +255,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
         const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
         march_back(df, t, b, value, on_axis, std::max(b.k_lo, k_begin), std::min(b.k_hi, k_end - 1), volume);
       }
-      if (strip.count > 0) back_strip(df, t, k_begin, k_end, strip, local, tile_data.data(), volume);
+      if (strip.count > 0) back_strip(df, t, k_begin, k_end, w, volume);
     }
   }
 }

@@ -97,11 +97,7 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid& g, cons
           r[j] = _mm512_setzero_ps();
           continue;
         }
-        const float* x_row = volume + tile.k0 + y * g.stride_y + z * g.stride_z;
-        r[j] = _mm512_maskz_loadu_ps(slices, x_row);
-        // The strip's next tile reads the next 16 voxels of the same rows: each row is its own
-        // stream, too many for the hardware prefetcher to follow.
-        _mm_prefetch(reinterpret_cast<const char*>(x_row + kTileSlices), _MM_HINT_T0);
+        r[j] = _mm512_maskz_loadu_ps(slices, volume + tile.k0 + y * g.stride_y + z * g.stride_z);
       }
       transpose16(r);
       for (int kk = 0; kk < tile.slices; ++kk) _mm512_storeu_ps(tile.data + tile.row(kk, zz) + yb, r[kk]);
