@@ -83,8 +83,8 @@ HWY_INLINE void prepare_strip(DF df, const RayTable& t, XStrip& s, RayTable& loc
     Bundle& b = s.tile[i];
     b.r = local.entry(0, i, 0);
     local.copy_entries(t, r, b.r, n);
-    b.k_lo = b.in_lo = 1 << 30;
-    b.k_hi = b.in_hi = -(1 << 30);
+    b.k_lo = b.in_hi = 1 << 30;  // k range: min and max over lanes; fast path: max and min
+    b.k_hi = b.in_lo = -(1 << 30);
     for (std::size_t l = 0; l < n; ++l) {
       const int first = t.k_first[r + l], last = t.k_last[r + l];
       // In a tile every corner of a lane in its range is there: the fast path needs only that
