@@ -134,6 +134,21 @@ HWY_INLINE void for_each_chunk(int k_lo, int k_hi, int k_begin, int k_end, F&& f
     f(std::max(k0, lo), std::min(k0 + kTileSlices - 1, hi));
 }
 
+// The tile for slices [k0, k1] of the strip, its rays' copies pointed at it; the bundles in
+// the volume instead when it would be too large (null when it fits).
+template <class DF>
+HWY_INLINE TileFit start_chunk(DF df, const RayTable& t, int axis, int k0, int k1, StripWorkspace& w, Tile& tile,
+                               const Bundle*& in_volume) {
+  const TileFit fit = tile_box(df, t, w.strip.entries, w.strip.count, k0, k1, tile);
+  in_volume = nullptr;
+  if (fit == TileFit::too_large) in_volume = volume_bundles(t, hn::Lanes(df), axis, w.strip);
+  if (fit != TileFit::fits) return fit;
+  tile.k0 = k0;
+  tile.slices = k1 - k0 + 1;
+  address_tile(w.local, w.strip.count, tile);
+  return fit;
+}
+
 template <class DF>
 HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRICT volume, StripWorkspace& w,
                               float* HWY_RESTRICT out) {
@@ -145,15 +160,10 @@ HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRIC
   Tile tile;
   tile.data = w.tile_data.data();
   for_each_chunk(s.k_lo, s.k_hi, 0, 1 << 30, [&](int k0, int k1) {
-    const TileFit fit = tile_box(df, t, s.entries, s.count, k0, k1, tile);
+    const Bundle* in_volume;
+    const TileFit fit = start_chunk(df, t, -1, k0, k1, w, tile, in_volume);
     if (fit == TileFit::nothing) return;
-    if (fit == TileFit::fits) {
-      tile.k0 = k0;
-      tile.slices = k1 - k0 + 1;
-      fill_tile(volume, g, tile);
-      address_tile(local, s.count, tile);
-    }
-    const Bundle* in_volume = fit == TileFit::fits ? nullptr : volume_bundles(t, hn::Lanes(df), -1, s);
+    if (fit == TileFit::fits) fill_tile(volume, g, tile);
     for (int i = 0; i < s.count; ++i) {
       const Bundle& b = in_volume ? in_volume[i] : s.tile[i];
       const auto sum = in_volume ? march_forward(df, t, volume, b, std::max(k0, b.k_lo), std::min(k1, b.k_hi))
@@ -179,15 +189,10 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
   Tile tile;
   tile.data = w.tile_data.data();
   for_each_chunk(s.k_lo, s.k_hi, k_begin, k_end, [&](int k0, int k1) {
-    const TileFit fit = tile_box(df, t, s.entries, s.count, k0, k1, tile);
+    const Bundle* in_volume;
+    const TileFit fit = start_chunk(df, t, 0, k0, k1, w, tile, in_volume);
     if (fit == TileFit::nothing) return;
-    if (fit == TileFit::fits) {
-      tile.k0 = k0;
-      tile.slices = k1 - k0 + 1;
-      std::fill_n(tile.data, tile.row(tile.slices, 0), 0.0f);
-      address_tile(local, s.count, tile);
-    }
-    const Bundle* in_volume = fit == TileFit::fits ? nullptr : volume_bundles(t, hn::Lanes(df), 0, s);
+    if (fit == TileFit::fits) std::fill_n(tile.data, tile.row(tile.slices, 0), 0.0f);
     for (int i = 0; i < s.count; ++i) {
       const std::size_t r = s.entries[i];
       const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
@@ -205,6 +210,25 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
   });
 }
 
+// Every bundle of the table, column strip by column strip: with `tiles`, the bundles along x of
+// a strip are collected in w.strip and handed to `strip` together; the others go to `one`.
+template <class One, class Strip>
+HWY_INLINE void for_each_bundle(const RayTable& t, int lanes, bool tiles, StripWorkspace& w, One&& one, Strip&& strip) {
+  for (int slot = 0; slot < t.views; ++slot) {
+    for (int col = 0; col < t.row_stride; col += lanes) {
+      w.strip.count = 0;
+      for (int row = 0; row < t.rows; ++row) {
+        const std::size_t r = t.entry(slot, row, col);
+        if (tiles && w.strip.count < XStrip::kMaxBundles && along_x(t, r, static_cast<std::size_t>(lanes)))
+          w.strip.entries[w.strip.count++] = r;
+        else
+          one(r);
+      }
+      if (w.strip.count > 0) strip();
+    }
+  }
+}
+
 // Bundles go one at a time, every slice of one before the next, except rays along x (above).
 // (Marching the bundles of a column strip in consecutive rows together, slice by slice, through
 // the volume itself was tried for locality: 25 % slower, the per-sample state no longer
@@ -214,23 +238,14 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
   const int N = static_cast<int>(hn::Lanes(df));
   StripWorkspace w;
   w.reserve(t.rows, N);
-  XStrip& strip = w.strip;
-  for (int slot = 0; slot < t.views; ++slot) {
-    for (int col = 0; col < t.row_stride; col += N) {
-      strip.count = 0;
-      for (int row = 0; row < t.rows; ++row) {
-        const std::size_t r = t.entry(slot, row, col);
-        if (strip.count < XStrip::kMaxBundles && along_x(t, r, static_cast<std::size_t>(N))) {
-          strip.entries[strip.count++] = r;
-          continue;
-        }
+  for_each_bundle(
+      t, N, true, w,
+      [&](std::size_t r) {
         const Bundle b = bundle_at(t, r, static_cast<std::size_t>(N), -1);
         hn::StoreU(hn::Mul(march_forward(df, t, volume, b, b.k_lo, b.k_hi), hn::LoadU(df, t.weight.data() + r)), df,
                    out + r);
-      }
-      if (strip.count > 0) forward_strip(df, t, volume, w, out);
-    }
-  }
+      },
+      [&] { forward_strip(df, t, volume, w, out); });
 }
 
 void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RESTRICT volume) {
@@ -239,25 +254,17 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
   const int N = static_cast<int>(hn::Lanes(df));
   StripWorkspace w;
   if (axis == 0) w.reserve(t.rows, N);
-  XStrip& strip = w.strip;
-  for (int slot = 0; slot < t.views; ++slot) {
-    for (int col = 0; col < t.row_stride; col += N) {
-      strip.count = 0;
-      for (int row = 0; row < t.rows; ++row) {
-        const std::size_t r = t.entry(slot, row, col);
+  // Bundles along x have lanes on axis 0 only, so only axis 0's slabs take strips.
+  for_each_bundle(
+      t, N, axis == 0, w,
+      [&](std::size_t r) {
         const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(di, t.axis.data() + r), hn::Set(di, axis)));
-        if (hn::AllFalse(df, on_axis)) continue;
-        if (axis == 0 && strip.count < XStrip::kMaxBundles && along_x(t, r, static_cast<std::size_t>(N))) {
-          strip.entries[strip.count++] = r;
-          continue;
-        }
+        if (hn::AllFalse(df, on_axis)) return;
         const Bundle b = bundle_at(t, r, static_cast<std::size_t>(N), axis);
         const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
         march_back(df, t, b, value, on_axis, std::max(b.k_lo, k_begin), std::min(b.k_hi, k_end - 1), volume);
-      }
-      if (strip.count > 0) back_strip(df, t, k_begin, k_end, w, volume);
-    }
-  }
+      },
+      [&] { back_strip(df, t, k_begin, k_end, w, volume); });
 }
 
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
