@@ -157,20 +157,6 @@ ModelError image_error(const ScanModelFit& all, const HeldOut& h) {
   return e;
 }
 
-DeclaredSetup declared_setup(const ScanDescription& scan) {
-  DeclaredSetup s;
-  s.K = scan.intrinsics();
-  s.detector = scan.detector;
-  s.holder = *scan.holder;
-  s.robot = scan.panda.has_value();
-  if (scan.panda) {
-    s.T_camera_base = scan.panda->T_camera_base;
-    s.T_flange_holder = scan.panda->T_flange_holder;
-  }
-  s.source_drift_mm_per_100_views = scan.source_drift_mm_per_100_views;
-  return s;
-}
-
 // Whether deviation component c follows the direction of gravity in the flange frame (a load
 // the model lacks: a sagging holder, a bending arm): the fraction of its variance a linear fit
 // on that direction explains, said when it is most of it.
@@ -304,8 +290,7 @@ std::vector<StructureFinding> find_structure(const ScanObservations& o, const Sc
 }  // namespace
 
 ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration& c, const DiagnosisOptions& options) {
-  ScanObservations o;
-  o.setup = declared_setup(scan);
+  ScanObservations o = observe_calibration(scan, c);
   o.robot_sigma_mm = options.robot_sigma_mm;
   o.robot_sigma_deg = options.robot_sigma_deg;
   // A sphere the calibration left out as an outlier in most of the views that matched it is off
@@ -318,31 +303,14 @@ ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration
     for (int k : r.outlier_spheres) ++dropped[k];
   }
   auto consistently_off = [&](int k) { return dropped[k] >= 5 && dropped[k] > used[k]; };
-  double sq = 0;
-  int dof = 0;
-  for (std::size_t v = 0; v < c.views.size(); ++v) {
-    const ViewCalibration& r = c.views[v];
-    if (r.status != ViewStatus::ok) continue;
-    ViewObservations view;
-    view.view = static_cast<int>(v);
-    if (scan.panda)
-      if (const JointRow* row = scan.panda->joints.find(static_cast<int>(v))) {
-        view.joints = row->q;
-        for (std::size_t j = 0; j < row->q.size(); ++j) (*view.joints)[j] += scan.panda->joint_offsets_rad[j];
-      }
-    view.T_calibrated = *r.T_camera_holder;
-    view.spheres = r.spheres;
-    view.measured_px = r.detected_px;
-    for (std::size_t k = 0; k < r.detected_px.size(); ++k) sq += (r.detected_px[k] - r.fitted_px[k]).squaredNorm();
-    dof += 2 * static_cast<int>(r.detected_px.size()) - 6;
+  for (ViewObservations& view : o.views) {
+    const ViewCalibration& r = c.views[static_cast<std::size_t>(view.view)];
     for (std::size_t k = 0; k < r.outlier_spheres.size(); ++k)
       if (consistently_off(r.outlier_spheres[k])) {
         view.spheres.push_back(r.outlier_spheres[k]);
         view.measured_px.push_back(r.outlier_detected_px[k]);
       }
-    o.views.push_back(std::move(view));
   }
-  if (dof > 0) o.centre_sigma_px = std::sqrt(sq / dof);
   return o;
 }
 

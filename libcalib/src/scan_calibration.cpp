@@ -26,7 +26,6 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
                      "has " + std::to_string(scan.holder->spheres_mm.size()) + " spheres; a pose needs at least " +
                          std::to_string(options.min_spheres));
   const std::optional<FlatDark> flat_dark = read_flat_dark(scan);
-  const Eigen::Matrix3d K = scan.intrinsics().K();
   const int n = scan.projections.count;
 
   ScanCalibration result;
@@ -41,16 +40,10 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
     } else {
       try {
         const Image image = read_line_integrals(scan, v, flat_dark);
-        // A declared drift: the view is seen from a moved focal spot, i.e. through K with its
-        // principal point moved, at a pose shifted by the focal spot's offset (P = K' [R | t - s]).
-        const Eigen::Vector3d s = scan.source_offset_mm(v);
-        Eigen::Matrix3d K_view = K;
-        K_view(0, 2) += s.x() / scan.detector.pitch_u_mm;
-        K_view(1, 2) += s.y() / scan.detector.pitch_v_mm;
-        Rigid shift = Rigid::Identity();
-        shift.translation() = -s;
-        out = calibrate_view(image, K_view, shift * *guess.T_camera_holder, *scan.holder, scan.detector, options, scan.distortion);
-        if (out.T_camera_holder) out.T_camera_holder = shift.inverse() * *out.T_camera_holder;  // the pose from the nominal spot
+        const ViewCamera camera = view_camera(scan, v);
+        out = calibrate_view(image, camera.K, camera.from_nominal * *guess.T_camera_holder, *scan.holder, scan.detector, options,
+                             scan.distortion);
+        if (out.T_camera_holder) out.T_camera_holder = camera.from_nominal.inverse() * *out.T_camera_holder;
       } catch (const InputError& e) {
         out.status = ViewStatus::rejected;
         out.reason = std::string("unreadable image: ") + e.what();
@@ -80,6 +73,16 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
 }
 
 }  // namespace
+
+ViewCamera view_camera(const ScanDescription& scan, int view) {
+  const Eigen::Vector3d s = scan.source_offset_mm(view);
+  ViewCamera camera;
+  camera.K = scan.intrinsics().K();
+  camera.K(0, 2) += s.x() / scan.detector.pitch_u_mm;
+  camera.K(1, 2) += s.y() / scan.detector.pitch_v_mm;
+  camera.from_nominal.translation() = -s;
+  return camera;
+}
 
 ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
                                const std::function<void(int, int)>& progress) {

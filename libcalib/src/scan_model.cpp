@@ -1,5 +1,7 @@
 #include "ctk/calib/scan_model.hpp"
 
+#include <cmath>
+
 namespace ctk {
 
 const char* effect_name(Effect e) {
@@ -25,11 +27,24 @@ Rigid offset_rigid(const double* p) {
 }
 }  // namespace
 
-Rigid robot_predicted_pose(const DeclaredSetup& s, const EffectParameters& p, const panda::Joints& q) {
+FlangeChain flange_chain(const DeclaredSetup& s, const EffectParameters& p, const panda::Joints& q) {
   panda::Joints q_true = q;
   for (int j = 0; j < panda::kJointCount; ++j) q_true[static_cast<std::size_t>(j)] += p.joints[j];
-  return s.T_camera_base * offset_rigid(p.base) * panda::forward_kinematics(q_true) * offset_rigid(p.mount) *
-         s.T_flange_holder;
+  return {s.T_camera_base * offset_rigid(p.base) * panda::forward_kinematics(q_true), offset_rigid(p.mount) * s.T_flange_holder};
+}
+
+Rigid robot_predicted_pose(const DeclaredSetup& s, const EffectParameters& p, const panda::Joints& q) {
+  const FlangeChain chain = flange_chain(s, p, q);
+  return chain.before_flange * chain.after_flange;
+}
+
+Eigen::Matrix<double, 6, 1> flange_deviation(const DeclaredSetup& s, const EffectParameters& p, const panda::Joints& q,
+                                             const Rigid& T) {
+  const FlangeChain chain = flange_chain(s, p, q);
+  const Rigid N = chain.before_flange.inverse() * T * chain.after_flange.inverse();
+  Eigen::Matrix<double, 6, 1> x;
+  x << rotation_vector(N.linear()), N.translation();
+  return x;
 }
 
 RadialDistortion distortion_of(const DeclaredSetup& s, const EffectParameters& p) {
@@ -46,6 +61,46 @@ Intrinsics intrinsics_of(const DeclaredSetup& s, const EffectParameters& p) {
   K.fu_px += p.intrinsics[2];
   K.fv_px += p.intrinsics[2] * s.K.fv_px / s.K.fu_px;
   return K;
+}
+
+DeclaredSetup declared_setup(const ScanDescription& scan) {
+  DeclaredSetup s;
+  s.K = scan.intrinsics();
+  s.detector = scan.detector;
+  s.holder = *scan.holder;
+  s.robot = scan.panda.has_value();
+  if (scan.panda) {
+    s.T_camera_base = scan.panda->T_camera_base;
+    s.T_flange_holder = scan.panda->T_flange_holder;
+  }
+  s.source_drift_mm_per_100_views = scan.source_drift_mm_per_100_views;
+  return s;
+}
+
+ScanObservations observe_calibration(const ScanDescription& scan, const ScanCalibration& c) {
+  ScanObservations o;
+  o.setup = declared_setup(scan);
+  double sq = 0;
+  int dof = 0;
+  for (std::size_t v = 0; v < c.views.size(); ++v) {
+    const ViewCalibration& r = c.views[v];
+    if (r.status != ViewStatus::ok) continue;
+    ViewObservations view;
+    view.view = static_cast<int>(v);
+    if (scan.panda)
+      if (const JointRow* row = scan.panda->joints.find(static_cast<int>(v))) {
+        view.joints = row->q;
+        for (std::size_t j = 0; j < row->q.size(); ++j) (*view.joints)[j] += scan.panda->joint_offsets_rad[j];
+      }
+    view.T_calibrated = *r.T_camera_holder;
+    view.spheres = r.spheres;
+    view.measured_px = r.detected_px;
+    for (std::size_t k = 0; k < r.detected_px.size(); ++k) sq += (r.detected_px[k] - r.fitted_px[k]).squaredNorm();
+    dof += 2 * static_cast<int>(r.detected_px.size()) - 6;
+    o.views.push_back(std::move(view));
+  }
+  if (dof > 0) o.centre_sigma_px = std::sqrt(sq / dof);
+  return o;
 }
 
 Eigen::Vector3d source_offset_at(const EffectParameters& p, int view) {

@@ -186,7 +186,7 @@ void add_view(ceres::Problem& problem, const ScanObservations& o, const ViewObse
   for (std::size_t i = 0; i < v.spheres.size(); ++i) {
     const auto k = static_cast<std::size_t>(v.spheres[i]);
     auto* f = new ImageResidual{R0, s.holder.spheres_mm[k], v.measured_px[i], s.K, s.detector.pitch_u_mm, s.detector.pitch_v_mm,
-                                static_cast<double>(v.view), 1.0 / o.centre_sigma_px, s.source_drift_mm_per_100_views};
+                                static_cast<double>(v.view), 1.0 / centre_sigma(o, v), s.source_drift_mm_per_100_views};
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ImageResidual, 2, 6, 3, 3, 3, 2>(f), nullptr, pose,
                              g.block(Effect::sphere_positions, k), g.block(Effect::detector_intrinsics),
                              g.block(Effect::detector_distortion), g.block(Effect::source_drift));
@@ -228,7 +228,7 @@ void collect_view(const ScanObservations& o, const ViewObservations& v, const do
     out.residual_px[slot].emplace_back(-r[0], -r[1]);
     sq += r[0] * r[0] + r[1] * r[1];
   }
-  const double image = sq / (o.centre_sigma_px * o.centre_sigma_px);
+  const double image = sq / (centre_sigma(o, v) * centre_sigma(o, v));
   double prior = 0;
   if (o.setup.robot && v.joints) {
     const RobotPrior f{R0, *v.joints, o.setup.T_camera_base.matrix(), o.setup.T_flange_holder.matrix(),

@@ -68,7 +68,8 @@ struct Diagnosis {
   ScanModelFit before_fit, after_fit;   // all views, for pictures
 };
 
-/// The observations behind a calibration: matched centres, poses, joints, noise levels.
+/// The observations behind a calibration (observe_calibration) with the repeatability the options
+/// assume, and the detections of spheres the calibration dropped in most views (misplaced ones).
 ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration& calibration,
                               const DiagnosisOptions& options);
 

@@ -16,6 +16,15 @@ struct ScanCalibration {
   double seconds = 0;
 };
 
+/// How one view is seen: a declared source drift moves the focal spot, i.e. the principal point
+/// moves with it and the pose is shifted by the spot's offset (P = K' [R | t - s]).
+struct ViewCamera {
+  Eigen::Matrix3d K;                            // K' of the moved spot
+  Rigid from_nominal = Rigid::Identity();       // camera frame of the nominal spot -> of the moved one
+  ProjectionMatrix P(const Rigid& T_camera_holder) const { return ProjectionMatrix::compose(K, from_nominal * T_camera_holder); }
+};
+ViewCamera view_camera(const ScanDescription& scan, int view);
+
 /// Throws InputError for problems of the scan as a whole (no holder, fewer than 6 spheres,
 /// unreadable flat or dark); per-view problems end up in the views.
 ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,

@@ -9,10 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "ctk/calib/scan_calibration.hpp"
 #include "ctk/geom/detector.hpp"
 #include "ctk/geom/helix.hpp"
 #include "ctk/geom/panda.hpp"
 #include "ctk/geom/rigid.hpp"
+#include "ctk/geom/scan.hpp"
 
 namespace ctk {
 
@@ -66,6 +68,7 @@ struct ViewObservations {
   Rigid T_calibrated;                // the per-view calibrated pose (start of every fit)
   std::vector<int> spheres;
   std::vector<Eigen::Vector2d> measured_px;
+  double centre_sigma_px = 0;        // this view's own detection noise; 0: the scan's
 };
 
 struct ScanObservations {
@@ -76,8 +79,34 @@ struct ScanObservations {
   double robot_sigma_deg = 0.02;
 };
 
+/// The robot's chain split at the flange: the holder's pose is before_flange * N * after_flange,
+/// where N is the flange's deviation from the model (the robot's repeatability acts there).
+struct FlangeChain {
+  Rigid before_flange;  // camera <- flange, as the model predicts it
+  Rigid after_flange;   // flange <- holder
+};
+FlangeChain flange_chain(const DeclaredSetup& setup, const EffectParameters& p, const panda::Joints& q);
+
+/// A view's detection noise per axis (its own when set, else the scan's).
+inline double centre_sigma(const ScanObservations& o, const ViewObservations& v) {
+  return v.centre_sigma_px > 0 ? v.centre_sigma_px : o.centre_sigma_px;
+}
+
 /// Where the robot puts the holder under the model (camera frame of the declared source).
 Rigid robot_predicted_pose(const DeclaredSetup& setup, const EffectParameters& p, const panda::Joints& q);
+
+/// A pose's deviation N from the model at the flange: rotation vector (rad), then translation
+/// (mm), flange coordinates (the robot prior's residual before scaling).
+Eigen::Matrix<double, 6, 1> flange_deviation(const DeclaredSetup& setup, const EffectParameters& p, const panda::Joints& q,
+                                             const Rigid& T_camera_holder);
+
+/// The chain and detector `scan` declares (it must have a holder).
+DeclaredSetup declared_setup(const ScanDescription& scan);
+
+/// The calibrated views of `c` as observations: each ok view's pose, the spheres its fit used and
+/// their measured centres, its logged joints (declared joint offsets added); the centre noise
+/// from the fits' residuals (per axis, degrees of freedom counted).
+ScanObservations observe_calibration(const ScanDescription& scan, const ScanCalibration& c);
 
 /// Radial distortion and intrinsics in the contract's terms.
 RadialDistortion distortion_of(const DeclaredSetup& setup, const EffectParameters& p);
