@@ -260,11 +260,19 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
       [&](std::size_t r) {
         const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(di, t.axis.data() + r), hn::Set(di, axis)));
         if (hn::AllFalse(df, on_axis)) return;
-        const Bundle b = bundle_at(t, r, static_cast<std::size_t>(N), axis);
+        const std::size_t i = r / static_cast<std::size_t>(N);
+        const Bundle b = i < t.bundles.size() && t.bundles[i].axis == axis ? t.bundles[i]
+                                                                           : bundle_at(t, r, static_cast<std::size_t>(N), axis);
         const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
         march_back(df, t, b, value, on_axis, std::max(b.k_lo, k_begin), std::min(b.k_hi, k_end - 1), volume);
       },
       [&] { back_strip(df, t, k_begin, k_end, w, volume); });
+}
+
+// Every lane on one axis (the usual case): the bundle restricted to that axis is the bundle.
+void PrepareBundles(RayTable& t, std::size_t begin, std::size_t end) {
+  const std::size_t n = hn::Lanes(hn::ScalableTag<float>());
+  for (std::size_t i = begin; i < end; ++i) t.bundles[i] = bundle_at(t, i * n, n, -1);
 }
 
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
@@ -278,12 +286,17 @@ HWY_AFTER_NAMESPACE();
 namespace ctk::detail {
 HWY_EXPORT(ForwardRays);
 HWY_EXPORT(BackRays);
+HWY_EXPORT(PrepareBundles);
 HWY_EXPORT(TargetName);
 HWY_EXPORT(FloatLanes);
 
 void forward_rays(const RayTable& t, const float* volume, float* out) { HWY_DYNAMIC_DISPATCH(ForwardRays)(t, volume, out); }
 void back_rays(const RayTable& t, int axis, int k_begin, int k_end, float* volume) {
   HWY_DYNAMIC_DISPATCH(BackRays)(t, axis, k_begin, k_end, volume);
+}
+void prepare_bundles(RayTable& t, std::size_t begin, std::size_t end) { HWY_DYNAMIC_DISPATCH(PrepareBundles)(t, begin, end); }
+std::size_t bundle_count(const RayTable& t) {
+  return static_cast<std::size_t>(t.views) * static_cast<std::size_t>(t.view_stride) / static_cast<std::size_t>(simd_float_lanes());
 }
 const char* simd_target_name() { return HWY_DYNAMIC_DISPATCH(TargetName)(); }
 int simd_float_lanes() { return HWY_DYNAMIC_DISPATCH(FloatLanes)(); }

@@ -60,6 +60,7 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
   const int batch = std::clamp(kBackTableRays / per_view, 1, y.views);
   detail::RayTable table;  // shared: filled together, then read by every slab task
   table.shape(batch, rows_per_block, y.cols);
+  table.bundles.resize(detail::bundle_count(table));
 #pragma omp parallel num_threads(n_threads)
   {
     // Views innermost, as in forward(): a band of the volume stays in cache across views.
@@ -83,6 +84,12 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
             table.rows = rows;
           }
         }
+        // Each bundle once for every slab task that marches it.
+        const auto bundles_in_use = static_cast<std::size_t>(in_batch) * table.bundles.size() / static_cast<std::size_t>(batch);
+#pragma omp for schedule(static)
+        for (int part = 0; part < n_threads; ++part)
+          detail::prepare_bundles(table, bundles_in_use * static_cast<std::size_t>(part) / static_cast<std::size_t>(n_threads),
+                                  bundles_in_use * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(n_threads));
         // A sample at slice k writes only slice k of its dominant axis: slabs are disjoint.
         for (int axis = 0; axis < 3; ++axis) {
           const int n = x.layout.size[static_cast<std::size_t>(axis)];

@@ -169,15 +169,6 @@ HWY_INLINE void interior_range(const RayTable& t, std::size_t r, std::size_t n, 
   }
 }
 
-// What a kernel needs to know about one bundle of N neighbouring rays before marching it.
-struct Bundle {
-  std::size_t r = 0;       // first entry
-  int k_lo = 0, k_hi = -1;  // slices any lane visits
-  int in_lo = 0, in_hi = -1;  // slices on the fast path (interior_range)
-  bool pairs = false;      // corners b and b + 1 adjacent in memory for every lane
-  bool window = false;     // pairs, one axis for every lane: rows of the slice can be loaded whole
-};
-
 // The bundle at entry r, restricted to lanes of dominant `axis` (all lanes when axis < 0).
 HWY_INLINE Bundle bundle_at(const RayTable& t, std::size_t r, std::size_t n, int axis) {
   Bundle b;
@@ -202,6 +193,9 @@ HWY_INLINE Bundle bundle_at(const RayTable& t, std::size_t r, std::size_t n, int
   interior_range(t, r, n, axis, b.in_lo, b.in_hi);
   // The fast path needs every lane on the axis (others would touch voxels outside the slab).
   if (!all_on_axis) b.in_lo = 1 << 30;
+  b.axis = t.axis[r];
+  for (std::size_t l = 1; l < n; ++l)
+    if (t.axis[r + l] != b.axis) b.axis = -2;
   return b;
 }
 

@@ -13,6 +13,16 @@ namespace ctk::detail {
 
 inline constexpr int kMaxLanes = 16;  // widest float vector (AVX-512); rows are padded to it
 
+// What a kernel needs to know about one bundle of N neighbouring rays before marching it.
+struct Bundle {
+  std::size_t r = 0;          // first entry
+  int k_lo = 0, k_hi = -1;    // slices any lane visits
+  int in_lo = 0, in_hi = -1;  // slices on the fast path (interior_range)
+  bool pairs = false;         // corners b and b + 1 adjacent in memory for every lane
+  bool window = false;        // pairs, one axis for every lane: rows of the slice can be loaded whole
+  int axis = -2;              // the dominant axis every lane shares; -2 when they differ
+};
+
 struct RayTable {
   int views = 0;        // views in use, each at slot * view_stride
   int rows = 0;         // detector rows in use per view
@@ -25,6 +35,9 @@ struct RayTable {
   // 0 <= b - origin_b < n_b, 0 <= c - origin_c < n_c exist. Zero for the volume itself; a
   // tile's corner when the rays are marched through a transposed copy of part of it.
   int origin_a = 0, origin_b = 0, origin_c = 0;
+  /// Bundle i (entries [i N, i N + N), N the SIMD width) as prepare_bundles found it, for tables
+  /// that many slab tasks read (back projection): found once, not once per slab.
+  std::vector<Bundle> bundles;
 
   /// Room for `views` views of `rows` rows of `cols` columns; views and rows in use are set to that.
   void shape(int views, int rows, int cols);
@@ -49,6 +62,9 @@ void forward_rays(const RayTable& table, const float* volume, float* out);
 /// volume += A' y for the rays of dominant `axis`, slices [k_begin, k_end) only; y is
 /// table.value (each ray's projection value).
 void back_rays(const RayTable& table, int axis, int k_begin, int k_end, float* volume);
+/// Fills table.bundles for bundles [begin, end) (count: bundle_count()).
+void prepare_bundles(RayTable& table, std::size_t begin, std::size_t end);
+std::size_t bundle_count(const RayTable& table);
 const char* simd_target_name();
 int simd_float_lanes();
 
