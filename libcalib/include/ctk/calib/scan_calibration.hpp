@@ -25,7 +25,8 @@ struct ViewCamera {
 };
 ViewCamera view_camera(const ScanDescription& scan, int view);
 
-/// Throws InputError for problems of the scan as a whole (no holder, fewer than 6 spheres,
+/// Poses from the images alone; robot_prior.hpp's combine_with_robot then adds the robot's prior
+/// (`ctk calibrate` does, unless --image-only). Throws InputError for problems of the scan as a whole (no holder, fewer than 6 spheres,
 /// unreadable flat or dark); per-view problems end up in the views.
 ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
                                const std::function<void(int, int)>& progress = {});
