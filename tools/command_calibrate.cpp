@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "ctk/geom/statistics.hpp"
 #include "ctk/calib/calibration_pictures.hpp"
 #include "ctk/calib/robot_prior.hpp"
 #include "ctk/calib/scan_calibration.hpp"
@@ -26,12 +27,6 @@ struct CalibrateOptions {
   CalibrationOptions calibration;
   bool image_only = false;  // no robot prior
 };
-
-double median(std::vector<double> x) {
-  if (x.empty()) return 0;
-  std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2), x.end());
-  return x[x.size() / 2];
-}
 
 nlohmann::json robot_prior_json(const RobotPriorFit& p) {
   if (!p.applied) return {{"applied", false}, {"reason", p.reason}};

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "ctk/geom/panda.hpp"
+#include "ctk/geom/statistics.hpp"
 
 namespace ctk {
 
@@ -89,12 +90,10 @@ std::vector<bool> misplaced_spheres(const ScanObservations& o, const std::vector
   }
   std::vector<double> m;
   for (const auto& x : all.parameters.spheres) m.push_back(x.norm());
-  std::vector<double> sorted = m;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
-  const double median = sorted[sorted.size() / 2];
-  for (double& x : sorted) x = std::abs(x - median);
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
-  const double limit = std::max(0.03, median + 6 * 1.4826 * sorted[sorted.size() / 2]);
+  std::vector<double> deviation = m;
+  const double centre = median_in_place(deviation);
+  for (double& x : deviation) x = std::abs(x - centre);
+  const double limit = std::max(0.03, centre + 6 * 1.4826 * median_in_place(deviation));
   // A sphere's 3-D place is only fixed by views from well-separated directions: one seen in a
   // few views, or from a narrow cone of directions, fits any bias of its centres (a sample's edge
   // over it) with a large, meaningless offset.
@@ -191,8 +190,7 @@ std::vector<StructureFinding> find_structure(const ScanObservations& o, const Sc
       components.push_back(std::abs(r.y()));
     }
   if (components.size() < 20) return out;
-  std::nth_element(components.begin(), components.begin() + static_cast<std::ptrdiff_t>(components.size() / 2), components.end());
-  const double sigma = 1.4826 * components[components.size() / 2];
+  const double sigma = 1.4826 * median_in_place(components);
   // Mean residual vectors in groups; chi-square with 2 dof against a Bonferroni threshold.
   auto test_groups = [&](const std::string& where, int groups, auto&& group_of, auto&& name_of) {
     std::vector<Eigen::Vector2d> sum(static_cast<std::size_t>(groups), Eigen::Vector2d::Zero());

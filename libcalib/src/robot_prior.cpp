@@ -6,6 +6,7 @@
 #include <ceres/ceres.h>
 
 #include "ctk/calib/scan_model_fit.hpp"
+#include "ctk/geom/statistics.hpp"
 #include "small_problem.hpp"
 
 namespace ctk {
@@ -56,12 +57,6 @@ Matrix6 prior_information(const Repeatability& r) {
   Vector6 d;
   d << 1 / (sr * sr), 1 / (sr * sr), 1 / (sr * sr), 1 / (st * st), 1 / (st * st), 1 / (st * st);
   return d.asDiagonal();
-}
-
-double median(std::vector<double> x) {
-  if (x.empty()) return 0;
-  std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2), x.end());
-  return x[x.size() / 2];
 }
 
 // Largest per-axis rotation uncertainty (deg) of a flange-deviation covariance, in camera axes.

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "ctk/geom/statistics.hpp"
+
 namespace ctk {
 
 bool refine_centroid(const Image& im, const Eigen::Vector2d& guess, double radius, SphereDetection& out) {
@@ -65,13 +67,9 @@ std::vector<SphereDetection> detect_spheres(const Image& im, const DetectionOpti
   sample.reserve(static_cast<std::size_t>(im.rows * im.cols / 16 + 1));
   for (int r = 0; r < im.rows; r += 4)
     for (int c = 0; c < im.cols; c += 4) sample.push_back(dog.at<float>(r, c));
-  auto median_of = [](std::vector<float>& v) {
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    return v[v.size() / 2];
-  };
-  const float centre = median_of(sample);
+  const float centre = median_in_place(sample);
   for (float& x : sample) x = std::abs(x - centre);
-  const float threshold = centre + o.noise_sigmas * 1.4826f * std::max(median_of(sample), 1e-12f);
+  const float threshold = centre + o.noise_sigmas * 1.4826f * std::max(median_in_place(sample), 1e-12f);
   std::vector<SphereDetection> candidates;
   for (int r = 1; r + 1 < im.rows; ++r) {
     const float* d = dog.ptr<float>(r);

@@ -7,6 +7,7 @@
 #include "ctk/calib/pose_fit.hpp"
 #include "ctk/calib/sphere_profile_fit.hpp"
 #include "ctk/calib/sphere_matching.hpp"
+#include "ctk/geom/statistics.hpp"
 
 namespace ctk {
 
@@ -55,8 +56,7 @@ void recover_missed_spheres(const Image& image, const Prediction& p, double radi
                             std::vector<SphereMatch>& matches, const std::vector<SphereMatch>& dropped,
                             std::vector<SphereDetection>& measured, std::vector<SphereDetection>& detections) {
   if (strengths.empty()) return;
-  std::nth_element(strengths.begin(), strengths.begin() + static_cast<std::ptrdiff_t>(strengths.size() / 2), strengths.end());
-  const double typical = strengths[strengths.size() / 2];
+  const double typical = median_in_place(strengths);
   const std::size_t n = p.uv.size();
   std::vector<bool> taken(n, false), candidate(n);
   for (const auto& m : matches) taken[static_cast<std::size_t>(m.sphere)] = true;
@@ -149,9 +149,7 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   // residuals far beyond the rest: those beyond 3 robust deviations (at least 0.25 px) are dropped
   // and the pose refitted once.
   auto drop_outliers = [&](Attempt& a) {
-    std::vector<double> r = a.fit.residual_px;
-    std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
-    const double limit = std::max(0.25, 3 * 1.4826 * r[r.size() / 2]);
+    const double limit = std::max(0.25, 3 * 1.4826 * median(a.fit.residual_px));
     std::vector<SphereMatch> kept, dropped;
     for (std::size_t i = 0; i < a.matches.size(); ++i) (a.fit.residual_px[i] <= limit ? kept : dropped).push_back(a.matches[i]);
     if (!dropped.empty() && static_cast<int>(kept.size()) >= o.min_spheres) {

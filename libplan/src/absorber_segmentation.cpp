@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "ctk/geom/statistics.hpp"
+
 namespace ctk {
 
 bool SampleRegion::contains(const Eigen::Vector3d& p) const {
@@ -28,8 +30,7 @@ AbsorberSegmentation segment_absorbers(const Volume& x, const SegmentationOption
     s.note = "the holder's wall is not in the volume: no yardstick for absorbers";
     return s;
   }
-  std::nth_element(wall.begin(), wall.begin() + static_cast<std::ptrdiff_t>(wall.size() / 2), wall.end());
-  s.wall_level = wall[wall.size() / 2];
+  s.wall_level = median_in_place(wall);
   if (!(s.wall_level > 0)) {
     s.note = "the holder's wall is not reconstructed yet";
     return s;

@@ -3,13 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "ctk/geom/statistics.hpp"
+
 namespace ctk {
 
 double median_source_distance(const std::vector<ProjectionMatrix>& views) {
   std::vector<double> d;
   for (const auto& P : views) d.push_back(P.source_position().norm());
-  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
-  return d[d.size() / 2];
+  return median(std::move(d));
 }
 
 VolumeLayout default_volume_layout(const ScanDescription& scan, const std::vector<ProjectionMatrix>& views, double voxel_mm,
