@@ -31,6 +31,16 @@ void IncrementalReconstruction::add_view(const ProjectionMatrix& P, const Image&
                       ? Image{coarse_.cols, coarse_.rows, std::vector<float>(static_cast<std::size_t>(coarse_.cols) * static_cast<std::size_t>(coarse_.rows), 1.0f)}
                       : binned_image(weights, options_.binning);
   append_view(w_, w);
+  // The residual A x - b of the new view: its forward projection through the current volume (none
+  // is needed before the first update, when the volume is still zero).
+  ProjectionStack predicted(1, coarse_.rows, coarse_.cols);
+  if (updates_ > 0) projector_.forward(x_, {matrices_.back()}, predicted);
+  const float* b = b_.view(b_.views - 1);
+  for (std::size_t i = 0; i < predicted.data.size(); ++i) predicted.data[i] -= b[i];
+  residual_.views += 1;
+  residual_.rows = coarse_.rows;
+  residual_.cols = coarse_.cols;
+  residual_.data.insert(residual_.data.end(), predicted.data.begin(), predicted.data.end());
 }
 
 SolverReport IncrementalReconstruction::update() {
@@ -40,7 +50,8 @@ SolverReport IncrementalReconstruction::update() {
   o.tolerance = 0;
   o.lambda = options_.lambda;
   o.regulariser = Regulariser::gradient;
-  return solve_wls_cg(projector_, matrices_, b_, &w_, x_, o);
+  o.gradient_after_last = false;
+  return solve_wls_cg(projector_, matrices_, b_, &w_, x_, residual_, o);
 }
 
 }  // namespace ctk

@@ -23,17 +23,23 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
                           const ProjectionStack* weights, Volume& x, const WlsOptions& o,
                           const IterationCallback& on_iteration) {
-  if (weights && weights->data.size() != b.data.size())
-    throw std::invalid_argument("solve_wls_cg: weights and line integrals differ in size");
-  static const std::vector<float> unit;
-  const std::vector<float>& w = weights ? weights->data : unit;
-  auto start = std::chrono::steady_clock::now();
-
-  // residual = A x - b, kept up to date so the cost needs no extra projection.
   ProjectionStack residual(b.views, b.rows, b.cols);
   const bool cold = std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; });
   if (!cold) A.forward(x, views, residual);
   axpy(-1.0, b.data, residual.data);
+  return solve_wls_cg(A, views, b, weights, x, residual, o, on_iteration);
+}
+
+SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
+                          const ProjectionStack* weights, Volume& x, ProjectionStack& residual, const WlsOptions& o,
+                          const IterationCallback& on_iteration) {
+  if (weights && weights->data.size() != b.data.size())
+    throw std::invalid_argument("solve_wls_cg: weights and line integrals differ in size");
+  if (residual.data.size() != b.data.size())
+    throw std::invalid_argument("solve_wls_cg: the residual and the line integrals differ in size");
+  static const std::vector<float> unit;
+  const std::vector<float>& w = weights ? weights->data : unit;
+  auto start = std::chrono::steady_clock::now();
 
   ProjectionStack scratch(b.views, b.rows, b.cols);  // W r, then A d, then W A d
   Volume gradient(x.layout), direction(x.layout), H_direction(x.layout);
@@ -79,6 +85,10 @@ SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<Projection
     const double alpha = gg / alpha_denominator;
     axpy(alpha, direction.data, x.data);
     axpy(alpha, Ad.data, residual.data);
+    if (it == o.iterations && !o.gradient_after_last) {
+      report.iterations.push_back(log_point(it, std::sqrt(gg), g0));
+      break;
+    }
     detail::weighted_copy(Ad.data, w, scratch.data);
     A.back(scratch, views, H_direction);
     add_regulariser_normal(o.regulariser, o.lambda, direction, H_direction);

@@ -10,6 +10,7 @@
 #include "ctk/plan/direction_damage.hpp"
 #include "ctk/plan/incremental_reconstruction.hpp"
 #include "ctk/plan/view_planner.hpp"
+#include "ctk/proj/detector_binning.hpp"
 
 namespace ctk {
 namespace {
@@ -152,17 +153,39 @@ TEST(IncrementalReconstruction, EachUpdateContinuesWhereTheLastStopped) {
   o.iterations_per_update = 4;
   IncrementalReconstruction recon(truth.layout, detector, o);
   JosephProjector A;
-  for (int v = 0; v < 12; ++v) {
+  std::vector<ProjectionMatrix> coarse_views;
+  ProjectionStack coarse_b(0, 48, 48);
+  auto add = [&](int v) {
     const ProjectionMatrix P = virtual_view(Eigen::Vector3d(std::cos(0.5 * v), std::sin(0.5 * v), 0.3 * std::sin(v)), K, 1000);
     ProjectionStack y(1, detector.rows, detector.cols);
     A.forward(truth, {P}, y);
-    recon.add_view(P, Image{detector.cols, detector.rows, y.data}, Image{});
-  }
+    const Image image{detector.cols, detector.rows, y.data};
+    recon.add_view(P, image, Image{});
+    coarse_views.push_back(binned_matrix(P, 2));
+    const Image binned = binned_image(image, 2);
+    coarse_b.views += 1;
+    coarse_b.data.insert(coarse_b.data.end(), binned.pixels.begin(), binned.pixels.end());
+  };
+  for (int v = 0; v < 12; ++v) add(v);
   const SolverReport first = recon.update();
   const SolverReport second = recon.update();
   EXPECT_NEAR(second.iterations.front().cost, first.iterations.back().cost, 1e-6 * first.iterations.back().cost);
   EXPECT_LT(second.iterations.back().cost, 0.9 * first.iterations.back().cost);
   EXPECT_EQ(recon.coarse_detector().cols, 48);
+
+  // Views added after updates: the cost the next update starts from (from the residual it keeps)
+  // is the cost of the volume so far over all the views, found here by projecting it afresh.
+  for (int v = 12; v < 16; ++v) add(v);
+  const Volume before = recon.volume();
+  ProjectionStack Ax(coarse_b.views, 48, 48);
+  A.forward(before, coarse_views, Ax);
+  double data_term = 0;
+  for (std::size_t i = 0; i < Ax.data.size(); ++i) data_term += 0.5 * std::pow(double(Ax.data[i]) - coarse_b.data[i], 2);
+  const double cost = data_term + o.lambda * regulariser_value(Regulariser::gradient, before);
+  const SolverReport third = recon.update();
+  EXPECT_NEAR(third.iterations.front().cost, cost, 1e-4 * cost);
+  EXPECT_GT(third.iterations.front().cost, 1.5 * second.iterations.back().cost);  // the new views are not fitted yet
+  EXPECT_LT(third.iterations.back().cost, 0.9 * third.iterations.front().cost);
 }
 
 }  // namespace

@@ -194,6 +194,53 @@ TEST(WlsCg, TikhonovSolutionSatisfiesTheNormalEquations) {
   EXPECT_LT(std::sqrt(gnorm / scale), 1e-3);
 }
 
+TEST(WlsCg, AKeptResidualAndASkippedLastGradientChangeNothingInX) {
+  // 2 + 1 iterations twice: restarted from the volume alone (the residual found by projecting it),
+  // and with the residual handed over and no gradient after the last iteration. The volumes must
+  // agree, and the residual handed back must be A x - b.
+  const VolumeLayout layout = VolumeLayout::centred({12, 12, 12}, Eigen::Vector3d::Constant(2.0));
+  const Detector d{20, 20, 2.0, 2.0};
+  const Intrinsics K = Intrinsics::from_setup(1500, d, d.centre_px());
+  std::vector<ProjectionMatrix> views;
+  for (const auto& dir : random_directions(6, 4))
+    views.push_back(ProjectionMatrix::compose(K, make_rigid(rotation_looking_along(dir), Eigen::Vector3d(0, 0, 1000))));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<float> u(0.2f, 1.0f);
+  ProjectionStack b(6, 20, 20);
+  for (auto& v : b.data) v = u(rng);
+  const JosephProjector A;
+  WlsOptions o;
+  o.tolerance = 0;
+  o.lambda = 0.5;
+  Volume restarted(layout), handed_over(layout);
+  ProjectionStack residual = b;
+  for (auto& v : residual.data) v = -v;  // A 0 - b
+  o.iterations = 2;
+  solve_wls_cg(A, views, b, nullptr, restarted, o);
+  solve_wls_cg(A, views, b, nullptr, handed_over, residual, o);
+  o.iterations = 1;
+  solve_wls_cg(A, views, b, nullptr, restarted, o);
+  o.gradient_after_last = false;
+  const SolverReport last = solve_wls_cg(A, views, b, nullptr, handed_over, residual, o);
+  EXPECT_EQ(last.iterations.size(), 2u);
+  EXPECT_LT(last.iterations.back().cost, last.iterations.front().cost);
+
+  double diff = 0, norm = 0;
+  for (std::size_t i = 0; i < restarted.data.size(); ++i) {
+    diff += std::pow(double(restarted.data[i]) - handed_over.data[i], 2);
+    norm += std::pow(double(restarted.data[i]), 2);
+  }
+  EXPECT_LT(std::sqrt(diff / norm), 1e-5);
+  ProjectionStack Ax(6, 20, 20);
+  A.forward(handed_over, views, Ax);
+  double r_err = 0, r_norm = 0;
+  for (std::size_t i = 0; i < Ax.data.size(); ++i) {
+    r_err += std::pow(double(Ax.data[i]) - b.data[i] - residual.data[i], 2);
+    r_norm += std::pow(double(residual.data[i]), 2);
+  }
+  EXPECT_LT(std::sqrt(r_err / r_norm), 1e-5);
+}
+
 TEST(Sirt, ConvergesOnNoiseFreeData) {
   const SheppLoganScan& s = noise_free_scan();
   const JosephProjector A;

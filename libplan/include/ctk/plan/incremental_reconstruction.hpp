@@ -4,6 +4,8 @@
 // few weighted-least-squares CG iterations started from the previous volume (warm start): the
 // first update (after the scout) solves properly, each later one takes one more step, so a
 // planning step costs one forward and one back projection of the views so far, not a full solve.
+// The residual A x - b is kept between updates (each step updates it alongside x), so only a new
+// view needs projecting through the volume to start the next step.
 #include <vector>
 
 #include "ctk/proj/image_io.hpp"
@@ -37,7 +39,7 @@ class IncrementalReconstruction {
   Detector detector_, coarse_;
   JosephProjector projector_;
   std::vector<ProjectionMatrix> matrices_;
-  ProjectionStack b_, w_;
+  ProjectionStack b_, w_, residual_;  // residual_ = A x_ - b_, kept up to date
   Volume x_;
   int updates_ = 0;
 };

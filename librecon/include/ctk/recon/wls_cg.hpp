@@ -18,12 +18,22 @@ struct WlsOptions {
   double tolerance = 1e-4;
   double lambda = 0;
   Regulariser regulariser = Regulariser::identity;
+  /// false: the gradient after the last iteration is not computed (one back projection less; the
+  /// last log entry then repeats the previous relative gradient). For callers that only want x.
+  bool gradient_after_last = true;
 };
 
 /// `x` is the starting point (zeros for a cold start) and receives the result. `weights` may be
 /// null (unit weights); otherwise the same shape as `b`.
 SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views,
                           const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
+                          const WlsOptions& options, const IterationCallback& on_iteration = {});
+
+/// The same for a caller that keeps the residual A x - b between calls (an incremental
+/// reconstruction that adds views): `residual` holds it on entry and on return, so the start
+/// costs no forward projection.
+SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views,
+                          const ProjectionStack& b, const ProjectionStack* weights, Volume& x, ProjectionStack& residual,
                           const WlsOptions& options, const IterationCallback& on_iteration = {});
 
 }  // namespace ctk
