@@ -155,19 +155,35 @@ TEST(WlsCg, StatisticalWeightsBeatUnitWeightsAndTikhonovLowersNoise) {
   EXPECT_LT(noise(tikhonov), 0.9 * noise(wls));
 }
 
-TEST(WlsCg, TikhonovSolutionSatisfiesTheNormalEquations) {
-  // Small problem, many iterations: the gradient (A'WA + lambda I) x - A'W b must vanish.
-  const VolumeLayout layout = VolumeLayout::centred({12, 12, 12}, Eigen::Vector3d::Constant(2.0));
+// A 12^3 volume of 2 mm voxels seen by `count` random views of 20 x 20 pixels, with random data
+// and weights in [0.2, 1].
+struct SmallProblem {
+  VolumeLayout layout = VolumeLayout::centred({12, 12, 12}, Eigen::Vector3d::Constant(2.0));
+  std::vector<ProjectionMatrix> views;
+  ProjectionStack b, w;
+};
+
+SmallProblem small_random_problem(int count, std::uint64_t direction_seed, std::uint64_t value_seed) {
+  SmallProblem p;
   const Detector d{20, 20, 2.0, 2.0};
   const Intrinsics K = Intrinsics::from_setup(1500, d, d.centre_px());
-  std::vector<ProjectionMatrix> views;
-  for (const auto& dir : random_directions(15, 9))
-    views.push_back(ProjectionMatrix::compose(K, make_rigid(rotation_looking_along(dir), Eigen::Vector3d(0, 0, 1000))));
-  std::mt19937_64 rng(2);
+  for (const auto& dir : random_directions(count, direction_seed))
+    p.views.push_back(ProjectionMatrix::compose(K, make_rigid(rotation_looking_along(dir), Eigen::Vector3d(0, 0, 1000))));
+  std::mt19937_64 rng(value_seed);
   std::uniform_real_distribution<float> u(0.2f, 1.0f);
-  ProjectionStack b(15, 20, 20), w(15, 20, 20);
-  for (auto& v : b.data) v = u(rng);
-  for (auto& v : w.data) v = u(rng);
+  p.b = ProjectionStack(count, 20, 20);
+  p.w = ProjectionStack(count, 20, 20);
+  for (auto& v : p.b.data) v = u(rng);
+  for (auto& v : p.w.data) v = u(rng);
+  return p;
+}
+
+TEST(WlsCg, TikhonovSolutionSatisfiesTheNormalEquations) {
+  // Small problem, many iterations: the gradient (A'WA + lambda I) x - A'W b must vanish.
+  const SmallProblem p = small_random_problem(15, 9, 2);
+  const VolumeLayout& layout = p.layout;
+  const std::vector<ProjectionMatrix>& views = p.views;
+  const ProjectionStack &b = p.b, &w = p.w;
   const JosephProjector A;
   Volume x(layout);
   WlsOptions o;
@@ -198,16 +214,10 @@ TEST(WlsCg, AKeptResidualAndASkippedLastGradientChangeNothingInX) {
   // 2 + 1 iterations twice: restarted from the volume alone (the residual found by projecting it),
   // and with the residual handed over and no gradient after the last iteration. The volumes must
   // agree, and the residual handed back must be A x - b.
-  const VolumeLayout layout = VolumeLayout::centred({12, 12, 12}, Eigen::Vector3d::Constant(2.0));
-  const Detector d{20, 20, 2.0, 2.0};
-  const Intrinsics K = Intrinsics::from_setup(1500, d, d.centre_px());
-  std::vector<ProjectionMatrix> views;
-  for (const auto& dir : random_directions(6, 4))
-    views.push_back(ProjectionMatrix::compose(K, make_rigid(rotation_looking_along(dir), Eigen::Vector3d(0, 0, 1000))));
-  std::mt19937_64 rng(5);
-  std::uniform_real_distribution<float> u(0.2f, 1.0f);
-  ProjectionStack b(6, 20, 20);
-  for (auto& v : b.data) v = u(rng);
+  const SmallProblem p = small_random_problem(6, 4, 5);
+  const VolumeLayout& layout = p.layout;
+  const std::vector<ProjectionMatrix>& views = p.views;
+  const ProjectionStack& b = p.b;
   const JosephProjector A;
   WlsOptions o;
   o.tolerance = 0;
