@@ -355,7 +355,7 @@ void register_plan(CLI::App& app) {
   cmd->add_option("--coarse-size", o->coarse_size, "Voxels per axis of the planner's volume")->check(CLI::Range(8, 1024))->capture_default_str();
   cmd->add_option("--coarse-voxel", o->coarse_voxel_mm, "Voxel size of the planner's volume (mm)")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--binning", o->binning, "Detector binning of the planner's reconstruction")->check(CLI::Range(1, 64))->capture_default_str();
-  cmd->add_flag("--compare", o->compare, "Simulation mode: also acquire and reconstruct the whole-sphere and a random trajectory of the same size");
+  cmd->add_flag("--compare", o->compare, "Simulation mode: also acquire and reconstruct the whole-sphere and random trajectories of the same size");
   cmd->add_option("--random-draws", o->random_draws, "With --compare: random trajectories to compare with (random/, random-2/ ...), summarised by mean and range")
       ->check(CLI::Range(1, 100))->capture_default_str();
   cmd->add_option("--eval-size", o->eval_size, "Voxels per axis of a cube for the comparison reconstructions (0: a volume holding the holder and the sample)")->check(CLI::Range(0, 2048))->capture_default_str();
