@@ -32,6 +32,7 @@ TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
   o.reconstruction.binning = 2;
   o.planner.planned_views = 28;
   o.planner.seed = 2;
+  o.planner.damage_exponent = 2.0;  // strong enough to show over 16 draws (the default, 0.5, is milder)
   const PlanningResult r = plan_trajectory(acquisition, setup, o);
   ASSERT_EQ(r.acquired(), 28);
   EXPECT_GT(r.segmentation.voxels, 200u) << r.segmentation.note;

@@ -89,6 +89,7 @@ std::vector<Eigen::Vector3d> draw(ViewPlanner& planner, int count) {
 
 TEST(ViewPlanner, AvoidsThePlatePlaneStaysSpreadAndIsReproducible) {
   PlannerOptions o;
+  o.damage_exponent = 2.0;  // the mechanism at a strength that shows over 40 draws (the default is milder)
   o.planned_views = 60;
   o.seed = 5;
   ViewPlanner a(o);
