@@ -214,6 +214,7 @@ void acquire_others(const PlanCommandOptions& o, const ScanSimulation& simulatio
 // One random trajectory is a lottery (on sample 2, six draws of 100 views ranged from 0.00199 to
 // 0.00223 in RMSE), so with several draws the planned one is also set against their spread: each
 // figure's mean, least and greatest, and how many draws did better than the planned trajectory.
+// `compared` holds the planned trajectory, the whole sphere, then the random draws.
 nlohmann::json random_draw_summary(const std::vector<ComparedTrajectory>& compared) {
   nlohmann::json summary = {{"count", compared.size() - 2}};
   const TrajectoryQuality& planned = compared.front().quality;

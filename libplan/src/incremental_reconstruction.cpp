@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <utility>
 
 #include "ctk/proj/detector_binning.hpp"
 
@@ -37,10 +38,7 @@ void IncrementalReconstruction::add_view(const ProjectionMatrix& P, const Image&
   if (updates_ > 0) projector_.forward(x_, {matrices_.back()}, predicted);
   const float* b = b_.view(b_.views - 1);
   for (std::size_t i = 0; i < predicted.data.size(); ++i) predicted.data[i] -= b[i];
-  residual_.views += 1;
-  residual_.rows = coarse_.rows;
-  residual_.cols = coarse_.cols;
-  residual_.data.insert(residual_.data.end(), predicted.data.begin(), predicted.data.end());
+  append_view(residual_, Image{coarse_.cols, coarse_.rows, std::move(predicted.data)});
 }
 
 SolverReport IncrementalReconstruction::update() {
