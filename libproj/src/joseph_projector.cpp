@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <type_traits>
 
 #include "ray_table.hpp"
 
@@ -21,28 +22,61 @@ int JosephProjector::threads() const { return options_.threads > 0 ? options_.th
 std::string JosephProjector::simd_target() { return detail::simd_target_name(); }
 int JosephProjector::simd_lanes() { return detail::simd_float_lanes(); }
 
+namespace {
+
+// Each view's lane path, and how many tables of `rows_per_block` lines it takes.
+struct ViewPaths {
+  std::vector<detail::LanePath> path;
+  std::vector<int> blocks;
+  int most_blocks = 0;
+  int most_lanes = 0;
+  ViewPaths(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout, int cols, int rows,
+            int rows_per_block) {
+    for (const auto& P : views) {
+      path.push_back(detail::LanePath::for_view(view_rays(P, layout), layout, cols, rows));
+      blocks.push_back((path.back().lines + rows_per_block - 1) / rows_per_block);
+      most_blocks = std::max(most_blocks, blocks.back());
+      most_lanes = std::max(most_lanes, path.back().majors);
+    }
+  }
+};
+
+// The detector pixel of table entry (row, lane) of lines from line_begin, or null outside it.
+template <typename Stack, typename Value = std::conditional_t<std::is_const_v<Stack>, const float, float>>
+Value* pixel_of(Stack& y, int v, const detail::LanePath& path, int line, int lane) {
+  if (!path.inside(line, lane)) return nullptr;
+  int u, row;
+  path.pixel(line, lane, u, row);
+  return y.view(v) + static_cast<std::size_t>(row) * static_cast<std::size_t>(y.cols) + static_cast<std::size_t>(u);
+}
+
+}  // namespace
+
 void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatrix>& views, ProjectionStack& y) const {
   check_stack_matches_views(y, views.size());
-  const int rows_per_block = std::min(options_.rows_per_block, y.rows);
-  const int blocks = (y.rows + rows_per_block - 1) / rows_per_block;
-  const int items = y.views * blocks;
+  const int rows_per_block = options_.rows_per_block;
+  const ViewPaths paths(views, x.layout, y.cols, y.rows, rows_per_block);
+  const int items = y.views * paths.most_blocks;
 #pragma omp parallel num_threads(threads())
   {
     detail::RayTable table;
-    table.shape(1, rows_per_block, y.cols);
+    table.shape(1, rows_per_block, paths.most_lanes);
     std::vector<float> out(table.pb_mid.size());
 #pragma omp for schedule(dynamic, 1)
     for (int item = 0; item < items; ++item) {
       // Views vary fastest: the same detector rows of neighbouring views see nearly the same
       // band of the volume, which then stays in cache.
-      const int v = item % y.views, row_begin = (item / y.views) * rows_per_block;
-      table.rows = std::min(rows_per_block, y.rows - row_begin);
-      table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, 0, row_begin, y.cols, 0,
-                 table.rows * y.cols);
+      const int v = item % y.views, block = item / y.views;
+      const auto& path = paths.path[static_cast<std::size_t>(v)];
+      if (block >= paths.blocks[static_cast<std::size_t>(v)]) continue;
+      const int line_begin = block * rows_per_block;
+      table.rows = std::min(rows_per_block, path.lines - line_begin);
+      table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, 0, path, line_begin, 0,
+                 table.rows * table.row_stride);
       detail::forward_rays(table, x.data.data(), out.data());
       for (int row = 0; row < table.rows; ++row)
-        std::copy_n(out.begin() + static_cast<std::ptrdiff_t>(table.entry(0, row, 0)), y.cols,
-                    y.view(v) + static_cast<std::size_t>(row_begin + row) * static_cast<std::size_t>(y.cols));
+        for (int lane = 0; lane < path.majors; ++lane)
+          if (float* pixel = pixel_of(y, v, path, line_begin + row, lane)) *pixel = out[table.entry(0, row, lane)];
     }
   }
 }
@@ -51,37 +85,45 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
   check_stack_matches_views(y, views.size());
   std::fill(x.data.begin(), x.data.end(), 0.0f);
   if (y.views == 0) return;
-  const int rows_per_block = std::min(options_.rows_per_block, y.rows);
-  const int blocks = (y.rows + rows_per_block - 1) / rows_per_block;
+  const int rows_per_block = options_.rows_per_block;
+  const ViewPaths paths(views, x.layout, y.cols, y.rows, rows_per_block);
   const int n_threads = threads();
   // Several views share one table, so the threads meet at a barrier once per batch rather than
   // once per view (barriers dominate small problems, and cost dearly when cores are shared).
-  const int per_view = rows_per_block * ((y.cols + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes);
+  const int per_view = rows_per_block * ((paths.most_lanes + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes);
   const int batch = std::clamp(kBackTableRays / per_view, 1, y.views);
   detail::RayTable table;  // shared: filled together, then read by every slab task
-  table.shape(batch, rows_per_block, y.cols);
+  table.shape(batch, rows_per_block, paths.most_lanes);
   table.bundles.resize(detail::bundle_count(table));
 #pragma omp parallel num_threads(n_threads)
   {
     // Views innermost, as in forward(): a band of the volume stays in cache across views.
-    for (int block = 0; block < blocks; ++block) {
-      const int row_begin = block * rows_per_block;
-      const int rows = std::min(rows_per_block, y.rows - row_begin);
-      const int count = rows * y.cols;
+    for (int block = 0; block < paths.most_blocks; ++block) {
+      const int line_begin = block * rows_per_block;
+      const int count = rows_per_block * table.row_stride;
       const int chunk = (count + n_threads - 1) / n_threads;
       for (int v0 = 0; v0 < y.views; v0 += batch) {
         const int in_batch = std::min(batch, y.views - v0);
 #pragma omp for schedule(static)
         for (int task = 0; task < in_batch * n_threads; ++task) {
           const int slot = task / n_threads, part = task % n_threads, v = v0 + slot;
+          const auto& path = paths.path[static_cast<std::size_t>(v)];
+          // Lines past this view's last are empty rows of the shared table.
+          const int rows = std::clamp(path.lines - line_begin, 0, rows_per_block);
           const int begin = std::min(count, part * chunk), end = std::min(count, begin + chunk);
-          table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, slot, row_begin, y.cols, begin,
-                     end);
-          const float* values = y.view(v) + static_cast<std::size_t>(row_begin) * static_cast<std::size_t>(y.cols);
-          for (int r = begin; r < end; ++r) table.value[table.entry(slot, r / y.cols, r % y.cols)] = values[r];
+          const std::size_t first = table.entry(slot, 0, 0);
+          const int filled = std::min(end, rows * table.row_stride);
+          table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, slot, path, line_begin, begin,
+                     std::max(begin, filled));
+          if (filled < end) table.empty(first + static_cast<std::size_t>(std::max(begin, filled)), first + static_cast<std::size_t>(end));
+          for (int r = begin; r < filled; ++r) {
+            const int row = r / table.row_stride, lane = r % table.row_stride;
+            const float* pixel = pixel_of(y, v, path, line_begin + row, lane);
+            table.value[first + static_cast<std::size_t>(r)] = pixel ? *pixel : 0.0f;
+          }
           if (task == 0) {
             table.views = in_batch;
-            table.rows = rows;
+            table.rows = rows_per_block;
           }
         }
         // Each bundle once for every slab task that marches it.

@@ -4,10 +4,37 @@
 
 namespace ctk::detail {
 
-void RayTable::shape(int view_count, int row_count, int cols) {
+LanePath LanePath::for_view(const ViewRays& rays, const VolumeLayout& layout, int cols, int rows) {
+  // At the central ray, the sample's c in a slice is c = s_c + (k - s_a) d_c / d_a; a pixel step
+  // (du, dv) changes d_c / d_a in proportion to g = (du_c d_a - d_c du_a, dv_c d_a - d_c dv_a).
+  // Lanes step across g.
+  const double uc = 0.5 * (cols - 1), vc = 0.5 * (rows - 1);
+  const Eigen::Vector3d d = rays.d0 + uc * rays.du + vc * rays.dv;
+  const MarchedRay centre = march_ray(rays, layout, uc, vc);
+  const int a = centre.axis, c = other_axes(a)[1];
+  const double gu = rays.du[c] * d[a] - d[c] * rays.du[a], gv = rays.dv[c] * d[a] - d[c] * rays.dv[a];
+  LanePath p;
+  p.along_u = std::abs(gv) >= std::abs(gu);  // the step (gv, -gu) is mostly along u
+  p.slope = p.along_u ? (gv != 0 ? -gu / gv : 0.0) : -gv / gu;
+  p.majors = p.along_u ? cols : rows;
+  p.minors = p.along_u ? rows : cols;
+  const int end = static_cast<int>(std::floor((p.majors - 1) * p.slope + 0.5));
+  const int lo = std::min(0, end), hi = std::max(0, end);
+  p.line_first = -hi;
+  p.lines = p.minors + hi - lo;
+  return p;
+}
+
+bool LanePath::meets_detector(int line, int lane, int count) const {
+  for (int l = lane; l < lane + count; ++l)
+    if (inside(line, l)) return true;
+  return false;
+}
+
+void RayTable::shape(int view_count, int row_count, int lanes) {
   views = view_count;
   rows = row_count;
-  row_stride = (cols + kMaxLanes - 1) / kMaxLanes * kMaxLanes;
+  row_stride = (lanes + kMaxLanes - 1) / kMaxLanes * kMaxLanes;
   view_stride = rows * row_stride;
   const auto n = static_cast<std::size_t>(views) * static_cast<std::size_t>(view_stride);
   for (auto* v : {&pb_mid, &beta_b, &pc_mid, &beta_c, &weight, &k_mid, &value}) v->assign(n, 0.0f);
@@ -15,13 +42,22 @@ void RayTable::shape(int view_count, int row_count, int cols) {
   empty(0, n);
 }
 
-void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int slot, int row_begin, int cols, int ray_begin,
-                    int ray_end) {
+void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int slot, const LanePath& path, int line_begin,
+                    int ray_begin, int ray_end) {
   const auto strides = layout.strides();
+  bool meets = false;
   for (int r = ray_begin; r < ray_end; ++r) {
-    const int row = r / cols, col = r % cols;
-    const std::size_t i = entry(slot, row, col);
-    const MarchedRay m = march_ray(rays, layout, col, row_begin + row);
+    const int row = r / row_stride, lane = r % row_stride;
+    const std::size_t i = entry(slot, row, lane);
+    if (lane % kMaxLanes == 0 || r == ray_begin)
+      meets = path.meets_detector(line_begin + row, lane - lane % kMaxLanes, kMaxLanes);
+    if (!meets) {
+      empty(i, i + 1);
+      continue;
+    }
+    int u, v;
+    path.pixel(line_begin + row, lane, u, v);
+    const MarchedRay m = march_ray(rays, layout, u, v);
     const auto [b, c] = other_axes(m.axis);
     pb_mid[i] = static_cast<float>(m.pb_mid);
     beta_b[i] = static_cast<float>(m.beta_b);
@@ -37,7 +73,6 @@ void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int slot, 
     stride_c[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(c)]);
     n_b[i] = layout.size[static_cast<std::size_t>(b)];
     n_c[i] = layout.size[static_cast<std::size_t>(c)];
-    if (col == cols - 1) empty(i + 1, entry(slot, row + 1, 0));
   }
 }
 

@@ -4,6 +4,7 @@
 // padded to a multiple of kMaxLanes, so a SIMD bundle never straddles two rows and the bundles
 // of one column strip in consecutive rows march through neighbouring voxels. Both fast kernels
 // read the same table.
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -23,10 +24,40 @@ struct Bundle {
   int axis = -2;              // the dominant axis every lane shares; -2 when they differ
 };
 
+// How one view's detector pixels are dealt out to table rows, so that a bundle's rays stay in
+// one row of every slice. Lanes step along the major detector axis (u or v) and, in a staircase,
+// `slope` minor pixels per lane: the detector direction along which a ray's sample moves along
+// the other axis b only (the contiguous one, in the volume or in a tile) of the view's dominant
+// axis. Lane l of line j is the pixel (major l, minor j + round(l slope)); the lines partition the
+// detector. Pixels the staircase puts outside the detector still get their rays (the bundle
+// stays whole), but are never read or written.
+struct LanePath {
+  bool along_u = true;            // the major axis is u (columns)
+  double slope = 0;               // minor pixels per lane, |slope| <= 1
+  int majors = 1, minors = 1;     // detector pixels along the major and the minor axis
+  int line_first = 0, lines = 1;  // line numbers in use
+
+  /// The path for a view of cols x rows pixels, chosen at the detector's centre.
+  static LanePath for_view(const ViewRays& rays, const VolumeLayout& layout, int cols, int rows);
+  int minor(int line, int lane) const { return line_first + line + static_cast<int>(std::floor(lane * slope + 0.5)); }
+  /// Pixel (u, v) of lane `lane` of line `line` (0 = the first line), inside the detector or not.
+  void pixel(int line, int lane, int& u, int& v) const {
+    const int m = minor(line, lane);
+    u = along_u ? lane : m;
+    v = along_u ? m : lane;
+  }
+  bool inside(int line, int lane) const {
+    const int m = minor(line, lane);
+    return lane >= 0 && lane < majors && m >= 0 && m < minors;
+  }
+  /// Whether any of lanes [lane, lane + count) of the line is inside the detector.
+  bool meets_detector(int line, int lane, int count) const;
+};
+
 struct RayTable {
   int views = 0;        // views in use, each at slot * view_stride
   int rows = 0;         // detector rows in use per view
-  int row_stride = 0;   // entries per row: the columns rounded up to kMaxLanes, the rest empty
+  int row_stride = 0;   // entries per row: the lanes rounded up to kMaxLanes
   int view_stride = 0;  // entries per view: the row capacity times row_stride
   std::vector<float> pb_mid, beta_b, pc_mid, beta_c, weight, k_mid, value;
   std::vector<std::int32_t> k_first, k_last, axis, stride_a, stride_b, stride_c, n_b, n_c;
@@ -39,17 +70,17 @@ struct RayTable {
   /// that many slab tasks read (back projection): found once, not once per slab.
   std::vector<Bundle> bundles;
 
-  /// Room for `views` views of `rows` rows of `cols` columns; views and rows in use are set to that.
-  void shape(int views, int rows, int cols);
+  /// Room for `views` views of `rows` rows of `lanes` lanes; views and rows in use are set to that.
+  void shape(int views, int rows, int lanes);
   std::size_t entry(int slot, int row, int col) const {
     return static_cast<std::size_t>(slot) * static_cast<std::size_t>(view_stride) +
            static_cast<std::size_t>(row) * static_cast<std::size_t>(row_stride) + static_cast<std::size_t>(col);
   }
-  /// The rays of one view in slot `slot`, numbered r = row * cols + col from pixel (0, row_begin);
-  /// fills r in [ray_begin, ray_end) only (and the padding of each row it completes), so threads
-  /// can fill one table together.
-  void fill(const ViewRays& rays, const VolumeLayout& layout, int slot, int row_begin, int cols, int ray_begin,
-            int ray_end);
+  /// The rays of lines [line_begin, line_begin + rows) of one view in slot `slot`, numbered
+  /// r = row * row_stride + lane; fills r in [ray_begin, ray_end) only, so threads can fill one
+  /// table together. Bundles with no pixel on the detector are left empty.
+  void fill(const ViewRays& rays, const VolumeLayout& layout, int slot, const LanePath& path, int line_begin,
+            int ray_begin, int ray_end);
   /// Marks entries [begin, end) empty: they touch nothing and project to zero.
   void empty(std::size_t begin, std::size_t end);
   /// Copies `n` entries of `from`, starting at `from_entry`, to this table at `to_entry`.
