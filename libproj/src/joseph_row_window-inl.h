@@ -37,18 +37,19 @@ HWY_INLINE hn::Vec<DF> lookup_window(DF df, hn::Vec<DF> lo, hn::Vec<DF> hi, hn::
 }
 
 // Where a window bundle's lanes sit in slice k: the first voxel x0 of the 2N-voxel window along
-// b (kept inside the row) and the lower row c0. Lanes are monotone along a detector row, so the
-// ends decide; the kernels then check every lane against the window.
+// b (kept inside the row) and the lowest row c0. Lanes step along b (LanePath), so the ends
+// decide x0; along c a staircase of lanes spreads over a row or two, so all lanes decide c0.
+// The kernels then check every lane against the window.
 template <class DF>
 HWY_INLINE void window_origin(DF df, const SamplePosition<DF>& p, int n_b, int& x0, int& c0) {
   const auto last = hn::Lanes(df) - 1;
   const int N = static_cast<int>(hn::Lanes(df));
   x0 = std::min(std::max(std::min(hn::GetLane(p.ib), hn::ExtractLane(p.ib, last)), 0), n_b - 2 * N);
-  c0 = std::min(hn::GetLane(p.ic), hn::ExtractLane(p.ic, last));
+  c0 = hn::GetLane(hn::MinOfLanes(hn::RebindToSigned<DF>(), p.ic));
 }
 
 // The interior sample of a window bundle (Bundle::window) without gathers, when its lanes fall in
-// a window of 2N voxels along b and at most two neighbouring values of c: the slice's rows
+// a window of 2N voxels along b and at most three neighbouring values of c: the slice's rows
 // there are loaded whole and each lane picks its corners by permutes. False (and `sample`
 // untouched) when the lanes spread wider; the caller then gathers.
 template <class DF>
@@ -66,10 +67,10 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
   const auto pos = hn::Sub(p.ib, hn::Set(di, x0)), pos1 = hn::Add(pos, hn::Set(di, 1));
   const auto dc = hn::Sub(p.ic, hn::Set(di, c0));
   const auto limit = hn::Set(di, 2 * N);
-  const auto zero = hn::Zero(di), one = hn::Set(di, 1);
-  const auto upper = hn::Eq(dc, one);  // lanes whose corner c sits one row up
+  const auto upper = hn::Gt(dc, hn::Zero(di));      // lanes whose corner c sits a row up or two
+  const auto top = hn::Eq(dc, hn::Set(di, 2));       // two rows up
   if (!hn::AllTrue(di, hn::And(hn::Gt(pos, hn::Set(di, -1)), hn::Lt(pos1, limit))) ||
-      !hn::AllTrue(di, hn::Or(hn::Eq(dc, zero), upper)))
+      !hn::AllTrue(di, hn::Lt(dc, hn::Set(di, 3))))
     return false;
   const std::ptrdiff_t sc = t.stride_c[r];
   const float* row = volume + static_cast<std::ptrdiff_t>(k - t.origin_a) * t.stride_a[r] + static_cast<std::ptrdiff_t>(c0) * sc + x0;
@@ -77,13 +78,22 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
   const auto r1lo = hn::LoadU(df, row + sc), r1hi = hn::LoadU(df, row + sc + N);
   auto c00 = lookup_window(df, r0lo, r0hi, pos), c10 = lookup_window(df, r0lo, r0hi, pos1);
   auto c01 = lookup_window(df, r1lo, r1hi, pos), c11 = lookup_window(df, r1lo, r1hi, pos1);
-  if (!hn::AllFalse(di, upper)) {  // some lanes one row up: shift them by a row
+  if (!hn::AllFalse(di, upper)) {  // some lanes a row up: shift them by a row
     const auto up = hn::RebindMask(df, upper);
     const auto r2lo = hn::LoadU(df, row + 2 * sc), r2hi = hn::LoadU(df, row + 2 * sc + N);
+    const auto c02 = lookup_window(df, r2lo, r2hi, pos), c12 = lookup_window(df, r2lo, r2hi, pos1);
     c00 = hn::IfThenElse(up, c01, c00);
     c10 = hn::IfThenElse(up, c11, c10);
-    c01 = hn::IfThenElse(up, lookup_window(df, r2lo, r2hi, pos), c01);
-    c11 = hn::IfThenElse(up, lookup_window(df, r2lo, r2hi, pos1), c11);
+    c01 = hn::IfThenElse(up, c02, c01);
+    c11 = hn::IfThenElse(up, c12, c11);
+    if (!hn::AllFalse(di, top)) {  // and some two rows up: shift those by one more
+      const auto up2 = hn::RebindMask(df, top);
+      const auto r3lo = hn::LoadU(df, row + 3 * sc), r3hi = hn::LoadU(df, row + 3 * sc + N);
+      c00 = hn::IfThenElse(up2, c02, c00);
+      c10 = hn::IfThenElse(up2, c12, c10);
+      c01 = hn::IfThenElse(up2, lookup_window(df, r3lo, r3hi, pos), c01);
+      c11 = hn::IfThenElse(up2, lookup_window(df, r3lo, r3hi, pos1), c11);
+    }
   }
   hn::Vec<DF> weight[4];
   bilinear_weights(p, weight);
@@ -95,7 +105,7 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
 #if HWY_TARGET <= HWY_AVX3
 // The adjoint of interpolate_window for 16 lanes, without a scatter: each lane's four corner
 // weights times `value` are placed at their voxels of a window of 32 voxels along b (expand
-// puts lane after lane at the set bits of a mask), in the slice's rows c0 .. c0 + 2, which are
+// puts lane after lane at the set bits of a mask), in the slice's rows c0 .. c0 + 3, which are
 // then updated whole. Lanes on the same voxel (rays closer than a voxel) are first summed
 // into one. False (and nothing written) when the lanes spread wider, or three share a voxel.
 HWY_INLINE bool scatter_window(const RayTable& t, float* HWY_RESTRICT volume, std::size_t r, int k,
@@ -116,11 +126,11 @@ HWY_INLINE bool scatter_window(const RayTable& t, float* HWY_RESTRICT volume, st
     for (auto& v : w) v = hn::Reverse(df, hn::Vec<decltype(df)>{v}).raw;
   }
   const __m512i P = pos.raw, C = dc.raw;
-  // Every lane inside the window (with its b + 1 corner) and on row c0 or c0 + 1; b never
+  // Every lane inside the window (with its b + 1 corner) and on rows c0 to c0 + 2; b never
   // decreasing from lane to lane.
   const __mmask16 inside = _mm512_cmpge_epi32_mask(P, _mm512_setzero_si512()) &
                            _mm512_cmplt_epi32_mask(P, _mm512_set1_epi32(2 * N - 1)) &
-                           _mm512_cmpge_epi32_mask(C, _mm512_setzero_si512()) & _mm512_cmple_epi32_mask(C, _mm512_set1_epi32(1));
+                           _mm512_cmpge_epi32_mask(C, _mm512_setzero_si512()) & _mm512_cmple_epi32_mask(C, _mm512_set1_epi32(2));
   const __m512i P_next = _mm512_alignr_epi32(P, P, 1);  // lane l holds P[l + 1] (l < N - 1)
   if (inside != 0xFFFF || (_mm512_cmpge_epi32_mask(P_next, P) & 0x7FFF) != 0x7FFF) return false;
   // A lane on the same voxel as the lane before it takes that lane's weights; that lane is dropped.
@@ -136,11 +146,10 @@ HWY_INLINE bool scatter_window(const RayTable& t, float* HWY_RESTRICT volume, st
   // permutes: one compress and two expands per row pair instead of per corner (each costs
   // about five cycles on Zen 5, a permute about two).
   const __m512i lane_number = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const __mmask16 upper = _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(1));
   const std::ptrdiff_t sc = t.stride_c[r];
   float* base = volume + static_cast<std::ptrdiff_t>(k - t.origin_a) * t.stride_a[r] + static_cast<std::ptrdiff_t>(c0) * sc + x0;
-  for (int layer = 0; layer < 2; ++layer) {  // lanes whose corner c is row c0, then c0 + 1
-    const auto lanes = static_cast<__mmask16>(keep & (layer == 0 ? ~upper : upper));
+  for (int layer = 0; layer < 3; ++layer) {  // lanes whose corner c is row c0, c0 + 1, c0 + 2
+    const auto lanes = static_cast<__mmask16>(keep & _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(layer)));
     if (lanes == 0) continue;
     const auto bits = static_cast<std::uint32_t>(
         _mm512_reduce_or_epi32(_mm512_maskz_sllv_epi32(lanes, _mm512_set1_epi32(1), P)));

@@ -104,11 +104,14 @@ HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k
   const VI ob0 = hn::Mul(hn::Min(hn::Max(ib, zero), nb1), sb), ob1 = hn::Mul(hn::Min(hn::Max(ib1, zero), nb1), sb);
   const VI oc0 = hn::Mul(hn::Min(hn::Max(ic, zero), nc1), sc), oc1 = hn::Mul(hn::Min(hn::Max(ic1, zero), nc1), sc);
 
+  // Lanes out of their range read voxel 0 (slice k may lie outside the volume for a lane of
+  // another axis); their weights are zero.
+  const auto active_i = hn::RebindMask(di, active);
   Corners<DF> out;
-  out.index[0] = hn::Add(base, hn::Add(ob0, oc0));
-  out.index[1] = hn::Add(base, hn::Add(ob1, oc0));
-  out.index[2] = hn::Add(base, hn::Add(ob0, oc1));
-  out.index[3] = hn::Add(base, hn::Add(ob1, oc1));
+  out.index[0] = hn::IfThenElseZero(active_i, hn::Add(base, hn::Add(ob0, oc0)));
+  out.index[1] = hn::IfThenElseZero(active_i, hn::Add(base, hn::Add(ob1, oc0)));
+  out.index[2] = hn::IfThenElseZero(active_i, hn::Add(base, hn::Add(ob0, oc1)));
+  out.index[3] = hn::IfThenElseZero(active_i, hn::Add(base, hn::Add(ob1, oc1)));
   bilinear_weights(p, out.weight);
   out.weight[0] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc0)), out.weight[0]);
   out.weight[1] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc0)), out.weight[1]);
