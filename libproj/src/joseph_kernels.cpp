@@ -59,10 +59,11 @@ HWY_INLINE void march_back(DF df, const RayTable& t, const Bundle& b, hn::Vec<DF
   }
 }
 
-// One column strip's bundles along x, and how each is marched through a tile or (where the
-// tile would be too large) through the volume.
+// One strip's bundles along x (kStripColumns neighbouring columns of every row of the table),
+// and how each is marched through a tile or (where the tile would be too large) through the
+// volume.
 struct XStrip {
-  static constexpr int kMaxBundles = 64;
+  static constexpr int kMaxBundles = 128;
   int count = 0;
   std::size_t entries[kMaxBundles];  // in the table
   Bundle tile[kMaxBundles];          // the same bundles in `local`, addressing the tile
@@ -109,7 +110,7 @@ struct StripWorkspace {
   RayTable local;
   std::vector<float> tile_data;
   void reserve(int rows, int lanes) {
-    local.shape(1, std::min(rows, XStrip::kMaxBundles), lanes);
+    local.shape(1, std::min(rows * kStripColumns, XStrip::kMaxBundles), lanes);
     tile_data.resize(static_cast<std::size_t>(kTileSlices * kTileMaxHeight * kTileMaxWidth));
   }
 };
@@ -210,20 +211,21 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
   });
 }
 
-// Every bundle of the table, column strip by column strip: with `tiles`, the bundles along x of
+// Every bundle of the table, strip by strip: with `tiles`, the bundles along x of
 // a strip are collected in w.strip and handed to `strip` together; the others go to `one`.
 template <class One, class Strip>
 HWY_INLINE void for_each_bundle(const RayTable& t, int lanes, bool tiles, StripWorkspace& w, One&& one, Strip&& strip) {
   for (int slot = 0; slot < t.views; ++slot) {
-    for (int col = 0; col < t.row_stride; col += lanes) {
+    for (int col0 = 0; col0 < t.row_stride; col0 += kStripColumns * lanes) {
       w.strip.count = 0;
-      for (int row = 0; row < t.rows; ++row) {
-        const std::size_t r = t.entry(slot, row, col);
-        if (tiles && w.strip.count < XStrip::kMaxBundles && along_x(t, r, static_cast<std::size_t>(lanes)))
-          w.strip.entries[w.strip.count++] = r;
-        else
-          one(r);
-      }
+      for (int row = 0; row < t.rows; ++row)
+        for (int col = col0; col < std::min(t.row_stride, col0 + kStripColumns * lanes); col += lanes) {
+          const std::size_t r = t.entry(slot, row, col);
+          if (tiles && w.strip.count < XStrip::kMaxBundles && along_x(t, r, static_cast<std::size_t>(lanes)))
+            w.strip.entries[w.strip.count++] = r;
+          else
+            one(r);
+        }
       if (w.strip.count > 0) strip();
     }
   }

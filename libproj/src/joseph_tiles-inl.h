@@ -26,9 +26,12 @@ namespace hn = hwy::HWY_NAMESPACE;
 // strip of a table (one per detector row) are marched through a tile instead: the slices of 16
 // steps, copied with y contiguous (a transposition), where the row-window paths apply as they
 // do to rays along y and z. Voxels outside the volume are zeros in the tile, as the masked
-// paths make them. A tile is at most kTileSlices x kTileMaxHeight x kTileMaxWidth floats (96 kB).
+// paths make them. A tile is at most kTileSlices x kTileMaxHeight x kTileMaxWidth floats (192 kB).
 constexpr int kTileSlices = 16;
-constexpr int kTileMaxWidth = 64, kTileMaxHeight = 24;
+// Bundles of this many neighbouring columns (and every row of the table) share a tile: wider
+// tiles copy each voxel fewer times (a tile's width is its lanes' span plus the rays' drift).
+constexpr int kStripColumns = 4;
+constexpr int kTileMaxWidth = 128, kTileMaxHeight = 24;
 
 struct Tile {
   int k0 = 0, slices = 0;  // x range k0 .. k0 + slices - 1
@@ -185,7 +188,7 @@ HWY_INLINE TileFit tile_box(DF df, const RayTable& t, const std::size_t* entries
   return tile.width <= kTileMaxWidth && tile.height <= kTileMaxHeight ? TileFit::fits : TileFit::too_large;
 }
 
-// The copies of a column strip's bundles (in `local`, one row each) address the tile.
+// The copies of a strip's bundles (in `local`, one row each) address the tile.
 HWY_INLINE void address_tile(RayTable& local, int count, const Tile& tile) {
   local.origin_a = tile.k0;
   local.origin_b = tile.y0;
