@@ -36,7 +36,10 @@ HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_
       }
       sum = hn::Add(sum, sample);
     } else {
-      sum = hn::Add(sum, interpolate(df, volume, corners_at(df, t, b.r, k, all)));
+      hn::Vec<DF> sample;
+      if (!b.window || !interpolate_window<true>(df, t, volume, b.r, k, sample))
+        sample = interpolate(df, volume, corners_at(df, t, b.r, k, all));
+      sum = hn::Add(sum, sample);
     }
   }
   return sum;
@@ -96,6 +99,9 @@ HWY_INLINE void prepare_strip(DF df, const RayTable& t, XStrip& s, RayTable& loc
       b.k_lo = std::min(b.k_lo, first);
       b.k_hi = std::max(b.k_hi, last);
     }
+    // In a tile every lane in its range is interior.
+    std::copy_n(local.k_first.begin() + static_cast<std::ptrdiff_t>(b.r), n, local.in_first.begin() + static_cast<std::ptrdiff_t>(b.r));
+    std::copy_n(local.k_last.begin() + static_cast<std::ptrdiff_t>(b.r), n, local.in_last.begin() + static_cast<std::ptrdiff_t>(b.r));
     b.pairs = true;
     b.window = n >= 4;
     s.k_lo = std::min(s.k_lo, b.k_lo);

@@ -52,7 +52,10 @@ HWY_INLINE void window_origin(DF df, const SamplePosition<DF>& p, int n_b, int& 
 // a window of 2N voxels along b and at most three neighbouring values of c: the slice's rows
 // there are loaded whole and each lane picks its corners by permutes. False (and `sample`
 // untouched) when the lanes spread wider; the caller then gathers.
-template <class DF>
+// With kMasked, at a slice outside the bundle's interior range: lanes out of their ray's range
+// take no part (their sample is zero), and every other lane must be interior there (false
+// otherwise: a lane on the volume's rim needs masked corners).
+template <bool kMasked = false, class DF>
 HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r, int k,
                                    hn::Vec<DF>& sample) {
 #if HWY_TARGET == HWY_SCALAR
@@ -63,9 +66,24 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
   const int N = static_cast<int>(hn::Lanes(df));
   const SamplePosition<DF> p = position_at(df, t, r, k);
   int x0, c0;
-  window_origin(df, p, t.n_b[r], x0, c0);
-  const auto pos = hn::Sub(p.ib, hn::Set(di, x0)), pos1 = hn::Add(pos, hn::Set(di, 1));
-  const auto dc = hn::Sub(p.ic, hn::Set(di, c0));
+  auto ib = p.ib, ic = p.ic;
+  hn::Mask<decltype(di)> inside;
+  if constexpr (kMasked) {
+    if (!interior_lanes(di, t, r, k, inside)) return false;
+    if (hn::AllFalse(di, inside)) {
+      sample = hn::Zero(df);
+      return true;
+    }
+    const auto far = hn::Set(di, 1 << 29);
+    x0 = std::min(std::max(hn::GetLane(hn::MinOfLanes(di, hn::IfThenElse(inside, ib, far))), 0), t.n_b[r] - 2 * N);
+    c0 = hn::GetLane(hn::MinOfLanes(di, hn::IfThenElse(inside, ic, far)));
+    ib = hn::IfThenElse(inside, ib, hn::Set(di, x0));  // the others read the window's first voxel
+    ic = hn::IfThenElse(inside, ic, hn::Set(di, c0));
+  } else {
+    window_origin(df, p, t.n_b[r], x0, c0);
+  }
+  const auto pos = hn::Sub(ib, hn::Set(di, x0)), pos1 = hn::Add(pos, hn::Set(di, 1));
+  const auto dc = hn::Sub(ic, hn::Set(di, c0));
   const auto limit = hn::Set(di, 2 * N);
   const auto upper = hn::Gt(dc, hn::Zero(di));      // lanes whose corner c sits a row up or two
   const auto top = hn::Eq(dc, hn::Set(di, 2));       // two rows up
@@ -98,6 +116,7 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
   hn::Vec<DF> weight[4];
   bilinear_weights(p, weight);
   sample = weigh(c00, c10, c01, c11, weight);
+  if constexpr (kMasked) sample = hn::IfThenElseZero(hn::RebindMask(df, inside), sample);
   return true;
 #endif
 }

@@ -140,36 +140,34 @@ HWY_INLINE Corners<DF> interior_corners_at(DF df, const RayTable& t, std::size_t
 }
 
 // Slices where every lane of the bundle (those with `axis`, or all when axis < 0) is inside its
-// ray's range with all four corners at least 1e-3 voxel inside the volume: the fast path.
-// Empty (lo > hi) when any such lane has none.
+// ray's range with all four corners at least 1e-3 voxel inside the volume (RayTable::in_first,
+// in_last): the fast path. Empty (lo > hi) when any such lane has none.
 HWY_INLINE void interior_range(const RayTable& t, std::size_t r, std::size_t n, int axis, int& lo, int& hi) {
   lo = -(1 << 30);
   hi = 1 << 30;
   for (std::size_t l = 0; l < n; ++l) {
     const std::size_t i = r + l;
     if (axis >= 0 && t.axis[i] != axis) continue;
-    if (t.k_last[i] < t.k_first[i]) {  // a ray that misses the volume: no fast path here
+    if (t.in_last[i] < t.in_first[i]) {
       lo = 1 << 30;
       return;
     }
-    double k_lo = t.k_first[i], k_hi = t.k_last[i];
-    const double margin = 1e-3;
-    for (int q = 0; q < 2; ++q) {
-      const double p_mid = q == 0 ? t.pb_mid[i] - t.origin_b : t.pc_mid[i] - t.origin_c;
-      const double beta = q == 0 ? t.beta_b[i] : t.beta_c[i];
-      const double n_max = (q == 0 ? t.n_b[i] : t.n_c[i]) - 1 - margin;
-      if (beta == 0) {
-        if (!(p_mid >= margin && p_mid <= n_max)) k_lo = 1e9;
-        continue;
-      }
-      double a = t.k_mid[i] + (margin - p_mid) / beta, b = t.k_mid[i] + (n_max - p_mid) / beta;
-      if (a > b) std::swap(a, b);
-      k_lo = std::max(k_lo, std::ceil(a));
-      k_hi = std::min(k_hi, std::floor(b));
-    }
-    lo = std::max(lo, static_cast<int>(std::max(k_lo, -1e9)));
-    hi = std::min(hi, static_cast<int>(std::min(k_hi, 1e9)));
+    lo = std::max(lo, t.in_first[i]);
+    hi = std::min(hi, t.in_last[i]);
   }
+}
+
+// At slice k: `inside` = the lanes whose four corners are all inside the volume there
+// (RayTable::in_first, in_last). False when some other lane is in its ray's range there (on the
+// volume's rim, where only the masked path places it).
+template <class DI>
+HWY_INLINE bool interior_lanes(DI di, const RayTable& t, std::size_t r, int k, hn::Mask<DI>& inside) {
+  const auto vk = hn::Set(di, k), one = hn::Set(di, 1);
+  const auto between = [&](const std::int32_t* first, const std::int32_t* last) {
+    return hn::And(hn::Lt(hn::LoadU(di, first + r), hn::Add(vk, one)), hn::Lt(vk, hn::Add(hn::LoadU(di, last + r), one)));
+  };
+  inside = between(t.in_first.data(), t.in_last.data());
+  return hn::AllFalse(di, hn::AndNot(inside, between(t.k_first.data(), t.k_last.data())));
 }
 
 // The bundle at entry r, restricted to lanes of dominant `axis` (all lanes when axis < 0).

@@ -38,7 +38,8 @@ void RayTable::shape(int view_count, int row_count, int lanes) {
   view_stride = rows * row_stride;
   const auto n = static_cast<std::size_t>(views) * static_cast<std::size_t>(view_stride);
   for (auto* v : {&pb_mid, &beta_b, &pc_mid, &beta_c, &weight, &k_mid, &value}) v->assign(n, 0.0f);
-  for (auto* v : {&k_first, &k_last, &axis, &stride_a, &stride_b, &stride_c, &n_b, &n_c}) v->assign(n, 0);
+  for (auto* v : {&k_first, &k_last, &axis, &stride_a, &stride_b, &stride_c, &n_b, &n_c, &in_first, &in_last})
+    v->assign(n, 0);
   empty(0, n);
 }
 
@@ -73,7 +74,29 @@ void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int slot, 
     stride_c[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(c)]);
     n_b[i] = layout.size[static_cast<std::size_t>(b)];
     n_c[i] = layout.size[static_cast<std::size_t>(c)];
+    find_interior(i);
   }
+}
+
+void RayTable::find_interior(std::size_t i) {
+  double k_lo = k_first[i], k_hi = k_last[i];
+  const double margin = 1e-3;
+  for (int q = 0; q < 2; ++q) {
+    const double p_mid = q == 0 ? static_cast<double>(pb_mid[i]) - origin_b : static_cast<double>(pc_mid[i]) - origin_c;
+    const double beta = q == 0 ? beta_b[i] : beta_c[i];
+    const double n_max = (q == 0 ? n_b[i] : n_c[i]) - 1 - margin;
+    if (beta == 0) {
+      if (!(p_mid >= margin && p_mid <= n_max)) k_lo = 1e9;
+      continue;
+    }
+    double a = k_mid[i] + (margin - p_mid) / beta, b = k_mid[i] + (n_max - p_mid) / beta;
+    if (a > b) std::swap(a, b);
+    k_lo = std::max(k_lo, std::ceil(a));
+    k_hi = std::min(k_hi, std::floor(b));
+  }
+  in_first[i] = static_cast<std::int32_t>(std::clamp(k_lo, -1e9, 1e9));
+  in_last[i] = static_cast<std::int32_t>(std::clamp(k_hi, -1e9, 1e9));
+  if (in_last[i] < in_first[i]) in_first[i] = 0, in_last[i] = -1;
 }
 
 void RayTable::copy_entries(const RayTable& from, std::size_t from_entry, std::size_t to_entry, std::size_t n) {
@@ -84,14 +107,14 @@ void RayTable::copy_entries(const RayTable& from, std::size_t from_entry, std::s
   copy(from.weight, weight), copy(from.k_mid, k_mid), copy(from.value, value);
   copy(from.k_first, k_first), copy(from.k_last, k_last), copy(from.axis, axis);
   copy(from.stride_a, stride_a), copy(from.stride_b, stride_b), copy(from.stride_c, stride_c);
-  copy(from.n_b, n_b), copy(from.n_c, n_c);
+  copy(from.n_b, n_b), copy(from.n_c, n_c), copy(from.in_first, in_first), copy(from.in_last, in_last);
 }
 
 void RayTable::empty(std::size_t begin, std::size_t end) {
   for (std::size_t i = begin; i < end; ++i) {
     pb_mid[i] = beta_b[i] = pc_mid[i] = beta_c[i] = weight[i] = k_mid[i] = value[i] = 0.0f;
-    k_first[i] = 0;
-    k_last[i] = -1;
+    k_first[i] = in_first[i] = 0;
+    k_last[i] = in_last[i] = -1;
     axis[i] = -1;
     stride_a[i] = stride_b[i] = stride_c[i] = 0;
     n_b[i] = n_c[i] = 1;

@@ -61,6 +61,9 @@ struct RayTable {
   int view_stride = 0;  // entries per view: the row capacity times row_stride
   std::vector<float> pb_mid, beta_b, pc_mid, beta_c, weight, k_mid, value;
   std::vector<std::int32_t> k_first, k_last, axis, stride_a, stride_b, stride_c, n_b, n_c;
+  // Slices where all four corners of the entry's sample are inside the grid (by 1e-3 voxel):
+  // no masks needed there. Empty (in_first > in_last) when none.
+  std::vector<std::int32_t> in_first, in_last;
   // The grid the kernels address: voxel (k, b, c) of the rays' axes is at
   // (k - origin_a) stride_a + (b - origin_b) stride_b + (c - origin_c) stride_c, and only
   // 0 <= b - origin_b < n_b, 0 <= c - origin_c < n_c exist. Zero for the volume itself; a
@@ -81,6 +84,8 @@ struct RayTable {
   /// table together. Bundles with no pixel on the detector are left empty.
   void fill(const ViewRays& rays, const VolumeLayout& layout, int slot, const LanePath& path, int line_begin,
             int ray_begin, int ray_end);
+  /// Sets in_first and in_last of entry i from its ray, as the kernels will see it (in float).
+  void find_interior(std::size_t i);
   /// Marks entries [begin, end) empty: they touch nothing and project to zero.
   void empty(std::size_t begin, std::size_t end);
   /// Copies `n` entries of `from`, starting at `from_entry`, to this table at `to_entry`.
