@@ -262,6 +262,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
   const int N = static_cast<int>(hn::Lanes(df));
   StripWorkspace w;
   if (axis == 0) w.reserve(t.rows, N);
+  std::vector<Bundle> along_z;
   // Bundles along x have lanes on axis 0 only, so only axis 0's slabs take strips.
   for_each_bundle(
       t, N, axis == 0, w,
@@ -271,10 +272,25 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
         const std::size_t i = r / static_cast<std::size_t>(N);
         const Bundle b = i < t.bundles.size() && t.bundles[i].axis == axis ? t.bundles[i]
                                                                            : bundle_at(t, r, static_cast<std::size_t>(N), axis);
+        if (axis == 2 && hn::AllTrue(df, on_axis)) {
+          if (std::max(b.k_lo, k_begin) <= std::min(b.k_hi, k_end - 1)) along_z.push_back(b);
+          return;
+        }
         const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
         march_back(df, t, b, value, on_axis, std::max(b.k_lo, k_begin), std::min(b.k_hi, k_end - 1), volume);
       },
       [&] { back_strip(df, t, k_begin, k_end, w, volume); });
+  // Rays along z step from one xy plane to the next (256 kB apart in a 256^3 volume), so one
+  // bundle at a time would update a few lines per plane that no prefetcher foresees. Slice by
+  // slice, the table's bundles update neighbouring rows of each plane together: about 10 %
+  // faster for views along z. (The forward projection, reading only, gained nothing this way.)
+  const auto all = hn::FirstN(df, hn::Lanes(df));
+  for (int k = k_begin; k < k_end; ++k)
+    for (const Bundle& b : along_z)
+      if (k >= b.k_lo && k <= b.k_hi) {
+        const auto value = hn::Mul(hn::LoadU(df, t.value.data() + b.r), hn::LoadU(df, t.weight.data() + b.r));
+        march_back(df, t, b, value, all, k, k, volume);
+      }
 }
 
 // Every lane on one axis (the usual case): the bundle restricted to that axis is the bundle.
