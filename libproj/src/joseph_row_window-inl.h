@@ -160,37 +160,63 @@ HWY_INLINE bool scatter_window(const RayTable& t, float* HWY_RESTRICT volume, st
   const auto keep = static_cast<__mmask16>(~(same_as_prev >> 1));
   for (auto& v : w) v = _mm512_mask_add_ps(
            v, same_as_prev, v, _mm512_castsi512_ps(_mm512_alignr_epi32(_mm512_castps_si512(v), _mm512_setzero_si512(), 15)));
-  // Which lane feeds each of the 32 window voxels: the kept lanes' numbers, in order, expanded
-  // to the voxels they occupy (lanes are sorted along b). The weights are then placed with
-  // permutes: one compress and two expands per row pair instead of per corner (each costs
-  // about five cycles on Zen 5, a permute about two).
+  // Which lane feeds each of the 32 window voxels: the lanes' numbers, in order, expanded to
+  // the voxels they occupy (lanes are sorted along b); corner b + 1 sits one voxel further, the
+  // same map shifted up by one. The weights are then placed with permutes: one compress and two
+  // expands per map instead of per corner (each costs about five cycles on Zen 5, a permute
+  // about two).
   const __m512i lane_number = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  struct Map {
+    __m512i from_lo, from_hi, from1_lo, from1_hi;
+    __mmask16 bits_lo, bits_hi, bits1_lo, bits1_hi;
+    int voxels;  // distinct voxels the lanes occupy
+  };
+  const auto map_of = [&](__mmask16 lanes) {
+    Map m;
+    const auto bits = static_cast<std::uint32_t>(_mm512_reduce_or_epi32(_mm512_maskz_sllv_epi32(lanes, _mm512_set1_epi32(1), P)));
+    m.voxels = _mm_popcnt_u32(bits);
+    m.bits_lo = static_cast<__mmask16>(bits & 0xFFFFu), m.bits_hi = static_cast<__mmask16>(bits >> 16);
+    const __m512i kept = lanes == 0xFFFF ? lane_number : _mm512_maskz_compress_epi32(lanes, lane_number);
+    m.from_lo = _mm512_maskz_expand_epi32(m.bits_lo, kept);
+    m.from_hi = _mm512_maskz_expand_epi32(
+        m.bits_hi, _mm512_permutexvar_epi32(_mm512_add_epi32(lane_number, _mm512_set1_epi32(_mm_popcnt_u32(m.bits_lo))), kept));
+    m.from1_lo = _mm512_alignr_epi32(m.from_lo, _mm512_setzero_si512(), 15);
+    m.from1_hi = _mm512_alignr_epi32(m.from_hi, m.from_lo, 15);
+    const auto bits1 = bits << 1;
+    m.bits1_lo = static_cast<__mmask16>(bits1 & 0xFFFFu), m.bits1_hi = static_cast<__mmask16>(bits1 >> 16);
+    return m;
+  };
+  // row += the lanes' weights wb at their voxel b and wb1 at b + 1.
+  const auto add_row = [&](const Map& m, __m512 wb, __m512 wb1, float* row) {
+    const __m512 lo = _mm512_add_ps(_mm512_maskz_permutexvar_ps(m.bits_lo, m.from_lo, wb),
+                                    _mm512_maskz_permutexvar_ps(m.bits1_lo, m.from1_lo, wb1));
+    const __m512 hi = _mm512_add_ps(_mm512_maskz_permutexvar_ps(m.bits_hi, m.from_hi, wb),
+                                    _mm512_maskz_permutexvar_ps(m.bits1_hi, m.from1_hi, wb1));
+    _mm512_storeu_ps(row, _mm512_add_ps(_mm512_loadu_ps(row), lo));
+    _mm512_storeu_ps(row + N, _mm512_add_ps(_mm512_loadu_ps(row + N), hi));
+  };
   const std::ptrdiff_t sc = t.stride_c[r];
   float* base = volume + static_cast<std::ptrdiff_t>(k - t.origin_a) * t.stride_a[r] + static_cast<std::ptrdiff_t>(c0) * sc + x0;
+  const Map all = map_of(keep);
+  if (all.voxels == _mm_popcnt_u32(keep)) {
+    // Every lane on its own voxel along b (the usual case): one map serves every row. Row
+    // c0 + j takes corner c of the lanes on row j and corner c + 1 of those on row j - 1.
+    const int rows = 1 + _mm512_mask_reduce_max_epi32(keep, C);
+    for (int j = 0; j <= rows; ++j) {
+      const auto here = static_cast<__mmask16>(keep & _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(j)));
+      const auto below = static_cast<__mmask16>(keep & _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(j - 1)));
+      add_row(all, _mm512_mask_mov_ps(_mm512_maskz_mov_ps(here, w[0]), below, w[2]),
+              _mm512_mask_mov_ps(_mm512_maskz_mov_ps(here, w[1]), below, w[3]), base + j * sc);
+    }
+    return true;
+  }
   for (int layer = 0; layer < 3; ++layer) {  // lanes whose corner c is row c0, c0 + 1, c0 + 2
     const auto lanes = static_cast<__mmask16>(keep & _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(layer)));
     if (lanes == 0) continue;
-    const auto bits = static_cast<std::uint32_t>(
-        _mm512_reduce_or_epi32(_mm512_maskz_sllv_epi32(lanes, _mm512_set1_epi32(1), P)));
-    const auto bits_lo = static_cast<__mmask16>(bits & 0xFFFFu), bits_hi = static_cast<__mmask16>(bits >> 16);
-    const __m512i kept = lanes == 0xFFFF ? lane_number : _mm512_maskz_compress_epi32(lanes, lane_number);
-    const __m512i from_lo = _mm512_maskz_expand_epi32(bits_lo, kept);
-    const __m512i from_hi = _mm512_maskz_expand_epi32(
-        bits_hi, _mm512_permutexvar_epi32(_mm512_add_epi32(lane_number, _mm512_set1_epi32(_mm_popcnt_u32(bits_lo))), kept));
-    // Corner b + 1 sits one voxel further: the same map shifted up by one voxel.
-    const __m512i from1_lo = _mm512_alignr_epi32(from_lo, _mm512_setzero_si512(), 15);
-    const __m512i from1_hi = _mm512_alignr_epi32(from_hi, from_lo, 15);
-    const auto bits1 = bits << 1;
-    const auto bits1_lo = static_cast<__mmask16>(bits1 & 0xFFFFu), bits1_hi = static_cast<__mmask16>(bits1 >> 16);
+    const Map m = lanes == keep ? all : map_of(lanes);
     float* row = base + layer * sc;
-    for (int q = 0; q < 2; ++q, row += sc) {  // corner c, then c + 1
-      const __m512 lo = _mm512_add_ps(_mm512_maskz_permutexvar_ps(bits_lo, from_lo, w[2 * q]),
-                                      _mm512_maskz_permutexvar_ps(bits1_lo, from1_lo, w[2 * q + 1]));
-      const __m512 hi = _mm512_add_ps(_mm512_maskz_permutexvar_ps(bits_hi, from_hi, w[2 * q]),
-                                      _mm512_maskz_permutexvar_ps(bits1_hi, from1_hi, w[2 * q + 1]));
-      _mm512_storeu_ps(row, _mm512_add_ps(_mm512_loadu_ps(row), lo));
-      _mm512_storeu_ps(row + N, _mm512_add_ps(_mm512_loadu_ps(row + N), hi));
-    }
+    add_row(m, w[0], w[1], row);
+    add_row(m, w[2], w[3], row + sc);
   }
   return true;
 }
