@@ -45,6 +45,23 @@ struct Problem {
   std::vector<ProjectionMatrix> views;
 };
 
+// One view per spec (direction, pixel pitch, roll in degrees about the beam), all with the same
+// detector tilt (u, v), principal-point offset and target.
+struct ViewSpec {
+  Eigen::Vector3d direction;
+  double pitch;
+  double roll_deg = 0;
+};
+Problem problem_with_views(const VolumeLayout& layout, int rows, int cols, double sod, double sdd,
+                           const std::vector<ViewSpec>& specs, const Eigen::Vector2d& tilt, const Eigen::Vector2d& pp_offset,
+                           const Eigen::Vector3d& target) {
+  Problem p{layout, rows, cols, {}};
+  for (const auto& v : specs)
+    p.views.push_back(view_from(v.direction.normalized(), sod, sdd, cols, rows, v.pitch, tilt.x(), tilt.y(), pp_offset,
+                                target, v.roll_deg * M_PI / 180));
+  return p;
+}
+
 // Random geometries of every kind the projector must handle.
 Problem random_problem(std::uint64_t seed) {
   std::mt19937_64 rng(seed);
@@ -175,18 +192,12 @@ TEST(JosephProjector, RowWindowPathsAgreeWithTheReferenceAndAreAdjoint) {
 // rays far apart and steep (tiles too large: the volume is marched instead), ends of the x range
 // that are not a whole tile, and rays leaving the volume sideways (tile voxels outside it).
 Problem rays_along_x_problem() {
-  Problem p;
-  p.layout = VolumeLayout::centred({37, 90, 30}, {1.0, 1.0, 1.0});
-  p.rows = 20;
-  p.cols = 40;
-  const double sod = 250, sdd = 400;
-  for (const auto& [d, pitch] : std::vector<std::pair<Eigen::Vector3d, double>>{{Eigen::Vector3d(1, 0, 0), 1.6},
-                                                                               {Eigen::Vector3d(-1, 0.45, 0.1), 1.1},
-                                                                               {Eigen::Vector3d(1, -0.9, -0.3), 1.6},
-                                                                               {Eigen::Vector3d(-1, 0.2, 0.6), 5.0}})
-    p.views.push_back(view_from(d.normalized(), sod, sdd, p.cols, p.rows, pitch, 0.04, -0.06, {0.3, 0.2},
-                                Eigen::Vector3d(0.4, 3.0, -0.2)));
-  return p;
+  return problem_with_views(VolumeLayout::centred({37, 90, 30}, {1.0, 1.0, 1.0}), 20, 40, 250, 400,
+                            {{Eigen::Vector3d(1, 0, 0), 1.6},
+                             {Eigen::Vector3d(-1, 0.45, 0.1), 1.1},
+                             {Eigen::Vector3d(1, -0.9, -0.3), 1.6},
+                             {Eigen::Vector3d(-1, 0.2, 0.6), 5.0}},
+                            {0.04, -0.06}, {0.3, 0.2}, Eigen::Vector3d(0.4, 3.0, -0.2));
 }
 
 TEST(JosephProjector, RaysAlongXThroughTilesAgreeWithTheReferenceAndAreAdjoint) {
@@ -214,21 +225,15 @@ TEST(JosephProjector, RaysAlongXThroughTilesAgreeWithTheReferenceAndAreAdjoint) 
 // once, including at the detector's edges, where a staircase leaves it, and for a detector
 // whose sides are not a multiple of the lanes.
 Problem turned_detector_problem() {
-  Problem p;
-  p.layout = VolumeLayout::centred({40, 36, 30}, {1.0, 1.0, 1.0});
-  p.rows = 23;
-  p.cols = 37;
-  const double sod = 300, sdd = 450;
-  for (const auto& [d, roll_deg] : std::vector<std::pair<Eigen::Vector3d, double>>{{Eigen::Vector3d(0, 0, 1), 20},
-                                                                                  {Eigen::Vector3d(0, 0, 1), 70},
-                                                                                  {Eigen::Vector3d(0, 0, -1), 110},
-                                                                                  {Eigen::Vector3d(0, 0, 1), 160},
-                                                                                  {Eigen::Vector3d(1, 0.1, 0), 30},
-                                                                                  {Eigen::Vector3d(0.1, -1, 0.2), 120},
-                                                                                  {Eigen::Vector3d(1, 1, 1), 45}})
-    p.views.push_back(view_from(d.normalized(), sod, sdd, p.cols, p.rows, 1.5, 0.03, -0.02, {0.2, -0.4},
-                                Eigen::Vector3d(0.3, -0.2, 0.1), roll_deg * M_PI / 180));
-  return p;
+  return problem_with_views(VolumeLayout::centred({40, 36, 30}, {1.0, 1.0, 1.0}), 23, 37, 300, 450,
+                            {{Eigen::Vector3d(0, 0, 1), 1.5, 20},
+                             {Eigen::Vector3d(0, 0, 1), 1.5, 70},
+                             {Eigen::Vector3d(0, 0, -1), 1.5, 110},
+                             {Eigen::Vector3d(0, 0, 1), 1.5, 160},
+                             {Eigen::Vector3d(1, 0.1, 0), 1.5, 30},
+                             {Eigen::Vector3d(0.1, -1, 0.2), 1.5, 120},
+                             {Eigen::Vector3d(1, 1, 1), 1.5, 45}},
+                            {0.03, -0.02}, {0.2, -0.4}, Eigen::Vector3d(0.3, -0.2, 0.1));
 }
 
 TEST(JosephProjector, TurnedDetectorsAgreeWithTheReferenceAndAreAdjoint) {
