@@ -4,7 +4,7 @@
 // and OpenMP threads. Its back projection is the exact adjoint of its forward projection: both
 // walk the same float ray tables and compute every sample weight with the same operations.
 //
-// Threads never write the same voxel: the back projection takes a few detector rows at a time,
+// Threads never write the same voxel: the back projection takes a few detector lines at a time,
 // and splits the volume into slabs along each ray's dominant axis (a Joseph sample at slice k
 // touches only slice k), one slab per task. Extra memory: one table of a few rows per thread.
 #include <string>
@@ -18,7 +18,7 @@ namespace ctk {
 
 struct ProjectorOptions {
   int threads = 0;         // 0: all OpenMP threads
-  int rows_per_block = 8;  // detector rows per ray table
+  int rows_per_block = 8;  // detector lines per ray table (rows, or staircases across the detector)
 };
 
 class JosephProjector {
