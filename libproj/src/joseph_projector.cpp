@@ -24,8 +24,9 @@ int JosephProjector::simd_lanes() { return detail::simd_float_lanes(); }
 
 namespace {
 
-// Each view's lane path, and how many tables of `rows_per_block` lines it takes.
+// Each view's rays and lane path, and how many tables of `rows_per_block` lines it takes.
 struct ViewPaths {
+  std::vector<ViewRays> rays;
   std::vector<detail::LanePath> path;
   std::vector<int> blocks;
   int most_blocks = 0;
@@ -33,7 +34,8 @@ struct ViewPaths {
   ViewPaths(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout, int cols, int rows,
             int rows_per_block) {
     for (const auto& P : views) {
-      path.push_back(detail::LanePath::for_view(view_rays(P, layout), layout, cols, rows));
+      rays.push_back(view_rays(P, layout));
+      path.push_back(detail::LanePath::for_view(rays.back(), cols, rows));
       blocks.push_back((path.back().lines + rows_per_block - 1) / rows_per_block);
       most_blocks = std::max(most_blocks, blocks.back());
       most_lanes = std::max(most_lanes, path.back().majors);
@@ -71,7 +73,7 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
       if (block >= paths.blocks[static_cast<std::size_t>(v)]) continue;
       const int line_begin = block * rows_per_block;
       table.rows = std::min(rows_per_block, path.lines - line_begin);
-      table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, 0, path, line_begin, 0,
+      table.fill(paths.rays[static_cast<std::size_t>(v)], x.layout, 0, path, line_begin, 0,
                  table.rows * table.row_stride);
       detail::forward_rays(table, x.data.data(), out.data());
       for (int row = 0; row < table.rows; ++row)
@@ -113,7 +115,7 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
           const int begin = std::min(count, part * chunk), end = std::min(count, begin + chunk);
           const std::size_t first = table.entry(slot, 0, 0);
           const int filled = std::min(end, rows * table.row_stride);
-          table.fill(view_rays(views[static_cast<std::size_t>(v)], x.layout), x.layout, slot, path, line_begin, begin,
+          table.fill(paths.rays[static_cast<std::size_t>(v)], x.layout, slot, path, line_begin, begin,
                      std::max(begin, filled));
           if (filled < end) table.empty(first + static_cast<std::size_t>(std::max(begin, filled)), first + static_cast<std::size_t>(end));
           for (int r = begin; r < filled; ++r) {
@@ -121,10 +123,7 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
             const float* pixel = pixel_of(y, v, path, line_begin + row, lane);
             table.value[first + static_cast<std::size_t>(r)] = pixel ? *pixel : 0.0f;
           }
-          if (task == 0) {
-            table.views = in_batch;
-            table.rows = rows_per_block;
-          }
+          if (task == 0) table.views = in_batch;  // every slot keeps rows_per_block rows
         }
         // Each bundle once for every slab task that marches it.
         const auto bundles_in_use = static_cast<std::size_t>(in_batch) * table.bundles.size() / static_cast<std::size_t>(batch);

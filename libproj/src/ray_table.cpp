@@ -4,14 +4,15 @@
 
 namespace ctk::detail {
 
-LanePath LanePath::for_view(const ViewRays& rays, const VolumeLayout& layout, int cols, int rows) {
+LanePath LanePath::for_view(const ViewRays& rays, int cols, int rows) {
   // At the central ray, the sample's c in a slice is c = s_c + (k - s_a) d_c / d_a; a pixel step
   // (du, dv) changes d_c / d_a in proportion to g = (du_c d_a - d_c du_a, dv_c d_a - d_c dv_a).
   // Lanes step across g.
   const double uc = 0.5 * (cols - 1), vc = 0.5 * (rows - 1);
   const Eigen::Vector3d d = rays.d0 + uc * rays.du + vc * rays.dv;
-  const MarchedRay centre = march_ray(rays, layout, uc, vc);
-  const int a = centre.axis, c = other_axes(a)[1];
+  int a = 0;
+  d.cwiseAbs().maxCoeff(&a);  // the central ray's dominant axis, as march_ray finds it
+  const int c = other_axes(a)[1];
   const double gu = rays.du[c] * d[a] - d[c] * rays.du[a], gv = rays.dv[c] * d[a] - d[c] * rays.dv[a];
   LanePath p;
   p.along_u = std::abs(gv) >= std::abs(gu);  // the step (gv, -gu) is mostly along u

@@ -38,7 +38,7 @@ struct LanePath {
   int line_first = 0, lines = 1;  // line numbers in use
 
   /// The path for a view of cols x rows pixels, chosen at the detector's centre.
-  static LanePath for_view(const ViewRays& rays, const VolumeLayout& layout, int cols, int rows);
+  static LanePath for_view(const ViewRays& rays, int cols, int rows);
   int minor(int line, int lane) const { return line_first + line + static_cast<int>(std::floor(lane * slope + 0.5)); }
   /// Pixel (u, v) of lane `lane` of line `line` (0 = the first line), inside the detector or not.
   void pixel(int line, int lane, int& u, int& v) const {
