@@ -34,6 +34,7 @@ struct PlanCommandOptions {
   double sod_mm = 1360;
   int views = 100, scout_nside = 2, candidate_nside = 8;
   double damage_exponent = 0.5;
+  double spread_exponent = 1.0;
   std::uint64_t seed = 1;
   int cols = 720, rows = 720;
   double pitch_mm = 0.6, sdd_mm = 2150;
@@ -57,6 +58,7 @@ PlanningOptions planning_options(const PlanCommandOptions& o) {
   p.planner.candidate_nside = o.candidate_nside;
   p.planner.planned_views = o.views;
   p.planner.damage_exponent = o.damage_exponent;
+  p.planner.spread_exponent = o.spread_exponent;
   p.planner.damage_floor_mm = 2 * o.coarse_voxel_mm;
   p.planner.seed = o.seed;
   p.reconstruction.binning = o.binning;
@@ -342,8 +344,9 @@ void register_plan(CLI::App& app) {
   cmd->add_option("--timeout", o->timeout_s, "Lab mode: seconds to wait for each answer")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--sod", o->sod_mm, "Source-to-isocentre distance (mm)")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--views", o->views, "Views to acquire, scout included")->check(CLI::Range(2, 10000))->capture_default_str();
-  cmd->add_option("--scout-nside", o->scout_nside, "HEALPix resolution of the scout (12 nside^2 directions)")->check(CLI::Range(1, 16))->capture_default_str();
+  cmd->add_option("--scout-nside", o->scout_nside, "HEALPix resolution of the scout (6 nside^2 directions: one of each opposite pair of cells)")->check(CLI::Range(1, 16))->capture_default_str();
   cmd->add_option("--candidate-nside", o->candidate_nside, "HEALPix resolution of the candidate directions")->check(CLI::Range(1, 64))->capture_default_str();
+  cmd->add_option("--spread-exponent", o->spread_exponent, "m: how strongly the largest gaps between views are preferred")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--damage-exponent", o->damage_exponent, "s: how strongly long absorber paths are avoided")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the planner's draws (and of the simulation)")->capture_default_str();
   cmd->add_option("--cols", o->cols, "Simulated detector columns")->check(CLI::Range(16, 100000))->capture_default_str();

@@ -83,6 +83,10 @@ double angular_distance_rad(const Eigen::Vector3d& a, const Eigen::Vector3d& b) 
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
+double line_distance_rad(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), std::abs(a.dot(b)));
+}
+
 std::vector<int> neighbours_within(const std::vector<Eigen::Vector3d>& directions, int i, double radius_rad) {
   std::vector<int> out;
   const auto& d = directions.at(static_cast<std::size_t>(i));

@@ -95,7 +95,11 @@ class Loop {
     }
     for (const Eigen::Vector3d& d : scout_directions(o_.scout_nside)) {
       if (acquired_ >= o_.views) break;
-      report(take(d, true, 0));
+      PlannedViewRecord rec = take(d, true, 0);
+      const bool refused = !rec.acquired;
+      report(std::move(rec));
+      // The opposite direction sees nearly the same lines, and the robot may reach it.
+      if (refused && acquired_ < o_.views) report(take(-d, true, 0));
     }
     result.views.back().planning_seconds += refresh();
     while (acquired_ < o_.views && next_index_ < max_attempts) {
@@ -140,7 +144,17 @@ int PlanningResult::acquired() const {
   return static_cast<int>(std::count_if(views.begin(), views.end(), [](const PlannedViewRecord& v) { return v.acquired; }));
 }
 
-std::vector<Eigen::Vector3d> scout_directions(int nside) { return HealpixSphere(nside).directions(); }
+// HEALPix cells come in opposite pairs; the scout keeps the cell of each pair whose first non-zero
+// coordinate, from z down to x, is positive.
+std::vector<Eigen::Vector3d> scout_directions(int nside) {
+  std::vector<Eigen::Vector3d> half;
+  for (const Eigen::Vector3d& d : HealpixSphere(nside).directions()) {
+    const double tie = 1e-9;
+    const double key = std::abs(d.z()) > tie ? d.z() : std::abs(d.y()) > tie ? d.y() : d.x();
+    if (key > 0) half.push_back(d);
+  }
+  return half;
+}
 
 std::vector<Eigen::Vector3d> whole_sphere_order(int nside) {
   std::vector<Eigen::Vector3d> cells = HealpixSphere(nside).directions();
@@ -151,7 +165,7 @@ std::vector<Eigen::Vector3d> whole_sphere_order(int nside) {
     order.push_back(cells[pick]);
     std::size_t best = 0;
     for (std::size_t c = 0; c < cells.size(); ++c) {
-      nearest[c] = std::min(nearest[c], angular_distance_rad(cells[c], cells[pick]));
+      nearest[c] = std::min(nearest[c], line_distance_rad(cells[c], cells[pick]));
       if (nearest[c] > nearest[best]) best = c;
     }
     pick = best;

@@ -32,8 +32,8 @@ std::vector<CandidateWeight> ViewPlanner::weights() const {
     for (const Eigen::Vector3d& u : unreachable_)
       if (d.dot(u) >= cos_unreachable) w[c].reach = 0;
     double nearest = 1e300;
-    for (const Eigen::Vector3d& a : acquired_) nearest = std::min(nearest, std::acos(std::min(1.0, std::abs(d.dot(a)))));
-    if (!acquired_.empty()) w[c].spread = 1.0 - std::exp(-(nearest / g0) * (nearest / g0));
+    for (const Eigen::Vector3d& a : acquired_) nearest = std::min(nearest, line_distance_rad(d, a));
+    if (!acquired_.empty()) w[c].spread = std::pow(1.0 - std::exp(-(nearest / g0) * (nearest / g0)), options_.spread_exponent);
     if (!damage_.empty() && w[c].reach > 0) least = std::min(least, damage_[c] + options_.damage_floor_mm);
   }
   if (!damage_.empty())

@@ -36,6 +36,8 @@ class HealpixSphere {
 std::vector<Eigen::Vector3d> random_directions(int count, std::uint64_t seed);
 
 double angular_distance_rad(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+/// The angle between the lines along `a` and `b` (0 to pi/2): opposite directions are one line.
+double line_distance_rad(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 /// Indices j != i with angular distance <= radius.
 std::vector<int> neighbours_within(const std::vector<Eigen::Vector3d>& directions, int i, double radius_rad);
 

@@ -26,7 +26,7 @@ struct PlanningSetup {
 };
 
 struct PlanningOptions {
-  int scout_nside = 2;  // 48 scout directions
+  int scout_nside = 2;  // 24 scout directions (one of each opposite pair of 48 cells)
   int views = 100;      // acquired views wanted in all (scout included)
   int max_attempts = 0; // requests in all; 0: three times `views`
   /// Non-empty: no scout and no planning, these directions are requested in order until `views`
@@ -67,10 +67,13 @@ struct PlanningResult {
 PlanningResult plan_trajectory(Acquisition& acquisition, const PlanningSetup& setup, const PlanningOptions& options,
                                const std::function<void(const PlannedViewRecord&)>& on_view = {});
 
-/// The scout's directions: a HEALPix sphere at `nside`.
+/// The scout's directions: one of each opposite pair of a HEALPix sphere's cells at `nside`
+/// (6 nside^2 directions). Opposite views see nearly the same lines, so the pair would spend a
+/// view on what the first already measured.
 std::vector<Eigen::Vector3d> scout_directions(int nside);
 /// The whole sphere in an order whose every prefix is spread evenly: the cells of a HEALPix
-/// sphere at `nside`, each next one the farthest from those before it.
+/// sphere at `nside`, each next one the farthest (as a line: opposite directions count as one)
+/// from those before it.
 std::vector<Eigen::Vector3d> whole_sphere_order(int nside);
 
 }  // namespace ctk

@@ -30,6 +30,7 @@ struct PlannerOptions {
   int candidate_nside = 8;            // 768 candidate directions, 7.3 deg apart
   int planned_views = 100;            // total the trajectory is meant to reach (sets g0)
   double damage_exponent = 0.5;       // s: mild, see above
+  double spread_exponent = 1.0;       // m: the spread term is raised to it
   double damage_floor_mm = 1.0;       // added to every damage (about a coarse voxel)
   double unreachable_radius_deg = 4.0;
   std::uint64_t seed = 1;
