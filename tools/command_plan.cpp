@@ -33,8 +33,8 @@ struct PlanCommandOptions {
   fs::path lab, setup;                // lab mode
   double sod_mm = 1360;
   int views = 100, scout_nside = 2, candidate_nside = 8;
-  double damage_exponent = 0.5;
-  double spread_exponent = 1.0;
+  double damage_exponent = PlannerOptions{}.damage_exponent;
+  double spread_exponent = PlannerOptions{}.spread_exponent;
   std::uint64_t seed = 1;
   int cols = 720, rows = 720;
   double pitch_mm = 0.6, sdd_mm = 2150;

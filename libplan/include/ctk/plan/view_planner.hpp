@@ -5,14 +5,18 @@
 //   damage     (d_min / d)^s, d the direction's damage (longest absorber path plus one voxel, so
 //              tiny differences do not count), d_min the least damage among candidates: views
 //              through long absorber paths become unlikely, the sharper the larger s;
-//   spread     1 - exp(-(g / g0)^2), g the angle to the nearest measured view or its opposite (a
-//              view and its opposite see nearly the same lines), g0 the spacing the planned number
-//              of views would have on the half sphere: keeps the data complete, no clustering;
+//   spread     (1 - exp(-(g / g0)^2))^m, g the angle to the nearest measured view or its opposite
+//              (a view and its opposite see nearly the same lines), g0 the spacing the planned
+//              number of views would have on the half sphere: keeps the data complete, no
+//              clustering; m = 4 makes the widest gaps much likelier than the rest;
 //   reach      0 within `unreachable_radius` of a direction the robot could not take, else 1: a
 //              refusal rules out its neighbourhood only, so the borders of unreachable regions
 //              keep being explored.
 // The next direction is drawn from the weights with a seeded generator: the same seed and the
 // same measurements give the same trajectory.
+// Why m is 4: with no absorber the draw should spread views as evenly as the whole-sphere order
+// does. At m = 1 (weights rising only as g^2 near a view) the draws left gaps and clusters, and
+// an evenly spread whole sphere beat the planned walnut (README, "Planning").
 // Why s is mild (0.5): the views along a plate's plane are the ones that see its faces edge on.
 // Avoiding them hard (s = 2 or 4) left a missing wedge: arcs and streaks beside the plate, and a
 // higher RMSE on the thesis' sample 1 than the whole sphere (README, "Planning").
@@ -30,7 +34,7 @@ struct PlannerOptions {
   int candidate_nside = 8;            // 768 candidate directions, 7.3 deg apart
   int planned_views = 100;            // total the trajectory is meant to reach (sets g0)
   double damage_exponent = 0.5;       // s: mild, see above
-  double spread_exponent = 1.0;       // m: the spread term is raised to it
+  double spread_exponent = 4.0;       // m: see above
   double damage_floor_mm = 1.0;       // added to every damage (about a coarse voxel)
   double unreachable_radius_deg = 4.0;
   std::uint64_t seed = 1;
