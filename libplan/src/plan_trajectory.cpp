@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/proj/projection_reading.hpp"
@@ -156,19 +157,27 @@ std::vector<Eigen::Vector3d> scout_directions(int nside) {
   return half;
 }
 
+// Once every line is taken, the opposites follow, spread as directions.
 std::vector<Eigen::Vector3d> whole_sphere_order(int nside) {
-  std::vector<Eigen::Vector3d> cells = HealpixSphere(nside).directions();
+  const std::vector<Eigen::Vector3d> cells = HealpixSphere(nside).directions();
   std::vector<Eigen::Vector3d> order;
-  std::vector<double> nearest(cells.size(), 4.0);  // angle to the chosen ones
+  std::vector<bool> taken(cells.size(), false);
+  std::vector<double> line(cells.size(), 4.0), direction(cells.size(), 4.0);  // to the chosen ones
+  const auto farther = [&](std::size_t c, std::size_t b) {
+    if (line[c] != line[b] || line[c] > 0) return line[c] > line[b];
+    return direction[c] > direction[b];
+  };
   std::size_t pick = 0;
   while (order.size() < cells.size()) {
     order.push_back(cells[pick]);
-    std::size_t best = 0;
+    taken[pick] = true;
+    std::optional<std::size_t> best;
     for (std::size_t c = 0; c < cells.size(); ++c) {
-      nearest[c] = std::min(nearest[c], line_distance_rad(cells[c], cells[pick]));
-      if (nearest[c] > nearest[best]) best = c;
+      line[c] = std::min(line[c], line_distance_rad(cells[c], cells[pick]));
+      direction[c] = std::min(direction[c], angular_distance_rad(cells[c], cells[pick]));
+      if (!taken[c] && (!best || farther(c, *best))) best = c;
     }
-    pick = best;
+    if (best) pick = *best;
   }
   return order;
 }
