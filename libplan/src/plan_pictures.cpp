@@ -75,8 +75,8 @@ void write_trajectory_comparison_png(const std::vector<ComparedTrajectory>& t, c
   const int width = static_cast<int>(t.size() + 1) * size;
   for (const auto& c : t) {
     char label[160];
-    std::snprintf(label, sizeof label, "%s: RMSE %.4f/mm, gradient %.4f", c.name.c_str(), c.quality.rmse_per_mm,
-                  c.quality.profile_gradient_per_mm2);
+    // Short enough for the picture's width; the gradients are in comparison.json and the chart.
+    std::snprintf(label, sizeof label, "%s: RMSE %.5f/mm", c.name.c_str(), c.quality.rmse_per_mm);
     top.push_back(labelled(slice_picture(*c.reconstruction, through[2], ceiling, size), label));
   }
   cv::Mat slices;
