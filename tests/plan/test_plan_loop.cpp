@@ -60,7 +60,7 @@ TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
   o.reconstruction.binning = 2;
   o.planner.planned_views = 28;
   o.planner.seed = 2;
-  o.planner.damage_exponent = 2.0;  // strong enough to show over 22 draws (the default, 0.5, is milder)
+  o.planner.damage_exponent = 2.0;  // strong enough to show over 22 draws (the default, 0.25, is milder)
   o.planner.spread_exponent = 1.0;  // and the spread term no stronger than it
   const PlanningResult r = plan_trajectory(acquisition, setup, o);
   ASSERT_EQ(r.acquired(), 28);
