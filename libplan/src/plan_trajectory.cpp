@@ -161,7 +161,6 @@ std::vector<Eigen::Vector3d> scout_directions(int nside) {
 std::vector<Eigen::Vector3d> whole_sphere_order(int nside) {
   const std::vector<Eigen::Vector3d> cells = HealpixSphere(nside).directions();
   std::vector<Eigen::Vector3d> order;
-  std::vector<bool> taken(cells.size(), false);
   std::vector<double> line(cells.size(), 4.0), direction(cells.size(), 4.0);  // to the chosen ones
   const auto farther = [&](std::size_t c, std::size_t b) {
     if (line[c] != line[b] || line[c] > 0) return line[c] > line[b];
@@ -170,12 +169,11 @@ std::vector<Eigen::Vector3d> whole_sphere_order(int nside) {
   std::size_t pick = 0;
   while (order.size() < cells.size()) {
     order.push_back(cells[pick]);
-    taken[pick] = true;
-    std::optional<std::size_t> best;
+    std::optional<std::size_t> best;  // among the cells not chosen yet: those a direction away
     for (std::size_t c = 0; c < cells.size(); ++c) {
       line[c] = std::min(line[c], line_distance_rad(cells[c], cells[pick]));
       direction[c] = std::min(direction[c], angular_distance_rad(cells[c], cells[pick]));
-      if (!taken[c] && (!best || farther(c, *best))) best = c;
+      if (direction[c] > 0 && (!best || farther(c, *best))) best = c;
     }
     if (best) pick = *best;
   }

@@ -108,7 +108,7 @@ TEST(ViewPlanner, AvoidsThePlatePlaneStaysSpreadAndIsReproducible) {
   // Spread: no two views (or a view and another's opposite) closer than a third of the spacing.
   const double g0 = std::sqrt(2 * M_PI / 60);
   for (std::size_t i = 0; i < chosen.size(); ++i)
-    for (std::size_t j = 0; j < i; ++j) EXPECT_GT(std::acos(std::min(1.0, std::abs(chosen[i].dot(chosen[j])))), g0 / 3);
+    for (std::size_t j = 0; j < i; ++j) EXPECT_GT(line_distance_rad(chosen[i], chosen[j]), g0 / 3);
 
   ViewPlanner b(o);
   b.set_damage(plate_damage(b.candidates()));
