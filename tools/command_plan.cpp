@@ -233,6 +233,7 @@ nlohmann::json random_draw_summary(const std::vector<ComparedTrajectory>& compar
     summary[key] = {{"mean", sum / static_cast<double>(compared.size() - 2)}, {"min", least}, {"max", most}, {"draws_better_than_planned", better}};
   };
   figure("rmse_per_mm", &TrajectoryQuality::rmse_per_mm, true);
+  figure("rmse_outside_absorbers_per_mm", &TrajectoryQuality::rmse_outside_absorbers_per_mm, true);
   figure("edge_gradient_per_mm2", &TrajectoryQuality::edge_gradient_per_mm2, false);
   figure("profile_gradient_per_mm2", &TrajectoryQuality::profile_gradient_per_mm2, false);
   return summary;
@@ -246,6 +247,8 @@ void compare(const PlanCommandOptions& o, const ScanSimulation& simulation) {
   write_volume_nrrd(truth, o.out / "truth.nrrd");
   const SampleRegion region;
   const std::array<int, 3> through = centre_of_mass_voxel(truth, region);
+  // Absorbers in the truth by the planner's own rule: more than times_wall the holder's wall.
+  const float absorber_above = static_cast<float>(SegmentationOptions{}.times_wall * material::pom);
   std::vector<Volume> volumes;
   std::vector<std::string> names = {"planned", "whole-sphere"};
   for (int k = 0; k < o.random_draws; ++k) names.push_back(random_name(k));
@@ -256,16 +259,17 @@ void compare(const PlanCommandOptions& o, const ScanSimulation& simulation) {
   }
   std::vector<ComparedTrajectory> compared;
   nlohmann::json table = nlohmann::json::object();
-  std::cout << "trajectory      views  RMSE (1/mm)  edge gradient (1/mm^2)  profile gradient (1/mm^2)\n";
+  std::cout << "trajectory      views  RMSE (1/mm)  RMSE outside absorbers  edge gradient (1/mm^2)  profile gradient (1/mm^2)\n";
   for (std::size_t i = 0; i < names.size(); ++i) {
-    const TrajectoryQuality q = trajectory_quality(volumes[i], truth, region, through);
+    const TrajectoryQuality q = trajectory_quality(volumes[i], truth, region, through, absorber_above);
     compared.push_back({names[i], &volumes[i], q});
     table[names[i]] = {{"views", n},
                        {"rmse_per_mm", q.rmse_per_mm},
+                       {"rmse_outside_absorbers_per_mm", q.rmse_outside_absorbers_per_mm},
                        {"edge_gradient_per_mm2", q.edge_gradient_per_mm2},
                        {"profile_gradient_per_mm2", q.profile_gradient_per_mm2}};
-    std::printf("%-14s %6d  %11.5f  %22.5f  %25.5f\n", names[i].c_str(), n, q.rmse_per_mm, q.edge_gradient_per_mm2,
-                q.profile_gradient_per_mm2);
+    std::printf("%-14s %6d  %11.5f  %22.5f  %22.5f  %25.5f\n", names[i].c_str(), n, q.rmse_per_mm, q.rmse_outside_absorbers_per_mm,
+                q.edge_gradient_per_mm2, q.profile_gradient_per_mm2);
   }
   std::printf("truth's edge gradient: %.5f, profile gradient: %.5f\n", compared.front().quality.truth_edge_gradient_per_mm2,
               compared.front().quality.truth_profile_gradient_per_mm2);
@@ -279,6 +283,7 @@ void compare(const PlanCommandOptions& o, const ScanSimulation& simulation) {
                             {"volume", {{"size", layout.size}, {"voxel_mm", o.eval_voxel_mm}, {"iterations", o.eval_iterations},
                                         {"lambda", o.eval_lambda}, {"binning", o.eval_binning}}},
                             {"profile_through_voxel", through},
+                            {"absorbers_above_per_mm", absorber_above},
                             {"truth_edge_gradient_per_mm2", compared.front().quality.truth_edge_gradient_per_mm2},
                             {"truth_profile_gradient_per_mm2", compared.front().quality.truth_profile_gradient_per_mm2},
                             {"trajectories", table},

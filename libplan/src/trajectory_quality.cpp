@@ -22,12 +22,21 @@ std::array<int, 3> centre_of_mass_voxel(const Volume& truth, const SampleRegion&
 }
 
 TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const SampleRegion& region,
-                                     const std::array<int, 3>& through) {
+                                     const std::array<int, 3>& through, float absorber_above_per_mm) {
   if (!(x.layout == truth.layout)) throw std::invalid_argument("trajectory_quality: the truth must have the reconstruction's layout");
   TrajectoryQuality q;
   const auto& n = x.layout.size;
-  double sum2 = 0;
-  std::size_t count = 0;
+  // An absorber voxel, or a face neighbour of one (partial volume, the absorber's own blur).
+  auto near_absorber = [&](int i, int j, int k) {
+    const int step[7][3] = {{0, 0, 0}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (const auto& s : step) {
+      const int a = i + s[0], b = j + s[1], c = k + s[2];
+      if (a >= 0 && b >= 0 && c >= 0 && a < n[0] && b < n[1] && c < n[2] && truth.at(a, b, c) > absorber_above_per_mm) return true;
+    }
+    return false;
+  };
+  double sum2 = 0, outside_sum2 = 0;
+  std::size_t count = 0, outside = 0;
   for (int k = 0; k < n[2]; ++k)
     for (int j = 0; j < n[1]; ++j)
       for (int i = 0; i < n[0]; ++i)
@@ -35,8 +44,13 @@ TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const
           const double d = x.at(i, j, k) - truth.at(i, j, k);
           sum2 += d * d;
           ++count;
+          if (!near_absorber(i, j, k)) {
+            outside_sum2 += d * d;
+            ++outside;
+          }
         }
   q.rmse_per_mm = count ? std::sqrt(sum2 / static_cast<double>(count)) : 0.0;
+  q.rmse_outside_absorbers_per_mm = outside ? std::sqrt(outside_sum2 / static_cast<double>(outside)) : 0.0;
 
   // Every pair of neighbouring voxels in the region across which the truth changes.
   double all_gradient = 0, all_truth = 0;

@@ -1,8 +1,11 @@
 // The comparison's figures against what they must be on volumes made to measure: an exact copy
 // scores no error and the truth's own edge gradient, a brighter copy a proportionally steeper
 // one, a blurred copy a shallower one, and the three-profile figure agrees with the all-lines one
-// on a cube (every line through it crosses the same edges).
+// on a cube (every line through it crosses the same edges). The RMSE outside the absorbers
+// leaves out the absorbers' own level and their face neighbours, and only those.
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "ctk/plan/trajectory_quality.hpp"
 
@@ -17,6 +20,8 @@ Volume cube() {
       for (int i = 12; i < 20; ++i) v.at(i, j, k) = 0.05f;
   return v;
 }
+
+constexpr float kNoAbsorber = 1.0f;  // above every truth value here
 
 // Neighbour averaging (1/4, 1/2, 1/4) along x.
 Volume blurred_along_x(const Volume& v) {
@@ -34,7 +39,7 @@ TEST(TrajectoryQuality, EdgeGradientsFollowContrastAndSharpness) {
   const std::array<int, 3> through = centre_of_mass_voxel(truth, region);
   EXPECT_EQ(through, (std::array<int, 3>{16, 16, 16}));
 
-  const TrajectoryQuality same = trajectory_quality(truth, truth, region, through);
+  const TrajectoryQuality same = trajectory_quality(truth, truth, region, through, kNoAbsorber);
   EXPECT_EQ(same.rmse_per_mm, 0.0);
   // Every edge is a full step of 0.05 /mm over 0.5 mm.
   EXPECT_NEAR(same.truth_edge_gradient_per_mm2, 0.1, 1e-6);
@@ -43,16 +48,34 @@ TEST(TrajectoryQuality, EdgeGradientsFollowContrastAndSharpness) {
 
   Volume brighter = truth;
   for (float& x : brighter.data) x *= 1.2f;
-  const TrajectoryQuality b = trajectory_quality(brighter, truth, region, through);
+  const TrajectoryQuality b = trajectory_quality(brighter, truth, region, through, kNoAbsorber);
   EXPECT_NEAR(b.edge_gradient_per_mm2, 0.12, 1e-6);
   EXPECT_NEAR(b.rmse_per_mm, 0.01 * std::sqrt(512.0 / 32768.0), 1e-6);  // 0.01 on the cube's 512 of 32768 voxels
+  EXPECT_DOUBLE_EQ(b.rmse_outside_absorbers_per_mm, b.rmse_per_mm);      // nothing is an absorber
 
   // Blurring along x halves the steps across the x faces (1/4 -> 3/4 of the step); across the y
   // and z faces the first and last columns keep 3/4 of theirs, the six between all of it:
   // (1/2 + 2 x (2 x 3/4 + 6) / 8) / 3 of the truth's.
-  const TrajectoryQuality s = trajectory_quality(blurred_along_x(truth), truth, region, through);
+  const TrajectoryQuality s = trajectory_quality(blurred_along_x(truth), truth, region, through, kNoAbsorber);
   EXPECT_NEAR(s.edge_gradient_per_mm2, 0.1 * (0.5 + 2 * 7.5 / 8) / 3, 1e-6);
   EXPECT_NEAR(s.profile_gradient_per_mm2, 0.1 * (0.5 + 1 + 1) / 3, 1e-6);
+}
+
+TEST(TrajectoryQuality, RmseOutsideAbsorbersLeavesOutTheirLevelAndTheirNeighbours) {
+  const Volume truth = cube();  // the cube is the absorber
+  const float absorber_above = 0.04f;
+  const SampleRegion region;
+  const std::array<int, 3> through = centre_of_mass_voxel(truth, region);
+  Volume x = truth;
+  for (float& v : x.data)
+    if (v > 0) v = 0.07f;      // the absorber's level is off, as under beam hardening
+  x.at(20, 16, 16) = 0.02f;    // a face neighbour of the cube: partial volume
+  x.at(21, 21, 16) = 0.02f;    // an edge neighbour: counted
+  x.at(3, 4, 5) = -0.01f;      // far away: counted
+  const TrajectoryQuality q = trajectory_quality(x, truth, region, through, absorber_above);
+  // 32768 voxels less the cube's 512 and the 6 x 64 face neighbours.
+  EXPECT_NEAR(q.rmse_outside_absorbers_per_mm, std::sqrt((0.02 * 0.02 + 0.01 * 0.01) / (32768.0 - 512 - 384)), 1e-9);
+  EXPECT_NEAR(q.rmse_per_mm, std::sqrt((512 * 0.02 * 0.02 + 2 * 0.02 * 0.02 + 0.01 * 0.01) / 32768.0), 1e-9);
 }
 
 }  // namespace

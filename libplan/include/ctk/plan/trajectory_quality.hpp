@@ -5,6 +5,11 @@
 // measure noise and streaks). Three profiles cross only a handful of edges, so that figure moves
 // by tens of percent with the noise of one run; the same measure over every axis-parallel line
 // of the region (every edge voxel pair of the truth) is the stable one.
+// Under a polychromatic beam an absorber reconstructs to a level set by beam hardening (an
+// aluminium plate of 0.070 /mm at 60 keV comes out at 0.094 to 0.097 /mm from a 90 kV beam, from
+// every trajectory tried), and on a large absorber that offset dominates the RMSE. The RMSE
+// outside the absorbers, and off the voxels touching them, measures what a trajectory does to the
+// rest of the sample: the streaks and the blur it leaves there.
 #include <array>
 #include <vector>
 
@@ -20,6 +25,7 @@ struct LineProfile {
 
 struct TrajectoryQuality {
   double rmse_per_mm = 0;                  // over the sample region
+  double rmse_outside_absorbers_per_mm = 0;  // over the region less the absorbers and their face neighbours
   double profile_gradient_per_mm2 = 0;     // mean |d mu / ds| across the truth's edges on the profiles
   double truth_profile_gradient_per_mm2 = 0;
   double edge_gradient_per_mm2 = 0;        // the same over every axis-parallel line of the region
@@ -28,9 +34,10 @@ struct TrajectoryQuality {
 };
 
 /// `truth` has the reconstruction's layout. The profiles run along x, y and z through
-/// `profile_through` (a voxel), clipped to the sample region.
+/// `profile_through` (a voxel), clipped to the sample region. Voxels whose truth is above
+/// `absorber_above_per_mm` are absorbers.
 TrajectoryQuality trajectory_quality(const Volume& reconstruction, const Volume& truth, const SampleRegion& region,
-                                     const std::array<int, 3>& profile_through);
+                                     const std::array<int, 3>& profile_through, float absorber_above_per_mm);
 
 /// The voxel at the attenuation-weighted centre of the truth inside the region.
 std::array<int, 3> centre_of_mass_voxel(const Volume& truth, const SampleRegion& region);
