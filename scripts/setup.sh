@@ -18,6 +18,7 @@ packages=(
   libgtest-dev libgmock-dev   # tests
   libbenchmark-dev       # benchmarks
   libhwy-dev             # SIMD with runtime dispatch (Highway)
+  python3                # benchmarks/yardstick.py: the benchmark checked from outside (standard library only)
 )
 
 missing=()

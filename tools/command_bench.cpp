@@ -1,11 +1,15 @@
 // ctk bench: throughput of the fast Joseph projector against the naive reference, measured in
 // one run on the standard problem (see ctk/proj/standard_problem.hpp), as a table or JSON.
+// --dump writes what the fast projector computed on the reference's views, so a yardstick outside
+// the project (benchmarks/yardstick.py) can check it with its own arithmetic.
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 
 #include "commands.hpp"
+#include "ctk/geom/atomic_write.hpp"
 #include "ctk/proj/joseph_projector.hpp"
 #include "ctk/proj/reference_projector.hpp"
 #include "ctk/proj/standard_problem.hpp"
@@ -20,7 +24,43 @@ struct BenchOptions {
   int scale = 1;
   int threads = 0;
   bool json = false;
+  std::filesystem::path dump;  // empty: no dump
 };
+
+// Raw float32, native byte order (little-endian on x86-64), as the manifest says.
+void write_floats(const std::filesystem::path& file, const std::vector<float>& values) {
+  write_file_atomically(file, [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(values.size() * sizeof(float)));
+  });
+}
+
+// The reference's views: n evenly spaced among the problem's.
+std::vector<ProjectionMatrix> reference_subset(const StandardProblem& p, int n) {
+  const int n_views = static_cast<int>(p.views.size());
+  std::vector<ProjectionMatrix> subset;
+  for (int i = 0; i < n; ++i) subset.push_back(p.views[static_cast<std::size_t>(i * n_views / n)]);
+  return subset;
+}
+
+// What the yardstick reads: the layout, the detector, the subset's matrices and the raw files.
+void write_dump_manifest(const StandardProblem& p, const std::vector<ProjectionMatrix>& views, const std::filesystem::path& dir) {
+  nlohmann::json matrices = nlohmann::json::array();
+  for (const auto& P : views) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (int r = 0; r < 3; ++r) rows.push_back({P.matrix()(r, 0), P.matrix()(r, 1), P.matrix()(r, 2), P.matrix()(r, 3)});
+    matrices.push_back(rows);
+  }
+  const nlohmann::json j = {
+      {"format", "ctk-bench-dump/1"},
+      {"trajectory", p.trajectory},
+      {"volume", {{"size", p.layout.size}, {"voxel_mm", {p.layout.voxel_mm.x(), p.layout.voxel_mm.y(), p.layout.voxel_mm.z()}},
+                  {"origin_mm", {p.layout.origin_mm.x(), p.layout.origin_mm.y(), p.layout.origin_mm.z()}}, {"order", "x fastest"}}},
+      {"detector", {{"cols", p.cols}, {"rows", p.rows}, {"pixel", "(u, v) = (column, row) at the pixel centre"}}},
+      {"matrices", matrices},
+      {"files", {{"x", "x.raw"}, {"y", "y.raw"}, {"forward", "forward.raw"}, {"back", "back.raw"}}},
+      {"meaning", "forward = A x and back = A' y over these views, by the fast projector; float32, views x rows x cols"}};
+  write_text_atomically(dir / "manifest.json", j.dump(2) + "\n");
+}
 
 template <typename F>
 double seconds(F&& f) {
@@ -44,8 +84,8 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
   const JosephProjector fast({o.threads, 8});
   const int n_views = static_cast<int>(p.views.size());
   const int n_ref = std::min(o.reference_views, n_views);
-  std::vector<ProjectionMatrix> ref_views;
-  for (int i = 0; i < n_ref; ++i) ref_views.push_back(p.views[static_cast<std::size_t>(i * n_views / n_ref)]);
+  const std::vector<ProjectionMatrix> ref_views = reference_subset(p, n_ref);
+  const std::filesystem::path dump = o.dump.empty() ? o.dump : o.dump / p.trajectory;
 
   Volume x(p.layout);
   for (std::size_t i = 0; i < x.data.size(); ++i) x.data[i] = 0.5f + 0.5f * std::sin(0.001f * static_cast<float>(i));
@@ -60,11 +100,20 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
     ref_s = seconds([&] { forward_project_reference(x, ref_views, y_ref); });
     fast.forward(x, ref_views, y_fast_subset);
     agreement = relative_difference(y_fast_subset.data, y_ref.data);
+    if (!dump.empty()) {
+      write_floats(dump / "x.raw", x.data);
+      write_floats(dump / "forward.raw", y_fast_subset.data);
+    }
   } else {
     fast_s = seconds([&] { fast.back(y, p.views, out); });
     ref_s = seconds([&] { back_project_reference(y_ref, ref_views, out_ref); });
     fast.back(y_ref, ref_views, out_fast_subset);
     agreement = relative_difference(out_fast_subset.data, out_ref.data);
+    if (!dump.empty()) {
+      write_floats(dump / "y.raw", y_ref.data);
+      write_floats(dump / "back.raw", out_fast_subset.data);
+      write_dump_manifest(p, ref_views, dump);
+    }
   }
   const double ref_full = ref_s * n_views / n_ref;
   const double voxel_views = static_cast<double>(p.layout.voxel_count()) * n_views;
@@ -90,6 +139,7 @@ void run_bench(const BenchOptions& o) {
   result["simd"] = {{"target", JosephProjector::simd_target()}, {"float_lanes", JosephProjector::simd_lanes()}};
   for (const auto trajectory : {StandardTrajectory::circular, StandardTrajectory::spherical}) {
     const StandardProblem p = standard_problem(trajectory, o.views, o.scale);
+    if (!o.dump.empty()) std::filesystem::create_directories(o.dump / p.trajectory);
     if (trajectory == StandardTrajectory::circular) {
       result["problem"] = {{"volume", p.layout.size},
                            {"voxel_mm", p.layout.voxel_mm.x()},
@@ -128,6 +178,8 @@ void register_bench(CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(1, 64));
   cmd->add_option("--threads", options->threads, "Threads for the fast projector (0 = all)")->capture_default_str();
   cmd->add_flag("--json", options->json, "Print the result as JSON on stdout (the table goes to stderr)");
+  cmd->add_option("--dump", options->dump,
+                  "Write the fast projector's results on the reference's views to this folder (for benchmarks/yardstick.py)");
   cmd->callback([options] { run_bench(*options); });
 }
 
