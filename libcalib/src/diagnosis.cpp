@@ -115,19 +115,6 @@ std::vector<bool> misplaced_spheres(const ScanObservations& o, const std::vector
   return any ? free : std::vector<bool>{};
 }
 
-// Mean of a - b over views in standard errors (paired).
-double paired_z(const std::vector<double>& a, const std::vector<double>& b) {
-  const std::size_t n = a.size();
-  double mean = 0;
-  for (std::size_t i = 0; i < n; ++i) mean += a[i] - b[i];
-  mean /= static_cast<double>(n);
-  double var = 0;
-  for (std::size_t i = 0; i < n; ++i) var += (a[i] - b[i] - mean) * (a[i] - b[i] - mean);
-  var /= static_cast<double>(std::max<std::size_t>(n - 1, 1));
-  const double se = std::sqrt(var / static_cast<double>(n));
-  return se > 0 ? mean / se : (mean > 0 ? 1e9 : 0.0);
-}
-
 // The robot's prediction under `model` against reference poses: the best estimate of where the
 // holder was (image and robot repeatability combined under the final model). An image-only pose
 // would add its own depth noise (~0.15 mm per view at the setup) to every figure.

@@ -8,6 +8,8 @@
 #include <optional>
 #include <sstream>
 
+#include "ctk/geom/statistics.hpp"
+
 namespace ctk {
 
 namespace {
@@ -59,19 +61,6 @@ std::vector<Candidate> make_candidates(const Eigen::Vector2d& nominal_pp, const 
 
 double sum(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); }
 double rms(const std::vector<double>& mean_squares) { return std::sqrt(sum(mean_squares) / static_cast<double>(mean_squares.size())); }
-
-// Paired z of the per-view improvement: mean(before - after) / its standard error.
-double paired_z(const std::vector<double>& before, const std::vector<double>& after) {
-  const std::size_t n = before.size();
-  std::vector<double> d(n);
-  for (std::size_t k = 0; k < n; ++k) d[k] = before[k] - after[k];
-  const double mean = sum(d) / static_cast<double>(n);
-  double var = 0;
-  for (double x : d) var += (x - mean) * (x - mean);
-  var /= static_cast<double>(n - 1);
-  const double se = std::sqrt(var / static_cast<double>(n));
-  return se > 0 ? mean / se : (mean > 0 ? std::numeric_limits<double>::infinity() : 0.0);
-}
 
 // Vertex of the least-squares parabola through (x_i, y_i); NaN when it opens downwards.
 double parabola_vertex(const std::vector<double>& x, const std::vector<double>& y) {

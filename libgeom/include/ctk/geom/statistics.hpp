@@ -1,7 +1,9 @@
 #pragma once
-// Small robust statistics shared by the libraries: the median (for an even count, the upper of
-// the two middle values; 0 when there are none).
+// Small statistics shared by the libraries: the median (for an even count, the upper of the two
+// middle values; 0 when there are none), and the paired z-score that judges an effect on
+// held-out views.
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -20,6 +22,24 @@ T median_in_place(std::vector<T>& values) {
 template <class T>
 T median(std::vector<T> values) {
   return median_in_place(values);
+}
+
+/// Mean of before - after over paired values (one per view) in standard errors of that mean:
+/// how many standard errors `after` improves on `before`. When every difference is the same
+/// (no spread) the answer is +-1e9 for a non-zero mean (finite, so reports stay valid JSON) and 0
+/// otherwise; fewer than two pairs have no spread.
+inline double paired_z(const std::vector<double>& before, const std::vector<double>& after) {
+  const std::size_t n = std::min(before.size(), after.size());
+  if (n == 0) return 0.0;
+  double mean = 0;
+  for (std::size_t i = 0; i < n; ++i) mean += before[i] - after[i];
+  mean /= static_cast<double>(n);
+  double var = 0;
+  for (std::size_t i = 0; i < n; ++i) var += (before[i] - after[i] - mean) * (before[i] - after[i] - mean);
+  var /= static_cast<double>(std::max<std::size_t>(n - 1, 1));
+  const double se = std::sqrt(var / static_cast<double>(n));
+  if (se > 0) return mean / se;
+  return mean > 0 ? 1e9 : mean < 0 ? -1e9 : 0.0;
 }
 
 }  // namespace ctk
