@@ -160,11 +160,11 @@ def check_dump(folder, rays_per_view, voxels, rng):
     forward_diff = relative(fast, mine)
 
     fast, mine = [], []
+    y_views = [y[vi * rows * cols:(vi + 1) * rows * cols] for vi in range(views)]
     for _ in range(voxels):
         ijk = [rng.randrange(s) for s in vol["size"]]
         fast.append(Aty[index(vol["size"], ijk)])
-        mine.append(math.fsum(back_at_voxel(view, y[vi * rows * cols:(vi + 1) * rows * cols], cols, rows, ijk)
-                              for vi, view in enumerate(view_list)))
+        mine.append(math.fsum(back_at_voxel(view, y_view, cols, rows, ijk) for view, y_view in zip(view_list, y_views)))
     back_diff = relative(fast, mine)
 
     lhs = math.fsum(a * b for a, b in zip(Ax, y))
