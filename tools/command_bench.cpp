@@ -112,7 +112,6 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
     if (!dump.empty()) {
       write_floats(dump / "y.raw", y_ref.data);
       write_floats(dump / "back.raw", out_fast_subset.data);
-      write_dump_manifest(p, ref_views, dump);
     }
   }
   const double ref_full = ref_s * n_views / n_ref;
@@ -139,7 +138,10 @@ void run_bench(const BenchOptions& o) {
   result["simd"] = {{"target", JosephProjector::simd_target()}, {"float_lanes", JosephProjector::simd_lanes()}};
   for (const auto trajectory : {StandardTrajectory::circular, StandardTrajectory::spherical}) {
     const StandardProblem p = standard_problem(trajectory, o.views, o.scale);
-    if (!o.dump.empty()) std::filesystem::create_directories(o.dump / p.trajectory);
+    if (!o.dump.empty()) {
+      std::filesystem::create_directories(o.dump / p.trajectory);
+      write_dump_manifest(p, reference_subset(p, std::min(o.reference_views, o.views)), o.dump / p.trajectory);
+    }
     if (trajectory == StandardTrajectory::circular) {
       result["problem"] = {{"volume", p.layout.size},
                            {"voxel_mm", p.layout.voxel_mm.x()},
