@@ -33,6 +33,7 @@ struct ReconstructOptions {
   double lambda = 0, tolerance = 1e-4;
   std::string regulariser = "identity";
   bool unweighted = false;
+  bool as_measured = false;
   std::vector<int> size;
   double voxel_mm = 0;
 };
@@ -85,7 +86,11 @@ void run_reconstruct(const ReconstructOptions& o) {
                              " GB are available: use a coarser --voxel, a smaller --size or fewer views");
 
   Progress reading("reading projections", "views");
-  Measurements m = load_measurements(scan, geometry, {weighted}, std::ref(reading));
+  MeasurementOptions reading_options;
+  reading_options.statistical_weights = weighted;
+  reading_options.undistort = !o.as_measured;
+  Measurements m = load_measurements(scan, geometry, reading_options, std::ref(reading));
+  if (scan.distortion) std::cout << m.notes.front() << "\n";  // the first note says what was done with it
   if (m.clamped_pixels > 0) std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
 
   const JosephProjector A;
@@ -158,6 +163,9 @@ void register_reconstruct(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--tolerance", o->tolerance, "Stop when the gradient has fallen by this factor")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("--unweighted", o->unweighted, "Unit weights even for counts (plain least squares)");
+  cmd->add_flag("--as-measured", o->as_measured,
+                "Use the images as measured even when the scan declares a detector distortion (by default they are "
+                "resampled onto the matrices' pinhole grid)");
   cmd->add_option("--size", o->size, "Voxels: n (cube) or nx ny nz (default: cover the holder, or the field of view)")
       ->expected(1, 3)
       ->check(CLI::Range(1, 100000));

@@ -1,7 +1,8 @@
 #pragma once
 // From a scan and its geometry to what the solvers consume: the line integrals b of the views
 // that are "ok", their matrices, and statistical weights. Counts become line integrals
-// -log((I - dark) / (flat - dark)); non-positive or over-flat values are clamped and counted.
+// -log((I - dark) / (flat - dark)); non-positive or over-flat values are clamped and counted. A
+// declared radial detector distortion is undone by resampling (DetectorUndistortion).
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -25,6 +26,9 @@ struct Measurements {
 
 struct MeasurementOptions {
   bool statistical_weights = true;  // only for counts; line-integral scans always get unit weights
+  /// A declared detector.radial_distortion resamples every image onto the matrices' pinhole grid
+  /// (DetectorUndistortion); false uses the images as measured.
+  bool undistort = true;
 };
 
 /// Reads every "ok" view of `geometry` (others are not used); throws InputError naming the image
