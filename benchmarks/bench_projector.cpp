@@ -1,4 +1,5 @@
-// Google Benchmark of the Joseph projectors on the standard problem (ctk/proj/standard_problem.hpp).
+// Google Benchmark of the Joseph projectors and of FDK's voxel-driven back projection on the
+// standard problem (ctk/proj/standard_problem.hpp).
 // Arguments: {scale, views}; scale 1 is the standard problem (256^3, 256^2, 360 views). The
 // reference runs on one thread, the fast projector on all; compare their voxel_views/s counters.
 #include <benchmark/benchmark.h>
@@ -6,6 +7,7 @@
 #include "ctk/proj/joseph_projector.hpp"
 #include "ctk/proj/reference_projector.hpp"
 #include "ctk/proj/standard_problem.hpp"
+#include "ctk/proj/voxel_backprojection.hpp"
 
 namespace ctk {
 namespace {
@@ -51,6 +53,14 @@ void BM_ReferenceBack(benchmark::State& state) {
   run<T>(state, [](Fixture& f) { back_project_reference(f.y, f.problem.views, f.x); });
 }
 
+// FDK's back projection (circular scans only), weighted by (1000 mm / depth)^2.
+void BM_FastVoxelBack(benchmark::State& state) {
+  run<StandardTrajectory::circular>(state, [](Fixture& f) { voxel_backproject(f.y, f.problem.views, 1000.0, f.x); });
+}
+void BM_ReferenceVoxelBack(benchmark::State& state) {
+  run<StandardTrajectory::circular>(state, [](Fixture& f) { voxel_backproject_reference(f.y, f.problem.views, 1000.0, f.x); });
+}
+
 // The fast projector on the full standard problem; the reference on 12 of its views (same
 // volume and detector), which its voxel_views_per_s counter makes comparable.
 constexpr auto kCircular = StandardTrajectory::circular;
@@ -63,6 +73,8 @@ BENCHMARK(BM_FastForward<kSpherical>)->Args({1, 360})->Unit(benchmark::kSecond)-
 BENCHMARK(BM_FastBack<kSpherical>)->Args({1, 360})->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_ReferenceForward<kSpherical>)->Args({1, 12})->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_ReferenceBack<kSpherical>)->Args({1, 12})->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK(BM_FastVoxelBack)->Args({1, 360})->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK(BM_ReferenceVoxelBack)->Args({1, 12})->Unit(benchmark::kSecond)->UseRealTime();
 
 }  // namespace
 }  // namespace ctk

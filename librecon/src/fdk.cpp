@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "ctk/proj/voxel_backprojection.hpp"
+
 namespace ctk {
 
 namespace {
@@ -182,39 +184,8 @@ void fdk_reconstruct(const std::vector<ProjectionMatrix>& views, ProjectionStack
       for (int col = 0; col < cols; ++col) b.at(static_cast<int>(v), r, col) = filtered.at<float>(r, col) * static_cast<float>(c.step_rad[v]);
   }
 
-  // Voxel-driven back projection, weighted by (R / depth)^2: threads own z slices. Along a
-  // voxel row the homogeneous pixel p = P X is linear in i, so it is stepped, not recomputed.
-  std::fill(x.data.begin(), x.data.end(), 0.0f);
-  const auto& n = x.layout.size;
-  const double R2 = c.radius_mm * c.radius_mm;
-  const Eigen::Vector3d step_i = Eigen::Vector3d(x.layout.voxel_mm.x(), 0, 0);
-#pragma omp parallel for schedule(dynamic)
-  for (int k = 0; k < n[2]; ++k)
-    for (std::size_t v = 0; v < views.size(); ++v) {
-      const Matrix34d& P = views[v].matrix();
-      const float* q = b.view(static_cast<int>(v));
-      const Eigen::Vector3d dp = P.leftCols<3>() * step_i;
-      for (int j = 0; j < n[1]; ++j) {
-        const Eigen::Vector3d p0 = P.leftCols<3>() * x.layout.centre_of(0, j, k) + P.col(3);
-        float* row = &x.at(0, j, k);
-        for (int i = 0; i < n[0]; ++i) {
-          const double pz = p0.z() + i * dp.z();
-          if (pz <= 0) continue;
-          const double inv = 1.0 / pz;
-          const double u = (p0.x() + i * dp.x()) * inv, w = (p0.y() + i * dp.y()) * inv;
-          const double uf = std::floor(u), wf = std::floor(w);
-          const int u0 = static_cast<int>(uf), w0 = static_cast<int>(wf);
-          if (u0 < -1 || w0 < -1 || u0 >= cols || w0 >= rows) continue;
-          const double fu = u - uf, fw = w - wf;
-          auto at = [&](int uu, int ww) -> double {
-            return uu < 0 || ww < 0 || uu >= cols || ww >= rows ? 0.0 : q[static_cast<std::size_t>(ww) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(uu)];
-          };
-          const double value = (1 - fw) * ((1 - fu) * at(u0, w0) + fu * at(u0 + 1, w0)) +
-                               fw * ((1 - fu) * at(u0, w0 + 1) + fu * at(u0 + 1, w0 + 1));
-          row[i] += static_cast<float>(value * R2 * inv * inv);
-        }
-      }
-    }
+  // Voxel-driven back projection, weighted by (R / depth)^2.
+  voxel_backproject(b, views, c.radius_mm, x);
 }
 
 }  // namespace ctk

@@ -1,0 +1,158 @@
+// Voxel-driven back projection: one SIMD kernel per x86 target (Highway, chosen at run time) for
+// a row of voxels along x, and the drivers.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "voxel_backprojection.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#include "ctk/proj/ray_geometry.hpp"
+#include "ctk/proj/voxel_backprojection.hpp"
+
+// What a row kernel needs: the homogeneous pixel P X of the row's first voxel and its step per
+// voxel (float: |P X| reaches 1e6 here, so u carries ~1e-5 px of rounding), the image, the weight.
+#ifndef CTK_PROJ_VOXEL_ROW_DEFINED
+#define CTK_PROJ_VOXEL_ROW_DEFINED
+namespace ctk::detail {
+struct VoxelRow {
+  float p0[3], dp[3];
+  const float* image;
+  int cols, rows;
+  float scale2;  // scale_mm^2
+  int voxels;
+};
+}  // namespace ctk::detail
+#endif
+
+HWY_BEFORE_NAMESPACE();
+namespace ctk::detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+// row[i] += (scale / depth)^2 image(u, v) for the row's voxels i. A corner of the bilinear
+// footprint off the detector has weight zero (its index is clamped so the gather stays inside).
+template <class DF>
+HWY_INLINE hn::Vec<DF> row_values(DF df, const VoxelRow& r, hn::Vec<DF> i) {
+  const hn::RebindToSigned<DF> di;
+  const auto pz = hn::MulAdd(i, hn::Set(df, r.dp[2]), hn::Set(df, r.p0[2]));
+  const auto in_front = hn::Gt(pz, hn::Zero(df));
+  const auto inv = hn::Div(hn::Set(df, 1.0f), hn::IfThenElse(in_front, pz, hn::Set(df, 1.0f)));
+  const auto u = hn::Mul(hn::MulAdd(i, hn::Set(df, r.dp[0]), hn::Set(df, r.p0[0])), inv);
+  const auto v = hn::Mul(hn::MulAdd(i, hn::Set(df, r.dp[1]), hn::Set(df, r.p0[1])), inv);
+  const auto last_u = hn::Set(df, static_cast<float>(r.cols - 1)), last_v = hn::Set(df, static_cast<float>(r.rows - 1));
+  const auto minus_one = hn::Set(df, -1.0f), one = hn::Set(df, 1.0f), zero = hn::Zero(df);
+  // Footprints touching the detector: -1 <= floor(u) <= cols - 1 (NaN compares false).
+  const auto uf = hn::Floor(u), vf = hn::Floor(v);
+  const auto touches = hn::And(in_front, hn::And(hn::And(hn::Ge(uf, minus_one), hn::Le(uf, last_u)),
+                                                 hn::And(hn::Ge(vf, minus_one), hn::Le(vf, last_v))));
+  const auto u0 = hn::IfThenElse(touches, uf, zero), v0 = hn::IfThenElse(touches, vf, zero);
+  const auto fu = hn::IfThenElseZero(touches, hn::Sub(u, uf)), fv = hn::IfThenElseZero(touches, hn::Sub(v, vf));
+  // Corner weights, zero for corners off the detector.
+  const auto wu0 = hn::IfThenElseZero(hn::Ge(u0, zero), hn::Sub(one, fu));
+  const auto wu1 = hn::IfThenElseZero(hn::Lt(u0, last_u), fu);
+  const auto wv0 = hn::IfThenElseZero(hn::And(touches, hn::Ge(v0, zero)), hn::Sub(one, fv));
+  const auto wv1 = hn::IfThenElseZero(hn::And(touches, hn::Lt(v0, last_v)), fv);
+  const auto cols = hn::Set(di, r.cols);
+  const auto iu0 = hn::ConvertTo(di, hn::Max(u0, zero)), iu1 = hn::ConvertTo(di, hn::Min(hn::Add(u0, one), last_u));
+  const auto iv0 = hn::ConvertTo(di, hn::Max(v0, zero)), iv1 = hn::ConvertTo(di, hn::Min(hn::Add(v0, one), last_v));
+  const auto row0 = hn::Mul(iv0, cols), row1 = hn::Mul(iv1, cols);
+  const auto g00 = hn::GatherIndex(df, r.image, hn::Add(row0, iu0)), g10 = hn::GatherIndex(df, r.image, hn::Add(row0, iu1));
+  const auto g01 = hn::GatherIndex(df, r.image, hn::Add(row1, iu0)), g11 = hn::GatherIndex(df, r.image, hn::Add(row1, iu1));
+  const auto value = hn::MulAdd(wv0, hn::MulAdd(wu0, g00, hn::Mul(wu1, g10)), hn::Mul(wv1, hn::MulAdd(wu0, g01, hn::Mul(wu1, g11))));
+  return hn::Mul(value, hn::Mul(hn::Set(df, r.scale2), hn::Mul(inv, inv)));
+}
+
+void BackprojectRow(const VoxelRow& r, float* HWY_RESTRICT row) {
+  const hn::ScalableTag<float> df;
+  const int N = static_cast<int>(hn::Lanes(df));
+  int i = 0;
+  for (; i + N <= r.voxels; i += N) {
+    const auto index = hn::Add(hn::Iota(df, 0.0f), hn::Set(df, static_cast<float>(i)));
+    hn::StoreU(hn::Add(hn::LoadU(df, row + i), row_values(df, r, index)), df, row + i);
+  }
+  if (i < r.voxels) {  // the tail through a full-width buffer
+    HWY_ALIGN float tail[hn::MaxLanes(df)];
+    hn::Store(row_values(df, r, hn::Add(hn::Iota(df, 0.0f), hn::Set(df, static_cast<float>(i)))), df, tail);
+    for (int l = 0; i + l < r.voxels; ++l) row[i + l] += tail[l];
+  }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace ctk::detail
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace ctk {
+namespace detail {
+HWY_EXPORT(BackprojectRow);
+}  // namespace detail
+
+namespace {
+
+void check_inputs(const ProjectionStack& q, const std::vector<ProjectionMatrix>& views, double scale_mm) {
+  check_stack_matches_views(q, views.size());
+  if (!(scale_mm > 0)) throw std::invalid_argument("voxel_backproject: the weight's scale must be positive");
+}
+
+}  // namespace
+
+void voxel_backproject(const ProjectionStack& q, const std::vector<ProjectionMatrix>& views, double scale_mm, Volume& x) {
+  check_inputs(q, views, scale_mm);
+  std::fill(x.data.begin(), x.data.end(), 0.0f);
+  const auto& n = x.layout.size;
+  const Eigen::Vector3d step_i(x.layout.voxel_mm.x(), 0, 0);
+  // A z slice (256 kB at 256^2) stays in cache while every view adds to it, and meets only a
+  // band of each view's rows on a circular scan.
+#pragma omp parallel for schedule(dynamic)
+  for (int k = 0; k < n[2]; ++k)
+    for (std::size_t v = 0; v < views.size(); ++v) {
+      const Matrix34d& P = views[v].matrix();
+      detail::VoxelRow r{};
+      const Eigen::Vector3d dp = P.leftCols<3>() * step_i;
+      for (int a = 0; a < 3; ++a) r.dp[a] = static_cast<float>(dp[a]);
+      r.image = q.view(static_cast<int>(v));
+      r.cols = q.cols;
+      r.rows = q.rows;
+      r.scale2 = static_cast<float>(scale_mm * scale_mm);
+      r.voxels = n[0];
+      for (int j = 0; j < n[1]; ++j) {
+        const Eigen::Vector3d p0 = P.leftCols<3>() * x.layout.centre_of(0, j, k) + P.col(3);
+        for (int a = 0; a < 3; ++a) r.p0[a] = static_cast<float>(p0[a]);
+        HWY_DYNAMIC_DISPATCH(detail::BackprojectRow)(r, &x.at(0, j, k));
+      }
+    }
+}
+
+void voxel_backproject_reference(const ProjectionStack& q, const std::vector<ProjectionMatrix>& views, double scale_mm,
+                                 Volume& x) {
+  check_inputs(q, views, scale_mm);
+  const int cols = q.cols, rows = q.rows;
+  const auto& n = x.layout.size;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) {
+        double sum = 0;
+        for (std::size_t v = 0; v < views.size(); ++v) {
+          const Eigen::Vector3d p = views[v].matrix() * x.layout.centre_of(i, j, k).homogeneous();
+          if (p.z() <= 0) continue;  // behind the source
+          const double u = p.x() / p.z(), w = p.y() / p.z();
+          if (!(u > -2 && w > -2 && u < cols + 1 && w < rows + 1)) continue;  // off the detector
+          const int u0 = static_cast<int>(std::floor(u)), w0 = static_cast<int>(std::floor(w));
+          const double fu = u - u0, fw = w - w0;
+          auto at = [&](int uu, int ww) -> double {
+            if (uu < 0 || ww < 0 || uu >= cols || ww >= rows) return 0.0;
+            return q.at(static_cast<int>(v), ww, uu);
+          };
+          const double value = (1 - fw) * ((1 - fu) * at(u0, w0) + fu * at(u0 + 1, w0)) +
+                               fw * ((1 - fu) * at(u0, w0 + 1) + fu * at(u0 + 1, w0 + 1));
+          sum += value * (scale_mm / p.z()) * (scale_mm / p.z());
+        }
+        x.at(i, j, k) = static_cast<float>(sum);
+      }
+}
+
+}  // namespace ctk
+#endif
