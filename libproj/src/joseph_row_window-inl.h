@@ -16,25 +16,12 @@
 
 #include "joseph_samples-inl.h"
 #include "ray_table.hpp"
+#include "window_lookup-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace ctk::detail {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
-
-// Lanes of `lo` (pos < N) or `hi` (pos - N otherwise), pos in [0, 2N): a two-table permute.
-template <class DF>
-HWY_INLINE hn::Vec<DF> lookup_window(DF df, hn::Vec<DF> lo, hn::Vec<DF> hi, hn::Vec<hn::RebindToSigned<DF>> pos) {
-#if HWY_TARGET <= HWY_AVX3
-  (void)df;
-  return hn::Vec<DF>{_mm512_permutex2var_ps(lo.raw, pos.raw, hi.raw)};
-#else
-  const hn::RebindToSigned<DF> di;
-  const auto n = hn::Set(di, static_cast<std::int32_t>(hn::Lanes(df)));
-  const auto idx = hn::IndicesFromVec(df, hn::And(pos, hn::Sub(n, hn::Set(di, 1))));
-  return hn::IfThenElse(hn::RebindMask(df, hn::Lt(pos, n)), hn::TableLookupLanes(lo, idx), hn::TableLookupLanes(hi, idx));
-#endif
-}
 
 // Where a window bundle's lanes sit in slice k: the first voxel x0 of the 2N-voxel window along
 // b (kept inside the row) and the lowest row c0. Lanes step along b (LanePath), so the ends

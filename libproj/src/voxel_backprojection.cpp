@@ -11,6 +11,7 @@
 
 #include "ctk/proj/ray_geometry.hpp"
 #include "ctk/proj/voxel_backprojection.hpp"
+#include "window_lookup-inl.h"
 
 // What a row kernel needs: the homogeneous pixel P X of the row's first voxel and its step per
 // voxel (float: |P X| reaches 1e6 here, so u carries ~1e-5 px of rounding), the image, the weight.
@@ -31,6 +32,45 @@ HWY_BEFORE_NAMESPACE();
 namespace ctk::detail {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
+
+// The four corners (u0, v0), (u1, v0), (u0, v1), (u1, v1) of every lane without gathers, when
+// the lanes that touch the detector fall within 2N columns and three rows: those rows are
+// loaded whole and each lane picks its corners by permutes. A row of voxels usually projects so
+// (along a detector row, or to nearly one pixel); false otherwise, and the caller gathers.
+template <class DF, class MI, class VI = hn::Vec<hn::RebindToSigned<DF>>>
+HWY_INLINE bool window_corners(DF df, const VoxelRow& r, MI touches, VI iu0, VI iu1, VI iv0, VI iv1, hn::Vec<DF>& g00,
+                               hn::Vec<DF>& g10, hn::Vec<DF>& g01, hn::Vec<DF>& g11) {
+#if HWY_TARGET == HWY_SCALAR
+  (void)df, (void)r, (void)touches, (void)iu0, (void)iu1, (void)iv0, (void)iv1, (void)g00, (void)g10, (void)g01, (void)g11;
+  return false;
+#else
+  const hn::RebindToSigned<DF> di;
+  const int N = static_cast<int>(hn::Lanes(df));
+  if (r.cols < 2 * N || r.rows < 3) return false;
+  const auto far = hn::Set(di, 1 << 29);
+  const int x0 = std::min(hn::GetLane(hn::MinOfLanes(di, hn::IfThenElse(touches, iu0, far))), r.cols - 2 * N);
+  const int y0 = std::min(hn::GetLane(hn::MinOfLanes(di, hn::IfThenElse(touches, iv0, far))), r.rows - 3);
+  // Lanes off the detector (weight zero) read the window's first voxel.
+  const auto pos0 = hn::IfThenElseZero(touches, hn::Sub(iu0, hn::Set(di, x0)));
+  const auto pos1 = hn::IfThenElseZero(touches, hn::Sub(iu1, hn::Set(di, x0)));
+  const auto row0 = hn::IfThenElseZero(touches, hn::Sub(iv0, hn::Set(di, y0)));
+  const auto row1 = hn::IfThenElseZero(touches, hn::Sub(iv1, hn::Set(di, y0)));
+  if (!hn::AllTrue(di, hn::Lt(pos1, hn::Set(di, 2 * N))) || !hn::AllTrue(di, hn::Lt(row1, hn::Set(di, 3)))) return false;
+  const float* base = r.image + static_cast<std::ptrdiff_t>(y0) * r.cols + x0;
+  hn::Vec<DF> at0[3], at1[3];  // row j at pos0 and at pos1
+  for (int j = 0; j < 3; ++j) {
+    const auto lo = hn::LoadU(df, base + j * r.cols), hi = hn::LoadU(df, base + j * r.cols + N);
+    at0[j] = lookup_window(df, lo, hi, pos0);
+    at1[j] = lookup_window(df, lo, hi, pos1);
+  }
+  const auto pick = [&](VI row, const hn::Vec<DF>(&at)[3]) {
+    return hn::IfThenElse(hn::RebindMask(df, hn::Eq(row, hn::Set(di, 2))), at[2],
+                          hn::IfThenElse(hn::RebindMask(df, hn::Eq(row, hn::Set(di, 1))), at[1], at[0]));
+  };
+  g00 = pick(row0, at0), g10 = pick(row0, at1), g01 = pick(row1, at0), g11 = pick(row1, at1);
+  return true;
+#endif
+}
 
 // row[i] += (scale / depth)^2 image(u, v) for the row's voxels i. A corner of the bilinear
 // footprint off the detector has weight zero (its index is clamped so the gather stays inside).
@@ -58,9 +98,12 @@ HWY_INLINE hn::Vec<DF> row_values(DF df, const VoxelRow& r, hn::Vec<DF> i) {
   const auto cols = hn::Set(di, r.cols);
   const auto iu0 = hn::ConvertTo(di, hn::Max(u0, zero)), iu1 = hn::ConvertTo(di, hn::Min(hn::Add(u0, one), last_u));
   const auto iv0 = hn::ConvertTo(di, hn::Max(v0, zero)), iv1 = hn::ConvertTo(di, hn::Min(hn::Add(v0, one), last_v));
-  const auto row0 = hn::Mul(iv0, cols), row1 = hn::Mul(iv1, cols);
-  const auto g00 = hn::GatherIndex(df, r.image, hn::Add(row0, iu0)), g10 = hn::GatherIndex(df, r.image, hn::Add(row0, iu1));
-  const auto g01 = hn::GatherIndex(df, r.image, hn::Add(row1, iu0)), g11 = hn::GatherIndex(df, r.image, hn::Add(row1, iu1));
+  hn::Vec<DF> g00, g10, g01, g11;
+  if (!window_corners(df, r, hn::RebindMask(di, touches), iu0, iu1, iv0, iv1, g00, g10, g01, g11)) {
+    const auto row0 = hn::Mul(iv0, cols), row1 = hn::Mul(iv1, cols);
+    g00 = hn::GatherIndex(df, r.image, hn::Add(row0, iu0)), g10 = hn::GatherIndex(df, r.image, hn::Add(row0, iu1));
+    g01 = hn::GatherIndex(df, r.image, hn::Add(row1, iu0)), g11 = hn::GatherIndex(df, r.image, hn::Add(row1, iu1));
+  }
   const auto value = hn::MulAdd(wv0, hn::MulAdd(wu0, g00, hn::Mul(wu1, g10)), hn::Mul(wv1, hn::MulAdd(wu0, g01, hn::Mul(wu1, g11))));
   return hn::Mul(value, hn::Mul(hn::Set(df, r.scale2), hn::Mul(inv, inv)));
 }

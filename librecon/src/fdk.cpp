@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "ctk/proj/parallel.hpp"
 #include "ctk/proj/voxel_backprojection.hpp"
 
 namespace ctk {
@@ -139,7 +140,9 @@ void fdk_reconstruct(const std::vector<ProjectionMatrix>& views, ProjectionStack
   const int cols = b.cols, rows = b.rows;
   const int n_fft = cv::getOptimalDFTSize(2 * cols);
 
-  for (std::size_t v = 0; v < views.size(); ++v) {
+  // Views are filtered independently: a few at a time.
+  parallel_for_dynamic(static_cast<int>(views.size()), [&](int view) {
+    const auto v = static_cast<std::size_t>(view);
     const ProjectionMatrix& P = views[v];
     const Eigen::Vector3d source = P.source_position();
     const Eigen::Vector3d central = (c.centre - source - (c.centre - source).dot(c.axis) * c.axis).normalized();
@@ -182,7 +185,7 @@ void fdk_reconstruct(const std::vector<ProjectionMatrix>& views, ProjectionStack
     cv::dft(spectrum, filtered, cv::DFT_ROWS | cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
     for (int r = 0; r < rows; ++r)
       for (int col = 0; col < cols; ++col) b.at(static_cast<int>(v), r, col) = filtered.at<float>(r, col) * static_cast<float>(c.step_rad[v]);
-  }
+  });
 
   // Voxel-driven back projection, weighted by (R / depth)^2.
   voxel_backproject(b, views, c.radius_mm, x);

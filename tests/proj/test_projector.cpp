@@ -1,7 +1,6 @@
 // The Joseph projectors: matched adjoint pair, agreement with the naive reference, and line
 // integrals of voxelised analytic objects against their closed forms.
 #include <gtest/gtest.h>
-#include <hwy/targets.h>
 
 #include <Eigen/Geometry>
 #include <random>
@@ -9,6 +8,7 @@
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/proj/joseph_projector.hpp"
 #include "ctk/proj/reference_projector.hpp"
+#include "simd_targets.hpp"
 
 namespace ctk {
 namespace {
@@ -165,23 +165,8 @@ Problem row_window_problem() {
   return p;
 }
 
-// Runs `check` on every SIMD target this CPU runs (AVX-512, AVX2, SSE4), not only the one
-// dispatch picks: the row window is 2 x lanes wide, and its back projection differs between
-// targets, as do the tiles' transpositions.
-template <typename Check>
-void on_every_simd_target(Check&& check) {
-  const std::int64_t supported = hwy::SupportedTargets();
-  for (const std::int64_t target : {HWY_AVX3, HWY_AVX2, HWY_SSE4}) {
-    if ((supported & target) == 0) continue;
-    hwy::SetSupportedTargetsForTest(target);
-    SCOPED_TRACE(JosephProjector::simd_target());
-    check();
-  }
-  hwy::SetSupportedTargetsForTest(0);  // back to what the CPU has
-}
-
 TEST(JosephProjector, RowWindowPathsAgreeWithTheReferenceAndAreAdjoint) {
-  on_every_simd_target([] {
+  testing::on_every_simd_target([] {
     EXPECT_LT(expect_fast_matches_reference(row_window_problem(), 7), 1e-5);
     for (std::uint64_t seed : {4u, 5u}) expect_fast_matches_reference(random_problem(seed), seed);
   });
@@ -202,7 +187,7 @@ Problem rays_along_x_problem() {
 
 TEST(JosephProjector, RaysAlongXThroughTilesAgreeWithTheReferenceAndAreAdjoint) {
   const Problem p = rays_along_x_problem();
-  on_every_simd_target([&] {
+  testing::on_every_simd_target([&] {
     EXPECT_LT(expect_fast_matches_reference(p, 11), 1e-5);
     // Slabs of the back projection that cut tiles short, on one thread and on three.
     Volume x(p.layout);
@@ -238,7 +223,7 @@ Problem turned_detector_problem() {
 
 TEST(JosephProjector, TurnedDetectorsAgreeWithTheReferenceAndAreAdjoint) {
   const Problem p = turned_detector_problem();
-  on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 21), 1e-5); });
+  testing::on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 21), 1e-5); });
 }
 
 TEST(JosephProjector, RaysMissingTheVolumeGiveZero) {
