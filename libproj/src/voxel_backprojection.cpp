@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <stdexcept>
 
 #include "ctk/proj/ray_geometry.hpp"
 #include "ctk/proj/voxel_backprojection.hpp"
@@ -72,8 +73,9 @@ HWY_INLINE bool window_corners(DF df, const VoxelRow& r, MI touches, VI iu0, VI 
 #endif
 }
 
-// row[i] += (scale / depth)^2 image(u, v) for the row's voxels i. A corner of the bilinear
-// footprint off the detector has weight zero (its index is clamped so the gather stays inside).
+// (scale / depth)^2 image(P X) for the voxels i of the row (fractional x index per lane). A
+// corner of the bilinear footprint off the detector has weight zero (its index is clamped so the
+// read stays inside the image).
 template <class DF>
 HWY_INLINE hn::Vec<DF> row_values(DF df, const VoxelRow& r, hn::Vec<DF> i) {
   const hn::RebindToSigned<DF> di;
