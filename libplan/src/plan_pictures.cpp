@@ -27,10 +27,13 @@ cv::Mat slice_picture(const Volume& v, int k, float ceiling, int size) {
   return colour;
 }
 
-cv::Mat labelled(const cv::Mat& picture, const std::string& label) {
-  cv::Mat out(picture.rows + 28, picture.cols, CV_8UC3, cv::Scalar(255, 255, 255));
-  picture.copyTo(out(cv::Rect(0, 28, picture.cols, picture.rows)));
-  cv::putText(out, label, cv::Point(6, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, colour::black, 1, cv::LINE_AA);
+// The picture under a label of two lines (every panel of a row gets the same height).
+cv::Mat labelled(const cv::Mat& picture, const std::string& line1, const std::string& line2 = "") {
+  const int top = 46;
+  cv::Mat out(picture.rows + top, picture.cols, CV_8UC3, cv::Scalar(255, 255, 255));
+  picture.copyTo(out(cv::Rect(0, top, picture.cols, picture.rows)));
+  cv::putText(out, line1, cv::Point(6, 18), cv::FONT_HERSHEY_SIMPLEX, 0.5, colour::black, 1, cv::LINE_AA);
+  cv::putText(out, line2, cv::Point(6, 38), cv::FONT_HERSHEY_SIMPLEX, 0.5, colour::black, 1, cv::LINE_AA);
   return out;
 }
 
@@ -74,10 +77,12 @@ void write_trajectory_comparison_png(const std::vector<ComparedTrajectory>& t, c
   for (float v : t.front().quality.profiles.front().truth) hi = std::max(hi, static_cast<double>(v));
   const int width = static_cast<int>(t.size() + 1) * size;
   for (const auto& c : t) {
-    char label[160];
+    char line1[160], line2[160];
     // Short enough for the picture's width; the gradients are in comparison.json and the chart.
-    std::snprintf(label, sizeof label, "%s: RMSE %.5f/mm", c.name.c_str(), c.quality.rmse_per_mm);
-    top.push_back(labelled(slice_picture(*c.reconstruction, through[2], ceiling, size), label));
+    // Without the absorbers (and their neighbours) the RMSE shows what their level hides.
+    std::snprintf(line1, sizeof line1, "%s: RMSE %.5f/mm", c.name.c_str(), c.quality.rmse_per_mm);
+    std::snprintf(line2, sizeof line2, "without absorbers %.5f/mm", c.quality.rmse_outside_absorbers_per_mm);
+    top.push_back(labelled(slice_picture(*c.reconstruction, through[2], ceiling, size), line1, line2));
   }
   cv::Mat slices;
   cv::hconcat(top, slices);
