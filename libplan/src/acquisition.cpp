@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <thread>
 
 #include "ctk/geom/atomic_write.hpp"
@@ -38,9 +39,23 @@ AcquisitionAnswer FileExchangeAcquisition::acquire(const AcquisitionRequest& r) 
                                   {"direction_holder", json3(r.direction)},
                                   {"R_camera_holder", rows},
                                   {"holder_origin_camera_mm", json3(r.holder_origin_camera_mm)}};
-  write_text_atomically(request_file(folder_, r.view), request.dump(2) + "\n");
-
-  const std::filesystem::path file = answer_file(folder_, r.view);
+  const std::filesystem::path file = answer_file(folder_, r.view), asked = request_file(folder_, r.view);
+  // An answer already here is from an earlier run in this folder, stopped before the end. It is
+  // taken when it answered the same direction, so the same command run again replays the views
+  // the lab has acquired (the planner is deterministic for a seed) and goes on from there; an
+  // answer to another direction is an error, never mixed in.
+  if (std::filesystem::exists(file) && std::filesystem::exists(asked)) {
+    const Eigen::Vector3d earlier = read_request(asked).direction;
+    if ((earlier - r.direction).norm() > 1e-9) {
+      std::ostringstream what;
+      what << "answers a request of an earlier run for direction (" << earlier.transpose() << "), but view " << r.view
+           << " now asks for (" << r.direction.transpose()
+           << "): run with the earlier run's settings, or give a folder without its answers";
+      throw InputError(file.string(), "view", what.str());
+    }
+  } else {
+    write_text_atomically(asked, request.dump(2) + "\n");
+  }
   const auto deadline = std::chrono::steady_clock::now() + timeout_;
   while (!std::filesystem::exists(file)) {
     if (std::chrono::steady_clock::now() > deadline)

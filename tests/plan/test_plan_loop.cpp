@@ -145,6 +145,29 @@ TEST(LabExchange, RequestsAndAnswersThroughFiles) {
   EXPECT_NEAR(answers[2].counts.pixels[0], std::round(1000 + 100 * 2 / std::sqrt(5.0)), 0.5);
   EXPECT_DOUBLE_EQ(answers[2].joints[3], -2.0);
 
+  // The planner run again in the folder (after an interruption): the same requests take the
+  // answers already there, with no lab to answer them; a different request is refused.
+  FileExchangeAcquisition again(dir, 8, 6, std::chrono::seconds(1));
+  for (int view = 0; view < 3; ++view) {
+    AcquisitionRequest r;
+    r.view = view;
+    r.direction = Eigen::Vector3d(view, 1, 0).normalized();
+    const AcquisitionAnswer replayed = again.acquire(r);
+    EXPECT_EQ(replayed.acquired, answers[static_cast<std::size_t>(view)].acquired) << view;
+    EXPECT_EQ(replayed.counts.pixels, answers[static_cast<std::size_t>(view)].counts.pixels) << view;
+  }
+  AcquisitionRequest other;
+  other.view = 2;
+  other.direction = Eigen::Vector3d(0, 0, 1);
+  try {
+    again.acquire(other);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("answer-0002.json"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("earlier run"), std::string::npos) << e.what();
+  }
+  EXPECT_NEAR(read_request(request_file(dir, 2)).direction.x(), 2 / std::sqrt(5.0), 1e-12);  // left as the lab saw it
+
   // A malformed answer names its key; a lab that never answers times out.
   write_answer(dir, 3, AcquisitionAnswer{});
   std::string text;
