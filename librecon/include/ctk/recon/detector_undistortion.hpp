@@ -2,8 +2,9 @@
 // Projections taken through a radially distorted detector, resampled onto the pinhole grid the
 // matrices describe. A point whose ideal projection is x was measured at
 // RadialDistortion::measured_from_ideal(x), so the ideal image at pixel x is the measured image
-// read there, bilinearly (OpenCV's remap). Calibration undistorts sphere centres the same way;
-// this makes the images agree with the same pinhole matrices.
+// read there, bilinearly (OpenCV's remap, whose weights come from a table in steps of 1/32 px).
+// Calibration undistorts sphere centres the same way; this makes the images agree with the same
+// pinhole matrices.
 #include <vector>
 
 #include "ctk/geom/detector.hpp"
