@@ -35,7 +35,7 @@ struct ViewPaths {
             int rows_per_block) {
     for (const auto& P : views) {
       rays.push_back(view_rays(P, layout));
-      path.push_back(detail::LanePath::for_view(rays.back(), cols, rows));
+      path.push_back(detail::LanePath::for_view(rays.back(), layout, cols, rows));
       blocks.push_back((path.back().lines + rows_per_block - 1) / rows_per_block);
       most_blocks = std::max(most_blocks, blocks.back());
       most_lanes = std::max(most_lanes, path.back().majors);

@@ -1,10 +1,11 @@
 #include "ray_table.hpp"
 
+#include <Eigen/QR>
 #include <algorithm>
 
 namespace ctk::detail {
 
-LanePath LanePath::for_view(const ViewRays& rays, int cols, int rows) {
+LanePath LanePath::for_view(const ViewRays& rays, const VolumeLayout& layout, int cols, int rows) {
   // At the central ray, the sample's c in a slice is c = s_c + (k - s_a) d_c / d_a; a pixel step
   // (du, dv) changes d_c / d_a in proportion to g = (du_c d_a - d_c du_a, dv_c d_a - d_c dv_a).
   // Lanes step across g.
@@ -23,10 +24,33 @@ LanePath LanePath::for_view(const ViewRays& rays, int cols, int rows) {
   const int lo = std::min(0, end), hi = std::max(0, end);
   p.line_first = -hi;
   p.lines = p.minors + hi - lo;
+  // The footprint: pixel (u, v) of corner X solves d0 + u du + v dv = lambda (X - source).
+  Eigen::Matrix3d A;
+  A.col(0) = rays.du;
+  A.col(1) = rays.dv;
+  const Eigen::Vector3d box_lo = Eigen::Vector3d::Constant(-1.0);
+  const Eigen::Vector3d box_hi(layout.size[0], layout.size[1], layout.size[2]);
+  double u_lo = 1e300, u_hi = -1e300, v_lo = 1e300, v_hi = -1e300;
+  for (int corner = 0; corner < 8; ++corner) {
+    Eigen::Vector3d X;
+    for (int axis = 0; axis < 3; ++axis) X[axis] = (corner >> axis) & 1 ? box_hi[axis] : box_lo[axis];
+    A.col(2) = -(X - rays.source);
+    const Eigen::Vector3d uvl = A.colPivHouseholderQr().solve(-rays.d0);
+    if (!(uvl.z() > 0)) return p;  // a corner behind the source (or on its plane): no footprint
+    u_lo = std::min(u_lo, uvl.x()), u_hi = std::max(u_hi, uvl.x());
+    v_lo = std::min(v_lo, uvl.y()), v_hi = std::max(v_hi, uvl.y());
+  }
+  // Half a pixel more for rounding: skipping a ray that touches would be an error, preparing one
+  // that misses only costs time.
+  p.u_lo = u_lo - 0.5, p.u_hi = u_hi + 0.5, p.v_lo = v_lo - 0.5, p.v_hi = v_hi + 0.5;
   return p;
 }
 
 bool LanePath::meets_detector(int line, int lane, int count) const {
+  int u0, v0, u1, v1;
+  pixel(line, lane, u0, v0);
+  pixel(line, lane + count - 1, u1, v1);
+  if (std::max(u0, u1) < u_lo || std::min(u0, u1) > u_hi || std::max(v0, v1) < v_lo || std::min(v0, v1) > v_hi) return false;
   for (int l = lane; l < lane + count; ++l)
     if (inside(line, l)) return true;
   return false;

@@ -36,9 +36,14 @@ struct LanePath {
   double slope = 0;               // minor pixels per lane, |slope| <= 1
   int majors = 1, minors = 1;     // detector pixels along the major and the minor axis
   int line_first = 0, lines = 1;  // line numbers in use
+  // The pixels whose rays can touch the volume: the bounding rectangle of the volume's box, grown
+  // by a voxel (bilinear samples reach that far), projected on the detector. Rays elsewhere
+  // project to zero and are never prepared (a small volume on a large detector would otherwise
+  // pay for every pixel's ray). Everything when part of that box lies behind the source.
+  double u_lo = -1e300, u_hi = 1e300, v_lo = -1e300, v_hi = 1e300;
 
   /// The path for a view of cols x rows pixels, chosen at the detector's centre.
-  static LanePath for_view(const ViewRays& rays, int cols, int rows);
+  static LanePath for_view(const ViewRays& rays, const VolumeLayout& layout, int cols, int rows);
   int minor(int line, int lane) const { return line_first + line + static_cast<int>(std::floor(lane * slope + 0.5)); }
   /// Pixel (u, v) of lane `lane` of line `line` (0 = the first line), inside the detector or not.
   void pixel(int line, int lane, int& u, int& v) const {
@@ -50,7 +55,8 @@ struct LanePath {
     const int m = minor(line, lane);
     return lane >= 0 && lane < majors && m >= 0 && m < minors;
   }
-  /// Whether any of lanes [lane, lane + count) of the line is inside the detector.
+  /// Whether any of lanes [lane, lane + count) of the line is inside the detector, with the
+  /// lanes' rectangle of pixels meeting the volume's footprint.
   bool meets_detector(int line, int lane, int count) const;
 };
 

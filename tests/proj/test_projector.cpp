@@ -226,6 +226,20 @@ TEST(JosephProjector, TurnedDetectorsAgreeWithTheReferenceAndAreAdjoint) {
   testing::on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 21), 1e-5); });
 }
 
+// A small volume on a large detector: only the pixels of the volume's footprint (its box grown by
+// a voxel, projected) get rays. Fine pixels (0.4 mm at the volume) put many rays in that one-voxel
+// margin, oblique views put the box's corners far apart, and the principal point 48 px off centre
+// leaves the volume partly off the detector's edge.
+TEST(JosephProjector, ASmallVolumeOnALargeDetectorAgreesWithTheReference) {
+  const Problem p = problem_with_views(VolumeLayout::centred({12, 10, 9}, {1.0, 1.1, 0.9}), 90, 110, 300, 450,
+                                       {{Eigen::Vector3d(1, 0.1, 0.05), 0.6},
+                                        {Eigen::Vector3d(0.6, 1, 0.7), 0.6, 30},
+                                        {Eigen::Vector3d(0.1, 0.05, -1), 0.6, 80},
+                                        {Eigen::Vector3d(-1, 0.3, 0.2), 1.1}},
+                                       {0.03, -0.02}, {48, 10}, Eigen::Vector3d(1.5, -2.0, 0.5));
+  testing::on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 33), 1e-5); });
+}
+
 TEST(JosephProjector, RaysMissingTheVolumeGiveZero) {
   const VolumeLayout layout = VolumeLayout::centred({16, 16, 16}, {1, 1, 1});
   Volume x(layout);
