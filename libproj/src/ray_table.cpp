@@ -24,7 +24,10 @@ LanePath LanePath::for_view(const ViewRays& rays, const VolumeLayout& layout, in
   const int lo = std::min(0, end), hi = std::max(0, end);
   p.line_first = -hi;
   p.lines = p.minors + hi - lo;
-  // The footprint: pixel (u, v) of corner X solves d0 + u du + v dv = lambda (X - source).
+  // The footprint: pixel (u, v) of corner X solves d0 + u du + v dv = lambda (X - source). Every
+  // pixel's d has the same depth (P is normalised), so depth(X) = n . (X - source) with n normal
+  // to du and dv and n . d0 = 1, and lambda = 1 / depth(X).
+  const Eigen::Vector3d normal = rays.du.cross(rays.dv) / rays.du.cross(rays.dv).dot(rays.d0);
   Eigen::Matrix3d A;
   A.col(0) = rays.du;
   A.col(1) = rays.dv;
@@ -34,9 +37,10 @@ LanePath LanePath::for_view(const ViewRays& rays, const VolumeLayout& layout, in
   for (int corner = 0; corner < 8; ++corner) {
     Eigen::Vector3d X;
     for (int axis = 0; axis < 3; ++axis) X[axis] = (corner >> axis) & 1 ? box_hi[axis] : box_lo[axis];
+    const double depth = normal.dot(X - rays.source);
+    if (!(depth > 1e-6 * (X - rays.source).norm())) return p;  // a corner behind the source or beside it: no footprint
     A.col(2) = -(X - rays.source);
     const Eigen::Vector3d uvl = A.colPivHouseholderQr().solve(-rays.d0);
-    if (!(uvl.z() > 0)) return p;  // a corner behind the source (or on its plane): no footprint
     u_lo = std::min(u_lo, uvl.x()), u_hi = std::max(u_hi, uvl.x());
     v_lo = std::min(v_lo, uvl.y()), v_hi = std::max(v_hi, uvl.y());
   }
