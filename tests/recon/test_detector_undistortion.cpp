@@ -57,9 +57,10 @@ TEST(DetectorUndistortion, ADeclaredDistortionLoadsAsTheUndistortedScan) {
   sim.trajectory = circular_robot_trajectory(sim.setup, 3);
   sim.output = SimulatedOutput::line_integrals;
   sim.robot_noise = {0, 0};
-  const auto plain = testing::scratch_dir() / "plain", distorted = testing::scratch_dir() / "distorted";
+  const auto dir = testing::scratch_dir();
+  const auto plain = dir / "plain", distorted = dir / "distorted";
   simulate_scan(sim, plain);
-  // Centred in a corner, so the holder (in the middle) moves by 1 to 4 px.
+  // Centred near a corner, so the holder (in the middle, 30 to 70 px from it) moves by 0.5 to 7 px.
   const RadialDistortion distortion{2e-5, {10.0, 8.0}};
   sim.effects.detector_distortion = distortion;
   simulate_scan(sim, distorted);
