@@ -90,7 +90,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   reading_options.statistical_weights = weighted;
   reading_options.undistort = !o.as_measured;
   Measurements m = load_measurements(scan, geometry, reading_options, std::ref(reading));
-  if (scan.distortion) std::cout << m.notes.front() << "\n";  // the first note says what was done with it
+  if (!m.distortion_note.empty()) std::cout << m.distortion_note << "\n";
   if (m.clamped_pixels > 0) std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
 
   const JosephProjector A;
@@ -136,6 +136,7 @@ void run_reconstruct(const ReconstructOptions& o) {
       {"views_used", m.view_indices},
       {"clamped_pixels", m.clamped_pixels},
       {"notes", m.notes},
+      {"detector_distortion", m.distortion_note},
       {"memory_plan", plan.describe()},
       {"solver", to_json(report)},
       {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};

@@ -48,7 +48,7 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
     } else {
       note << "the images are used as measured (the projector is a pinhole)";
     }
-    m.notes.push_back(note.str());
+    m.distortion_note = note.str();
   }
   const std::optional<FlatDark> flat_dark = read_flat_dark(scan);
   std::vector<std::size_t> clamped(static_cast<std::size_t>(n), 0);

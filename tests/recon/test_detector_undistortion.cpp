@@ -72,8 +72,10 @@ TEST(DetectorUndistortion, ADeclaredDistortionLoadsAsTheUndistortedScan) {
   MeasurementOptions as_measured_options;
   as_measured_options.undistort = false;
   const Measurements as_measured = load_measurements(scan, geometry, as_measured_options);
-  ASSERT_EQ(undistorted.notes.size(), 1u);
-  EXPECT_NE(undistorted.notes[0].find("resampled"), std::string::npos) << undistorted.notes[0];
+  EXPECT_TRUE(undistorted.notes.empty());
+  EXPECT_NE(undistorted.distortion_note.find("resampled"), std::string::npos) << undistorted.distortion_note;
+  EXPECT_NE(as_measured.distortion_note.find("as measured"), std::string::npos) << as_measured.distortion_note;
+  EXPECT_TRUE(truth.distortion_note.empty());
   // Bilinear resampling blurs the holder's sharp edges by a fraction of a pixel, as much as a
   // small shift moves them; a shift of pixels stays when both are summed over 5 x 5 pixels.
   // Compared where the measured 5 x 5 block lies on the detector.

@@ -22,6 +22,7 @@ struct Measurements {
   ProjectionStack weights;                 // W: empty (views == 0) when unit weights
   std::size_t clamped_pixels = 0;          // counts at or below dark (or flat not above dark)
   std::vector<std::string> notes;          // per-view findings worth a line in the log
+  std::string distortion_note;             // what was done with a declared detector distortion; empty when none
 };
 
 struct MeasurementOptions {
