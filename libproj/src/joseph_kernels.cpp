@@ -128,8 +128,14 @@ HWY_INLINE const Bundle* volume_bundles(const RayTable& t, std::size_t lanes, in
   return s.volume;
 }
 
-HWY_INLINE XGrid x_grid(const RayTable& t, std::size_t r) {
-  return {t.stride_b[r], t.stride_c[r], t.n_b[r], t.n_c[r]};
+// The volume's grid as the strip's rays along x see it, from a lane that runs along x: lanes
+// that miss the volume may carry another axis (or none), and along_x admits them.
+HWY_INLINE XGrid x_grid(const RayTable& t, const XStrip& s, std::size_t lanes) {
+  for (std::size_t l = 0; l < lanes; ++l) {
+    const std::size_t r = s.entries[0] + l;
+    if (t.axis[r] == 0 && t.k_first[r] <= t.k_last[r]) return {t.stride_b[r], t.stride_c[r], t.n_b[r], t.n_c[r]};
+  }
+  return {};  // unreachable: along_x requires such a lane
 }
 
 // Slices [k_begin, k_end) in chunks of up to kTileSlices, aligned so that each tile row is one
@@ -163,7 +169,7 @@ HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRIC
   RayTable& local = w.local;
   prepare_strip(df, t, s, local);
   HWY_ALIGN float sums[XStrip::kMaxBundles * kMaxLanes] = {};
-  const XGrid g = x_grid(t, s.entries[0]);
+  const XGrid g = x_grid(t, s, hn::Lanes(df));
   Tile tile;
   tile.data = w.tile_data.data();
   for_each_chunk(s.k_lo, s.k_hi, 0, 1 << 30, [&](int k0, int k1) {
@@ -192,7 +198,7 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
   RayTable& local = w.local;
   prepare_strip(df, t, s, local);
   const auto all = hn::FirstN(df, hn::Lanes(df));
-  const XGrid g = x_grid(t, s.entries[0]);
+  const XGrid g = x_grid(t, s, hn::Lanes(df));
   Tile tile;
   tile.data = w.tile_data.data();
   for_each_chunk(s.k_lo, s.k_hi, k_begin, k_end, [&](int k0, int k1) {
