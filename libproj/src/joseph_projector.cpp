@@ -61,6 +61,9 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
   const int items = y.views * paths.most_blocks;
 #pragma omp parallel num_threads(threads())
   {
+    // Pixels outside a view's footprint are in none of its lines: their rays miss the volume.
+#pragma omp for schedule(static)
+    for (int v = 0; v < y.views; ++v) std::fill_n(y.view(v), y.pixels_per_view(), 0.0f);
     detail::RayTable table;
     table.shape(1, rows_per_block, paths.most_lanes);
     std::vector<float> out(table.pb_mid.size());
@@ -89,6 +92,7 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
   if (y.views == 0) return;
   const int rows_per_block = options_.rows_per_block;
   const ViewPaths paths(views, x.layout, y.cols, y.rows, rows_per_block);
+  if (paths.most_blocks == 0) return;  // no view's footprint meets its detector
   const int n_threads = threads();
   // Several views share one table, so the threads meet at a barrier once per batch rather than
   // once per view (barriers dominate small problems, and cost dearly when cores are shared).

@@ -18,36 +18,53 @@ LanePath LanePath::for_view(const ViewRays& rays, const VolumeLayout& layout, in
   LanePath p;
   p.along_u = std::abs(gv) >= std::abs(gu);  // the step (gv, -gu) is mostly along u
   p.slope = p.along_u ? (gv != 0 ? -gu / gv : 0.0) : -gv / gu;
-  p.majors = p.along_u ? cols : rows;
   p.minors = p.along_u ? rows : cols;
-  const int end = static_cast<int>(std::floor((p.majors - 1) * p.slope + 0.5));
-  const int lo = std::min(0, end), hi = std::max(0, end);
-  p.line_first = -hi;
-  p.lines = p.minors + hi - lo;
-  // The footprint: pixel (u, v) of corner X solves d0 + u du + v dv = lambda (X - source). Every
-  // pixel's d has the same depth (P is normalised), so depth(X) = n . (X - source) with n normal
-  // to du and dv and n . d0 = 1, and lambda = 1 / depth(X).
+  p.find_footprint(rays, layout);
+  // Lines only over the footprint's pixels (all of them when it is unbounded).
+  const double major_lo = p.along_u ? p.u_lo : p.v_lo, major_hi = p.along_u ? p.u_hi : p.v_hi;
+  const double minor_lo = p.along_u ? p.v_lo : p.u_lo, minor_hi = p.along_u ? p.v_hi : p.u_hi;
+  const int major_count = p.along_u ? cols : rows;
+  p.major_first = static_cast<int>(std::clamp(std::ceil(major_lo), 0.0, static_cast<double>(major_count)));
+  const int major_last = static_cast<int>(std::clamp(std::floor(major_hi), -1.0, major_count - 1.0));
+  const int minor_first = static_cast<int>(std::clamp(std::ceil(minor_lo), 0.0, static_cast<double>(p.minors)));
+  const int minor_last = static_cast<int>(std::clamp(std::floor(minor_hi), -1.0, p.minors - 1.0));
+  p.majors = std::max(0, major_last - p.major_first + 1);
+  if (p.majors == 0 || minor_last < minor_first) {
+    p.majors = 0, p.lines = 0;
+    return p;
+  }
+  // Line j covers minors line_first + j + round(m slope) over the footprint's majors m.
+  const int e0 = static_cast<int>(std::floor(p.major_first * p.slope + 0.5));
+  const int e1 = static_cast<int>(std::floor(major_last * p.slope + 0.5));
+  p.line_first = minor_first - std::max(e0, e1);
+  p.lines = minor_last - minor_first + 1 + std::abs(e1 - e0);
+  return p;
+}
+
+void LanePath::find_footprint(const ViewRays& rays, const VolumeLayout& layout) {
+  // Pixel (u, v) of corner X solves d0 + u du + v dv = lambda (X - source). Every pixel's d has
+  // the same depth (P is normalised), so depth(X) = n . (X - source) with n normal to du and dv
+  // and n . d0 = 1, and lambda = 1 / depth(X).
   const Eigen::Vector3d normal = rays.du.cross(rays.dv) / rays.du.cross(rays.dv).dot(rays.d0);
   Eigen::Matrix3d A;
   A.col(0) = rays.du;
   A.col(1) = rays.dv;
   const Eigen::Vector3d box_lo = Eigen::Vector3d::Constant(-1.0);
   const Eigen::Vector3d box_hi(layout.size[0], layout.size[1], layout.size[2]);
-  double u_lo = 1e300, u_hi = -1e300, v_lo = 1e300, v_hi = -1e300;
+  double lo_u = 1e300, hi_u = -1e300, lo_v = 1e300, hi_v = -1e300;
   for (int corner = 0; corner < 8; ++corner) {
     Eigen::Vector3d X;
     for (int axis = 0; axis < 3; ++axis) X[axis] = (corner >> axis) & 1 ? box_hi[axis] : box_lo[axis];
     const double depth = normal.dot(X - rays.source);
-    if (!(depth > 1e-6 * (X - rays.source).norm())) return p;  // a corner behind the source or beside it: no footprint
+    if (!(depth > 1e-6 * (X - rays.source).norm())) return;  // a corner behind the source or beside it: unbounded
     A.col(2) = -(X - rays.source);
     const Eigen::Vector3d uvl = A.colPivHouseholderQr().solve(-rays.d0);
-    u_lo = std::min(u_lo, uvl.x()), u_hi = std::max(u_hi, uvl.x());
-    v_lo = std::min(v_lo, uvl.y()), v_hi = std::max(v_hi, uvl.y());
+    lo_u = std::min(lo_u, uvl.x()), hi_u = std::max(hi_u, uvl.x());
+    lo_v = std::min(lo_v, uvl.y()), hi_v = std::max(hi_v, uvl.y());
   }
   // Half a pixel more for rounding: skipping a ray that touches would be an error, preparing one
   // that misses only costs time.
-  p.u_lo = u_lo - 0.5, p.u_hi = u_hi + 0.5, p.v_lo = v_lo - 0.5, p.v_hi = v_hi + 0.5;
-  return p;
+  u_lo = lo_u - 0.5, u_hi = hi_u + 0.5, v_lo = lo_v - 0.5, v_hi = hi_v + 0.5;
 }
 
 bool LanePath::meets_detector(int line, int lane, int count) const {

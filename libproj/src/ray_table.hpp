@@ -28,14 +28,16 @@ struct Bundle {
 // one row of every slice. Lanes step along the major detector axis (u or v) and, in a staircase,
 // `slope` minor pixels per lane: the detector direction along which a ray's sample moves along
 // the other axis b only (the contiguous one, in the volume or in a tile) of the view's dominant
-// axis. Lane l of line j is the pixel (major l, minor j + round(l slope)); the lines partition the
-// detector. Pixels the staircase puts outside the detector still get their rays (the bundle
-// stays whole), but are never read or written.
+// axis. Lane l of line j is the pixel (major m = major_first + l, minor line_first + j +
+// round(m slope)); the lines partition the pixels of the volume's footprint. Pixels the staircase
+// puts outside the detector still get their rays (the bundle stays whole), but are never read or
+// written; pixels outside the footprint are in no line (their rays miss the volume).
 struct LanePath {
   bool along_u = true;            // the major axis is u (columns)
   double slope = 0;               // minor pixels per lane, |slope| <= 1
-  int majors = 1, minors = 1;     // detector pixels along the major and the minor axis
-  int line_first = 0, lines = 1;  // line numbers in use
+  int major_first = 0, majors = 1;  // the footprint's pixels along the major axis (lanes per line)
+  int minors = 1;                   // detector pixels along the minor axis
+  int line_first = 0, lines = 1;    // line numbers in use (none when the footprint misses the detector)
   // The pixels whose rays can touch the volume: the bounding rectangle of the volume's box, grown
   // by a voxel (bilinear samples reach that far), projected on the detector. Rays elsewhere
   // project to zero and are never prepared (a small volume on a large detector would otherwise
@@ -44,12 +46,14 @@ struct LanePath {
 
   /// The path for a view of cols x rows pixels, chosen at the detector's centre.
   static LanePath for_view(const ViewRays& rays, const VolumeLayout& layout, int cols, int rows);
-  int minor(int line, int lane) const { return line_first + line + static_cast<int>(std::floor(lane * slope + 0.5)); }
+  int minor(int line, int lane) const {
+    return line_first + line + static_cast<int>(std::floor((major_first + lane) * slope + 0.5));
+  }
   /// Pixel (u, v) of lane `lane` of line `line` (0 = the first line), inside the detector or not.
   void pixel(int line, int lane, int& u, int& v) const {
     const int m = minor(line, lane);
-    u = along_u ? lane : m;
-    v = along_u ? m : lane;
+    u = along_u ? major_first + lane : m;
+    v = along_u ? m : major_first + lane;
   }
   bool inside(int line, int lane) const {
     const int m = minor(line, lane);
@@ -58,6 +62,9 @@ struct LanePath {
   /// Whether any of lanes [lane, lane + count) of the line is inside the detector, with the
   /// lanes' rectangle of pixels meeting the volume's footprint.
   bool meets_detector(int line, int lane, int count) const;
+
+ private:
+  void find_footprint(const ViewRays& rays, const VolumeLayout& layout);
 };
 
 struct RayTable {
