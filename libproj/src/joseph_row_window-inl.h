@@ -197,13 +197,24 @@ HWY_INLINE bool scatter_window(const RayTable& t, float* HWY_RESTRICT volume, st
     }
     return true;
   }
-  for (int layer = 0; layer < 3; ++layer) {  // lanes whose corner c is row c0, c0 + 1, c0 + 2
-    const auto lanes = static_cast<__mmask16>(keep & _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(layer)));
-    if (lanes == 0) continue;
-    const Map m = lanes == keep ? all : map_of(lanes);
+  // Lanes by the row of their corner c (c0, c0 + 1, c0 + 2). Each row's lanes must sit on
+  // distinct voxels: with rays closer than a voxel, a staircase that zigzags across a row
+  // boundary puts two lanes on one voxel with a lane of the other row between them, which the
+  // merge above (neighbouring lanes only) leaves apart. Such a sample is left to the scatter,
+  // before anything is written.
+  Map maps[3] = {};
+  __mmask16 lanes[3] = {};
+  for (int layer = 0; layer < 3; ++layer) {
+    lanes[layer] = static_cast<__mmask16>(keep & _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(layer)));
+    if (lanes[layer] == 0) continue;
+    maps[layer] = map_of(lanes[layer]);
+    if (maps[layer].voxels != _mm_popcnt_u32(lanes[layer])) return false;
+  }
+  for (int layer = 0; layer < 3; ++layer) {
+    if (lanes[layer] == 0) continue;
     float* row = base + layer * sc;
-    add_row(m, w[0], w[1], row);
-    add_row(m, w[2], w[3], row + sc);
+    add_row(maps[layer], w[0], w[1], row);
+    add_row(maps[layer], w[2], w[3], row + sc);
   }
   return true;
 }
