@@ -92,57 +92,47 @@ void RayTable::shape(int view_count, int row_count, int lanes) {
 void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int slot, const LanePath& path, int line_begin,
                     int ray_begin, int ray_end) {
   const auto strides = layout.strides();
-  bool meets = false;
-  for (int r = ray_begin; r < ray_end; ++r) {
-    const int row = r / row_stride, lane = r % row_stride;
-    const std::size_t i = entry(slot, row, lane);
-    if (lane % kMaxLanes == 0 || r == ray_begin)
-      meets = path.meets_detector(line_begin + row, lane - lane % kMaxLanes, kMaxLanes);
-    if (!meets) {
-      empty(i, i + 1);
+  double u[kMaxLanes], v[kMaxLanes];
+  PreparedRays p;
+  // A run of entries at a time: the rest of a bundle (kMaxLanes lanes of one line) within the range.
+  for (int r = ray_begin; r < ray_end;) {
+    const int row = r / row_stride, lane = r % row_stride, bundle_lane = lane - lane % kMaxLanes;
+    const int count = std::min(ray_end, row * row_stride + bundle_lane + kMaxLanes) - r;
+    const std::size_t first = entry(slot, row, lane);
+    r += count;
+    if (!path.meets_detector(line_begin + row, bundle_lane, kMaxLanes)) {
+      empty(first, first + static_cast<std::size_t>(count));
       continue;
     }
-    int u, v;
-    path.pixel(line_begin + row, lane, u, v);
-    const MarchedRay m = march_ray(rays, layout, u, v);
-    const auto [b, c] = other_axes(m.axis);
-    pb_mid[i] = static_cast<float>(m.pb_mid);
-    beta_b[i] = static_cast<float>(m.beta_b);
-    pc_mid[i] = static_cast<float>(m.pc_mid);
-    beta_c[i] = static_cast<float>(m.beta_c);
-    weight[i] = static_cast<float>(m.weight_mm);
-    k_mid[i] = 0.5f * static_cast<float>(layout.size[static_cast<std::size_t>(m.axis)] - 1);
-    k_first[i] = m.k_first;
-    k_last[i] = m.k_last;
-    axis[i] = m.axis;
-    stride_a[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(m.axis)]);
-    stride_b[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(b)]);
-    stride_c[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(c)]);
-    n_b[i] = layout.size[static_cast<std::size_t>(b)];
-    n_c[i] = layout.size[static_cast<std::size_t>(c)];
-    find_interior(i);
-  }
-}
-
-void RayTable::find_interior(std::size_t i) {
-  double k_lo = k_first[i], k_hi = k_last[i];
-  const double margin = 1e-3;
-  for (int q = 0; q < 2; ++q) {
-    const double p_mid = q == 0 ? static_cast<double>(pb_mid[i]) - origin_b : static_cast<double>(pc_mid[i]) - origin_c;
-    const double beta = q == 0 ? beta_b[i] : beta_c[i];
-    const double n_max = (q == 0 ? n_b[i] : n_c[i]) - 1 - margin;
-    if (beta == 0) {
-      if (!(p_mid >= margin && p_mid <= n_max)) k_lo = 1e9;
-      continue;
+    for (int l = 0; l < kMaxLanes; ++l) {
+      int pu, pv;
+      path.pixel(line_begin + row, lane + std::min(l, count - 1), pu, pv);
+      u[l] = pu, v[l] = pv;
     }
-    double a = k_mid[i] + (margin - p_mid) / beta, b = k_mid[i] + (n_max - p_mid) / beta;
-    if (a > b) std::swap(a, b);
-    k_lo = std::max(k_lo, std::ceil(a));
-    k_hi = std::min(k_hi, std::floor(b));
+    prepare_rays(rays, layout, origin_b, origin_c, u, v, count, p);
+    for (int l = 0; l < count; ++l) {
+      const std::size_t i = first + static_cast<std::size_t>(l);
+      const int a = static_cast<int>(p.axis[l]);
+      const auto [b, c] = other_axes(a);
+      pb_mid[i] = static_cast<float>(p.pb_mid[l]);
+      beta_b[i] = static_cast<float>(p.beta_b[l]);
+      pc_mid[i] = static_cast<float>(p.pc_mid[l]);
+      beta_c[i] = static_cast<float>(p.beta_c[l]);
+      weight[i] = static_cast<float>(p.weight_mm[l]);
+      k_mid[i] = 0.5f * static_cast<float>(layout.size[static_cast<std::size_t>(a)] - 1);
+      k_first[i] = static_cast<std::int32_t>(p.k_first[l]);
+      k_last[i] = static_cast<std::int32_t>(p.k_last[l]);
+      axis[i] = a;
+      stride_a[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(a)]);
+      stride_b[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(b)]);
+      stride_c[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(c)]);
+      n_b[i] = layout.size[static_cast<std::size_t>(b)];
+      n_c[i] = layout.size[static_cast<std::size_t>(c)];
+      in_first[i] = static_cast<std::int32_t>(p.in_first[l]);
+      in_last[i] = static_cast<std::int32_t>(p.in_last[l]);
+      if (in_last[i] < in_first[i]) in_first[i] = 0, in_last[i] = -1;
+    }
   }
-  in_first[i] = static_cast<std::int32_t>(std::clamp(k_lo, -1e9, 1e9));
-  in_last[i] = static_cast<std::int32_t>(std::clamp(k_hi, -1e9, 1e9));
-  if (in_last[i] < in_first[i]) in_first[i] = 0, in_last[i] = -1;
 }
 
 void RayTable::copy_entries(const RayTable& from, std::size_t from_entry, std::size_t to_entry, std::size_t n) {

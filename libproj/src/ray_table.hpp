@@ -97,13 +97,23 @@ struct RayTable {
   /// table together. Bundles with no pixel on the detector are left empty.
   void fill(const ViewRays& rays, const VolumeLayout& layout, int slot, const LanePath& path, int line_begin,
             int ray_begin, int ray_end);
-  /// Sets in_first and in_last of entry i from its ray, as the kernels will see it (in float).
-  void find_interior(std::size_t i);
   /// Marks entries [begin, end) empty: they touch nothing and project to zero.
   void empty(std::size_t begin, std::size_t end);
   /// Copies `n` entries of `from`, starting at `from_entry`, to this table at `to_entry`.
   void copy_entries(const RayTable& from, std::size_t from_entry, std::size_t to_entry, std::size_t n);
 };
+
+/// Up to kMaxLanes rays as march_ray prepares them, with the interior range (in_first, in_last:
+/// slices where all four corners of the sample, as the float table holds it, are inside the
+/// grid by 1e-3 voxel). Integers are held as doubles.
+struct PreparedRays {
+  double axis[kMaxLanes], pb_mid[kMaxLanes], beta_b[kMaxLanes], pc_mid[kMaxLanes], beta_c[kMaxLanes];
+  double weight_mm[kMaxLanes], k_first[kMaxLanes], k_last[kMaxLanes], in_first[kMaxLanes], in_last[kMaxLanes];
+};
+/// The rays through pixels (u[l], v[l]), l < count <= kMaxLanes (u and v readable up to
+/// kMaxLanes), SIMD across rays; origin_b and origin_c are the table's grid origin.
+void prepare_rays(const ViewRays& rays, const VolumeLayout& layout, int origin_b, int origin_c, const double* u,
+                  const double* v, int count, PreparedRays& out);
 
 // Kernels (Highway, dispatched to the widest SIMD unit at run time).
 /// out[e] = line integral of the ray at entry e, for every entry in use (out sized like the table).

@@ -331,6 +331,17 @@ TEST(JosephProjector, RandomGeometriesAgreeWithTheReference) {
   }
 }
 
+// A source inside the volume (a sample held against the tube): only slices in front of it count.
+TEST(JosephProjector, ASourceInsideTheVolumeAgreesWithTheReference) {
+  const Problem p = problem_with_views(VolumeLayout::centred({40, 36, 30}, {1.0, 1.0, 1.0}), 50, 60, 6.3, 300,
+                                       {{Eigen::Vector3d(1, 0.2, 0.1), 3.0},
+                                        {Eigen::Vector3d(0.1, -1, 0.3), 3.0, 20},
+                                        {Eigen::Vector3d(0.3, 0.2, 1), 3.0, 60},
+                                        {Eigen::Vector3d(-1, -1, 0.05), 3.0}},
+                                       {0.0, 0.0}, {0.0, 0.0}, Eigen::Vector3d(0.37, -0.21, 0.13));
+  testing::on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 51), 1e-5); });
+}
+
 TEST(JosephProjector, RaysMissingTheVolumeGiveZero) {
   const VolumeLayout layout = VolumeLayout::centred({16, 16, 16}, {1, 1, 1});
   Volume x(layout);

@@ -1,0 +1,145 @@
+// Per SIMD target: preparing the rays of a run of table entries, SIMD across rays in double
+// precision. The same arithmetic as march_ray (which the reference projector marches with) and
+// RayTable::find_interior, operation for operation, so the table holds the same numbers; compiled
+// without contraction into FMAs (CMakeLists.txt), which would round differently.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "ray_table_fill.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "ray_table.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace ctk::detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+// The lane's value of x, y or z by its axis (0, 1, 2).
+template <class V, class M>
+HWY_INLINE V by_axis(M is0, M is1, V x, V y, V z) {
+  return hn::IfThenElse(is0, x, hn::IfThenElse(is1, y, z));
+}
+
+// clip() of ray_geometry.cpp: the k range where lo < p_mid + (k - k_mid) beta < hi, widened by
+// one slice.
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE void clip(D d, V p_mid, V beta, V lo, V hi, V k_mid, V& k_lo, V& k_hi) {
+  const auto still = hn::Eq(beta, hn::Zero(d));
+  const auto inside = hn::And(hn::Gt(p_mid, lo), hn::Lt(p_mid, hi));
+  V a = hn::Add(k_mid, hn::Div(hn::Sub(lo, p_mid), beta));
+  V b = hn::Add(k_mid, hn::Div(hn::Sub(hi, p_mid), beta));
+  const V first = hn::Min(a, b), second = hn::Max(a, b);
+  const V inf = hn::Set(d, std::numeric_limits<double>::infinity());
+  k_lo = hn::IfThenElse(still, hn::IfThenElse(inside, k_lo, inf), hn::Max(k_lo, hn::Floor(first)));
+  k_hi = hn::IfThenElse(still, k_hi, hn::Min(k_hi, hn::Floor(second)));
+}
+
+// find_interior's range for one axis, from the float values the kernels see.
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE void interior(D d, V p_mid, V beta, V n_max, V k_mid, V& k_lo, V& k_hi) {
+  const V margin = hn::Set(d, 1e-3);
+  const auto still = hn::Eq(beta, hn::Zero(d));
+  const auto inside = hn::And(hn::Ge(p_mid, margin), hn::Le(p_mid, n_max));
+  V a = hn::Add(k_mid, hn::Div(hn::Sub(margin, p_mid), beta));
+  V b = hn::Add(k_mid, hn::Div(hn::Sub(n_max, p_mid), beta));
+  const V first = hn::Min(a, b), second = hn::Max(a, b);
+  k_lo = hn::IfThenElse(still, hn::IfThenElse(inside, k_lo, hn::Set(d, 1e9)), hn::Max(k_lo, hn::Ceil(first)));
+  k_hi = hn::IfThenElse(still, k_hi, hn::Min(k_hi, hn::Floor(second)));
+}
+
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE V through_float(D d, V x) {
+  const hn::Rebind<float, D> df;
+  return hn::PromoteTo(d, hn::DemoteTo(df, x));
+}
+
+void PrepareRays(const ViewRays& rays, const VolumeLayout& layout, int grid_origin_b, int grid_origin_c, const double* u,
+                 const double* v, int count, PreparedRays& out) {
+  const hn::ScalableTag<double> d;
+  using V = hn::Vec<decltype(d)>;
+  const int N = static_cast<int>(hn::Lanes(d));
+  const V n0 = hn::Set(d, layout.size[0]), n1 = hn::Set(d, layout.size[1]), n2 = hn::Set(d, layout.size[2]);
+  const V one = hn::Set(d, 1.0), minus_one = hn::Set(d, -1.0), half = hn::Set(d, 0.5);
+  const V origin_b = hn::Set(d, grid_origin_b), origin_c = hn::Set(d, grid_origin_c);
+  for (int i = 0; i < count; i += N) {
+    const V U = hn::LoadU(d, u + i), W = hn::LoadU(d, v + i);
+    V dir[3];
+    for (int k = 0; k < 3; ++k)
+      dir[k] = hn::Add(hn::Add(hn::Set(d, rays.d0[k]), hn::Mul(U, hn::Set(d, rays.du[k]))), hn::Mul(W, hn::Set(d, rays.dv[k])));
+    const V ax = hn::Abs(dir[0]), ay = hn::Abs(dir[1]), az = hn::Abs(dir[2]);
+    // The first largest, as Eigen's maxCoeff finds it.
+    const auto is0 = hn::And(hn::Ge(ax, ay), hn::Ge(ax, az));
+    const auto is1 = hn::AndNot(is0, hn::Ge(ay, az));
+    const auto is2 = hn::Not(hn::Or(is0, is1));
+    const V sx = hn::Set(d, rays.source[0]), sy = hn::Set(d, rays.source[1]), sz = hn::Set(d, rays.source[2]);
+    // Axes b < c besides a: (1, 2), (0, 2), (0, 1).
+    const V da = by_axis(is0, is1, dir[0], dir[1], dir[2]);
+    const V db = hn::IfThenElse(is0, dir[1], dir[0]), dc = hn::IfThenElse(is2, dir[1], dir[2]);
+    const V sa = by_axis(is0, is1, sx, sy, sz);
+    const V sb = hn::IfThenElse(is0, sy, sx), sc = hn::IfThenElse(is2, sy, sz);
+    const V na = by_axis(is0, is1, n0, n1, n2);
+    const V nb = hn::IfThenElse(is0, n1, n0), nc = hn::IfThenElse(is2, n1, n2);
+    const V k_mid = hn::Mul(half, hn::Sub(na, one));
+    const V beta_b = hn::Div(db, da), beta_c = hn::Div(dc, da);
+    const V pb_mid = hn::Add(sb, hn::Mul(hn::Sub(k_mid, sa), beta_b));
+    const V pc_mid = hn::Add(sc, hn::Mul(hn::Sub(k_mid, sa), beta_c));
+    V sum = hn::Zero(d);
+    for (int k = 0; k < 3; ++k) {
+      const V scaled = hn::Mul(dir[k], hn::Set(d, layout.voxel_mm[k]));
+      sum = hn::Add(sum, hn::Mul(scaled, scaled));
+    }
+    const V weight = hn::Div(hn::Sqrt(sum), hn::Abs(da));
+
+    V k_lo = hn::Zero(d), k_hi = hn::Sub(na, one);
+    clip(d, pb_mid, beta_b, minus_one, nb, k_mid, k_lo, k_hi);
+    clip(d, pc_mid, beta_c, minus_one, nc, k_mid, k_lo, k_hi);
+    // Only points in front of the source.
+    const auto forward = hn::Gt(da, hn::Zero(d));
+    k_lo = hn::IfThenElse(forward, hn::Max(k_lo, hn::Add(hn::Floor(sa), one)), k_lo);
+    k_hi = hn::IfThenElse(forward, k_hi, hn::Min(k_hi, hn::Sub(hn::Ceil(sa), one)));
+    const auto met = hn::Le(k_lo, k_hi);
+    const V k_first = hn::IfThenElseZero(met, k_lo), k_last = hn::IfThenElse(met, k_hi, minus_one);
+
+    // The interior range, from the values as stored (float).
+    const V k_mid_f = through_float(d, k_mid);
+    V in_lo = k_first, in_hi = k_last;
+    const V margin = hn::Set(d, 1e-3);
+    interior(d, hn::Sub(through_float(d, pb_mid), origin_b), through_float(d, beta_b), hn::Sub(hn::Sub(nb, one), margin),
+             k_mid_f, in_lo, in_hi);
+    interior(d, hn::Sub(through_float(d, pc_mid), origin_c), through_float(d, beta_c), hn::Sub(hn::Sub(nc, one), margin),
+             k_mid_f, in_lo, in_hi);
+    const V big = hn::Set(d, 1e9);
+    in_lo = hn::Min(hn::Max(in_lo, hn::Neg(big)), big);
+    in_hi = hn::Min(hn::Max(in_hi, hn::Neg(big)), big);
+
+    const V axis = hn::IfThenElse(is0, hn::Zero(d), hn::IfThenElse(is1, one, hn::Set(d, 2.0)));
+    hn::StoreU(axis, d, out.axis + i);
+    hn::StoreU(beta_b, d, out.beta_b + i);
+    hn::StoreU(beta_c, d, out.beta_c + i);
+    hn::StoreU(pb_mid, d, out.pb_mid + i);
+    hn::StoreU(pc_mid, d, out.pc_mid + i);
+    hn::StoreU(weight, d, out.weight_mm + i);
+    hn::StoreU(k_first, d, out.k_first + i);
+    hn::StoreU(k_last, d, out.k_last + i);
+    hn::StoreU(in_lo, d, out.in_first + i);
+    hn::StoreU(in_hi, d, out.in_last + i);
+  }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace ctk::detail
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace ctk::detail {
+HWY_EXPORT(PrepareRays);
+void prepare_rays(const ViewRays& rays, const VolumeLayout& layout, int origin_b, int origin_c, const double* u,
+                  const double* v, int count, PreparedRays& out) {
+  HWY_DYNAMIC_DISPATCH(PrepareRays)(rays, layout, origin_b, origin_c, u, v, count, out);
+}
+}  // namespace ctk::detail
+#endif
