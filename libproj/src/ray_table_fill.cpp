@@ -35,7 +35,7 @@ HWY_INLINE void clip(D d, V p_mid, V beta, V lo, V hi, V k_mid, V& k_lo, V& k_hi
   const V first = hn::Min(a, b), second = hn::Max(a, b);
   const V inf = hn::Set(d, std::numeric_limits<double>::infinity());
   k_lo = hn::IfThenElse(still, hn::IfThenElse(inside, k_lo, inf), hn::Max(k_lo, hn::Floor(first)));
-  k_hi = hn::IfThenElse(still, k_hi, hn::Min(k_hi, hn::Floor(second)));
+  k_hi = hn::IfThenElse(still, k_hi, hn::Min(k_hi, hn::Ceil(second)));
 }
 
 // find_interior's range for one axis, from the float values the kernels see.
