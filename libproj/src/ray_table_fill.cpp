@@ -1,7 +1,8 @@
 // Per SIMD target: preparing the rays of a run of table entries, SIMD across rays in double
-// precision. The same arithmetic as march_ray (which the reference projector marches with) and
-// RayTable::find_interior, operation for operation, so the table holds the same numbers; compiled
-// without contraction into FMAs (CMakeLists.txt), which would round differently.
+// precision. The same arithmetic as march_ray (which the reference projector marches with),
+// operation for operation, so the table holds the same numbers; compiled without contraction into
+// FMAs (CMakeLists.txt), which would round differently. Then the interior range, where the
+// kernels' mask-free paths may run.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "ray_table_fill.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -38,7 +39,8 @@ HWY_INLINE void clip(D d, V p_mid, V beta, V lo, V hi, V k_mid, V& k_lo, V& k_hi
   k_hi = hn::IfThenElse(still, k_hi, hn::Min(k_hi, hn::Ceil(second)));
 }
 
-// find_interior's range for one axis, from the float values the kernels see.
+// The interior range along one axis: slices whose sample, from the float values the kernels see,
+// has both corners inside the grid by 1e-3 voxel.
 template <class D, class V = hn::Vec<D>>
 HWY_INLINE void interior(D d, V p_mid, V beta, V n_max, V k_mid, V& k_lo, V& k_hi) {
   const V margin = hn::Set(d, 1e-3);
