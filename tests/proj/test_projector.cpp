@@ -351,6 +351,11 @@ TEST(JosephProjector, RaysMissingTheVolumeGiveZero) {
   ProjectionStack y(1, 8, 8);
   JosephProjector().forward(x, {P}, y);
   EXPECT_EQ(norm(y.data), 0.0);
+  // And nothing comes back from them.
+  std::fill(y.data.begin(), y.data.end(), 1.0f);
+  std::fill(x.data.begin(), x.data.end(), 5.0f);
+  JosephProjector().back(y, {P}, x);
+  EXPECT_EQ(norm(x.data), 0.0);
 }
 
 // Line integrals through a voxelised ball at 256^3 match the analytic chord to 1 % for rays
