@@ -63,7 +63,8 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
   {
     // Pixels outside a view's footprint are in none of its lines: their rays miss the volume.
 #pragma omp for schedule(static)
-    for (int v = 0; v < y.views; ++v) std::fill_n(y.view(v), y.pixels_per_view(), 0.0f);
+    for (int v = 0; v < y.views; ++v)
+      if (!paths.path[static_cast<std::size_t>(v)].whole_detector) std::fill_n(y.view(v), y.pixels_per_view(), 0.0f);
     detail::RayTable table;
     table.shape(1, rows_per_block, paths.most_lanes);
     std::vector<float> out(table.pb_mid.size());

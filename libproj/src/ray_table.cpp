@@ -29,6 +29,7 @@ LanePath LanePath::for_view(const ViewRays& rays, const VolumeLayout& layout, in
   const int minor_first = static_cast<int>(std::clamp(std::ceil(minor_lo), 0.0, static_cast<double>(p.minors)));
   const int minor_last = static_cast<int>(std::clamp(std::floor(minor_hi), -1.0, p.minors - 1.0));
   p.majors = std::max(0, major_last - p.major_first + 1);
+  p.whole_detector = p.major_first == 0 && major_last == major_count - 1 && minor_first == 0 && minor_last == p.minors - 1;
   if (p.majors == 0 || minor_last < minor_first) {
     p.majors = 0, p.lines = 0;
     return p;

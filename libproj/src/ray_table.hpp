@@ -38,6 +38,7 @@ struct LanePath {
   int major_first = 0, majors = 1;  // the footprint's pixels along the major axis (lanes per line)
   int minors = 1;                   // detector pixels along the minor axis
   int line_first = 0, lines = 1;    // line numbers in use (none when the footprint misses the detector)
+  bool whole_detector = true;       // the footprint holds every pixel: the lines cover the detector
   // The pixels whose rays can touch the volume: the bounding rectangle of the volume's box, grown
   // by a voxel (bilinear samples reach that far), projected on the detector. Rays elsewhere
   // project to zero and are never prepared (a small volume on a large detector would otherwise

@@ -25,32 +25,20 @@ HWY_INLINE V by_axis(M is0, M is1, V x, V y, V z) {
   return hn::IfThenElse(is0, x, hn::IfThenElse(is1, y, z));
 }
 
-// clip() of ray_geometry.cpp: the k range where lo < p_mid + (k - k_mid) beta < hi, widened by
-// one slice.
-template <class D, class V = hn::Vec<D>>
-HWY_INLINE void clip(D d, V p_mid, V beta, V lo, V hi, V k_mid, V& k_lo, V& k_hi) {
+// The k range where lo < p_mid + (k - k_mid) beta < hi. kWidened: clip() of ray_geometry.cpp,
+// widened by one slice (the slices a ray may touch); otherwise lo <= ... <= hi, narrowed to whole
+// slices (the interior range, where every corner of the sample is inside).
+template <bool kWidened, class D, class V = hn::Vec<D>>
+HWY_INLINE void k_range(D d, V p_mid, V beta, V lo, V hi, V k_mid, V& k_lo, V& k_hi) {
   const auto still = hn::Eq(beta, hn::Zero(d));
-  const auto inside = hn::And(hn::Gt(p_mid, lo), hn::Lt(p_mid, hi));
-  V a = hn::Add(k_mid, hn::Div(hn::Sub(lo, p_mid), beta));
-  V b = hn::Add(k_mid, hn::Div(hn::Sub(hi, p_mid), beta));
-  const V first = hn::Min(a, b), second = hn::Max(a, b);
-  const V inf = hn::Set(d, std::numeric_limits<double>::infinity());
-  k_lo = hn::IfThenElse(still, hn::IfThenElse(inside, k_lo, inf), hn::Max(k_lo, hn::Floor(first)));
-  k_hi = hn::IfThenElse(still, k_hi, hn::Min(k_hi, hn::Ceil(second)));
-}
-
-// The interior range along one axis: slices whose sample, from the float values the kernels see,
-// has both corners inside the grid by 1e-3 voxel.
-template <class D, class V = hn::Vec<D>>
-HWY_INLINE void interior(D d, V p_mid, V beta, V n_max, V k_mid, V& k_lo, V& k_hi) {
-  const V margin = hn::Set(d, 1e-3);
-  const auto still = hn::Eq(beta, hn::Zero(d));
-  const auto inside = hn::And(hn::Ge(p_mid, margin), hn::Le(p_mid, n_max));
-  V a = hn::Add(k_mid, hn::Div(hn::Sub(margin, p_mid), beta));
-  V b = hn::Add(k_mid, hn::Div(hn::Sub(n_max, p_mid), beta));
-  const V first = hn::Min(a, b), second = hn::Max(a, b);
-  k_lo = hn::IfThenElse(still, hn::IfThenElse(inside, k_lo, hn::Set(d, 1e9)), hn::Max(k_lo, hn::Ceil(first)));
-  k_hi = hn::IfThenElse(still, k_hi, hn::Min(k_hi, hn::Floor(second)));
+  const auto inside = kWidened ? hn::And(hn::Gt(p_mid, lo), hn::Lt(p_mid, hi)) : hn::And(hn::Ge(p_mid, lo), hn::Le(p_mid, hi));
+  const V a = hn::Add(k_mid, hn::Div(hn::Sub(lo, p_mid), beta));
+  const V b = hn::Add(k_mid, hn::Div(hn::Sub(hi, p_mid), beta));
+  const V first = kWidened ? hn::Floor(hn::Min(a, b)) : hn::Ceil(hn::Min(a, b));
+  const V second = kWidened ? hn::Ceil(hn::Max(a, b)) : hn::Floor(hn::Max(a, b));
+  const V none = hn::Set(d, std::numeric_limits<double>::infinity());
+  k_lo = hn::IfThenElse(still, hn::IfThenElse(inside, k_lo, none), hn::Max(k_lo, first));
+  k_hi = hn::IfThenElse(still, k_hi, hn::Min(k_hi, second));
 }
 
 template <class D, class V = hn::Vec<D>>
@@ -97,8 +85,8 @@ void PrepareRays(const ViewRays& rays, const VolumeLayout& layout, int grid_orig
     const V weight = hn::Div(hn::Sqrt(sum), hn::Abs(da));
 
     V k_lo = hn::Zero(d), k_hi = hn::Sub(na, one);
-    clip(d, pb_mid, beta_b, minus_one, nb, k_mid, k_lo, k_hi);
-    clip(d, pc_mid, beta_c, minus_one, nc, k_mid, k_lo, k_hi);
+    k_range<true>(d, pb_mid, beta_b, minus_one, nb, k_mid, k_lo, k_hi);
+    k_range<true>(d, pc_mid, beta_c, minus_one, nc, k_mid, k_lo, k_hi);
     // Only points in front of the source.
     const auto forward = hn::Gt(da, hn::Zero(d));
     k_lo = hn::IfThenElse(forward, hn::Max(k_lo, hn::Add(hn::Floor(sa), one)), k_lo);
@@ -110,10 +98,10 @@ void PrepareRays(const ViewRays& rays, const VolumeLayout& layout, int grid_orig
     const V k_mid_f = through_float(d, k_mid);
     V in_lo = k_first, in_hi = k_last;
     const V margin = hn::Set(d, 1e-3);
-    interior(d, hn::Sub(through_float(d, pb_mid), origin_b), through_float(d, beta_b), hn::Sub(hn::Sub(nb, one), margin),
-             k_mid_f, in_lo, in_hi);
-    interior(d, hn::Sub(through_float(d, pc_mid), origin_c), through_float(d, beta_c), hn::Sub(hn::Sub(nc, one), margin),
-             k_mid_f, in_lo, in_hi);
+    k_range<false>(d, hn::Sub(through_float(d, pb_mid), origin_b), through_float(d, beta_b), margin,
+                   hn::Sub(hn::Sub(nb, one), margin), k_mid_f, in_lo, in_hi);
+    k_range<false>(d, hn::Sub(through_float(d, pc_mid), origin_c), through_float(d, beta_c), margin,
+                   hn::Sub(hn::Sub(nc, one), margin), k_mid_f, in_lo, in_hi);
     const V big = hn::Set(d, 1e9);
     in_lo = hn::Min(hn::Max(in_lo, hn::Neg(big)), big);
     in_hi = hn::Min(hn::Max(in_hi, hn::Neg(big)), big);
