@@ -28,7 +28,7 @@ struct BenchOptions {
 };
 
 // Raw float32, native byte order (little-endian on x86-64), as the manifest says.
-void write_floats(const std::filesystem::path& file, const std::vector<float>& values) {
+void write_floats(const std::filesystem::path& file, const FloatBuffer& values) {
   write_file_atomically(file, [&](std::ostream& out) {
     out.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(values.size() * sizeof(float)));
   });
@@ -69,7 +69,7 @@ double seconds(F&& f) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-double relative_difference(const std::vector<float>& a, const std::vector<float>& b) {
+double relative_difference(const FloatBuffer& a, const FloatBuffer& b) {
   double d = 0, n = 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
     d += (static_cast<double>(a[i]) - b[i]) * (static_cast<double>(a[i]) - b[i]);

@@ -38,7 +38,7 @@ void IncrementalReconstruction::add_view(const ProjectionMatrix& P, const Image&
   if (updates_ > 0) projector_.forward(x_, {matrices_.back()}, predicted);
   const float* b = b_.view(b_.views - 1);
   for (std::size_t i = 0; i < predicted.data.size(); ++i) predicted.data[i] -= b[i];
-  append_view(residual_, Image{coarse_.cols, coarse_.rows, std::move(predicted.data)});
+  append_view(residual_, Image{coarse_.cols, coarse_.rows, std::vector<float>(predicted.data.begin(), predicted.data.end())});
 }
 
 SolverReport IncrementalReconstruction::update() {

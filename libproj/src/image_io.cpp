@@ -110,7 +110,7 @@ void write_volume_tiff(const Volume& v, const fs::path& file) {
 
 float preview_ceiling(const Volume& volume) {
   if (volume.data.empty()) return 1e-6f;
-  std::vector<float> sorted = volume.data;
+  std::vector<float> sorted(volume.data.begin(), volume.data.end());
   const std::size_t hi = static_cast<std::size_t>(0.999 * static_cast<double>(sorted.size() - 1));
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(hi), sorted.end());
   return std::max(sorted[hi], 1e-6f);

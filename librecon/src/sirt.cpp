@@ -9,7 +9,7 @@ namespace ctk {
 
 namespace {
 
-void invert_nonzero(std::vector<float>& v) {
+void invert_nonzero(FloatBuffer& v) {
   for (float& x : v) x = x > 1e-12f ? 1.0f / x : 0.0f;
 }
 

@@ -3,9 +3,11 @@
 #include <cstddef>
 #include <vector>
 
+#include "ctk/proj/float_buffer.hpp"
+
 namespace ctk::detail {
 
-inline double dot(const std::vector<float>& a, const std::vector<float>& b) {
+inline double dot(const FloatBuffer& a, const FloatBuffer& b) {
   double sum = 0;
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(a.size());
 #pragma omp parallel for reduction(+ : sum) schedule(static)
@@ -14,7 +16,7 @@ inline double dot(const std::vector<float>& a, const std::vector<float>& b) {
 }
 
 /// sum_i w_i a_i^2 (w empty: unit weights).
-inline double weighted_square_sum(const std::vector<float>& a, const std::vector<float>& w) {
+inline double weighted_square_sum(const FloatBuffer& a, const FloatBuffer& w) {
   double sum = 0;
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(a.size());
   const bool weighted = !w.empty();
@@ -27,7 +29,7 @@ inline double weighted_square_sum(const std::vector<float>& a, const std::vector
 }
 
 /// y += alpha * x
-inline void axpy(double alpha, const std::vector<float>& x, std::vector<float>& y) {
+inline void axpy(double alpha, const FloatBuffer& x, FloatBuffer& y) {
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(x.size());
   const float a = static_cast<float>(alpha);
 #pragma omp parallel for schedule(static)
@@ -35,7 +37,7 @@ inline void axpy(double alpha, const std::vector<float>& x, std::vector<float>& 
 }
 
 /// out = w * x elementwise (w empty: copy).
-inline void weighted_copy(const std::vector<float>& x, const std::vector<float>& w, std::vector<float>& out) {
+inline void weighted_copy(const FloatBuffer& x, const FloatBuffer& w, FloatBuffer& out) {
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(x.size());
   out.resize(x.size());
   const bool weighted = !w.empty();

@@ -37,8 +37,8 @@ SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<Projection
     throw std::invalid_argument("solve_wls_cg: weights and line integrals differ in size");
   if (residual.data.size() != b.data.size())
     throw std::invalid_argument("solve_wls_cg: the residual and the line integrals differ in size");
-  static const std::vector<float> unit;
-  const std::vector<float>& w = weights ? weights->data : unit;
+  static const FloatBuffer unit;
+  const FloatBuffer& w = weights ? weights->data : unit;
   auto start = std::chrono::steady_clock::now();
 
   ProjectionStack scratch(b.views, b.rows, b.cols);  // W r, then A d, then W A d

@@ -180,7 +180,7 @@ TEST(IncrementalReconstruction, EachUpdateContinuesWhereTheLastStopped) {
     const ProjectionMatrix P = virtual_view(Eigen::Vector3d(std::cos(0.5 * v), std::sin(0.5 * v), 0.3 * std::sin(v)), K, 1000);
     ProjectionStack y(1, detector.rows, detector.cols);
     A.forward(truth, {P}, y);
-    const Image image{detector.cols, detector.rows, y.data};
+    const Image image{detector.cols, detector.rows, std::vector<float>(y.data.begin(), y.data.end())};
     recon.add_view(P, image, Image{});
     coarse_views.push_back(binned_matrix(P, 2));
     const Image binned = binned_image(image, 2);

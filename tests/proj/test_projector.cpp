@@ -16,13 +16,13 @@
 namespace ctk {
 namespace {
 
-double dot(const std::vector<float>& a, const std::vector<float>& b) {
+double dot(const FloatBuffer& a, const FloatBuffer& b) {
   double s = 0;
   for (std::size_t i = 0; i < a.size(); ++i) s += static_cast<double>(a[i]) * b[i];
   return s;
 }
-double norm(const std::vector<float>& a) { return std::sqrt(dot(a, a)); }
-double relative_difference(const std::vector<float>& a, const std::vector<float>& b) {
+double norm(const FloatBuffer& a) { return std::sqrt(dot(a, a)); }
+double relative_difference(const FloatBuffer& a, const FloatBuffer& b) {
   double d = 0;
   for (std::size_t i = 0; i < a.size(); ++i) d += (static_cast<double>(a[i]) - b[i]) * (static_cast<double>(a[i]) - b[i]);
   return std::sqrt(d) / std::max(norm(b), 1e-30);
@@ -87,10 +87,10 @@ Problem random_problem(std::uint64_t seed) {
   return p;
 }
 
-std::vector<float> random_values(std::size_t n, std::uint64_t seed) {
+FloatBuffer random_values(std::size_t n, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<float> u(0, 1);
-  std::vector<float> v(n);
+  FloatBuffer v(n);
   for (auto& x : v) x = u(rng);
   return v;
 }

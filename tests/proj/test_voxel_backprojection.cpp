@@ -14,14 +14,14 @@
 namespace ctk {
 namespace {
 
-double squared_norm(const std::vector<float>& a) {
+double squared_norm(const FloatBuffer& a) {
   double n = 0;
   for (float e : a) n += static_cast<double>(e) * e;
   return n;
 }
 
 // |a - b| / |b|, in double.
-double relative_rms(const std::vector<float>& a, const std::vector<float>& b) {
+double relative_rms(const FloatBuffer& a, const FloatBuffer& b) {
   double d = 0;
   for (std::size_t i = 0; i < a.size(); ++i) d += (static_cast<double>(a[i]) - b[i]) * (static_cast<double>(a[i]) - b[i]);
   return std::sqrt(d / squared_norm(b));

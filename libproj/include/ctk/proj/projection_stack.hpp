@@ -3,11 +3,13 @@
 #include <cstddef>
 #include <vector>
 
+#include "ctk/proj/float_buffer.hpp"
+
 namespace ctk {
 
 struct ProjectionStack {
   int views = 0, rows = 0, cols = 0;
-  std::vector<float> data;
+  FloatBuffer data;
 
   ProjectionStack() = default;
   ProjectionStack(int v, int r, int c)

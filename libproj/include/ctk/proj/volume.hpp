@@ -6,6 +6,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "ctk/proj/float_buffer.hpp"
+
 namespace ctk {
 
 struct VolumeLayout {
@@ -25,7 +27,7 @@ struct VolumeLayout {
 
 struct Volume {
   VolumeLayout layout;
-  std::vector<float> data;
+  FloatBuffer data;
 
   explicit Volume(const VolumeLayout& l = {}) : layout(l), data(l.voxel_count(), 0.0f) {}
   float& at(int i, int j, int k) { return data[index(i, j, k)]; }
