@@ -35,6 +35,7 @@ struct PlanCommandOptions {
   int views = 100, scout_nside = 2, candidate_nside = 8;
   double damage_exponent = PlannerOptions{}.damage_exponent;
   double spread_exponent = PlannerOptions{}.spread_exponent;
+  double widest_gap_fraction = PlannerOptions{}.widest_gap_fraction;
   std::uint64_t seed = 1;
   int cols = 720, rows = 720;
   double pitch_mm = 0.6, sdd_mm = 2150;
@@ -59,6 +60,7 @@ PlanningOptions planning_options(const PlanCommandOptions& o) {
   p.planner.planned_views = o.views;
   p.planner.damage_exponent = o.damage_exponent;
   p.planner.spread_exponent = o.spread_exponent;
+  p.planner.widest_gap_fraction = o.widest_gap_fraction;
   p.planner.damage_floor_mm = 2 * o.coarse_voxel_mm;
   p.planner.seed = o.seed;
   p.reconstruction.binning = o.binning;
@@ -352,6 +354,7 @@ void register_plan(CLI::App& app) {
   cmd->add_option("--scout-nside", o->scout_nside, "HEALPix resolution of the scout (6 nside^2 directions: one of each opposite pair of cells)")->check(CLI::Range(1, 16))->capture_default_str();
   cmd->add_option("--candidate-nside", o->candidate_nside, "HEALPix resolution of the candidate directions")->check(CLI::Range(1, 64))->capture_default_str();
   cmd->add_option("--spread-exponent", o->spread_exponent, "m: how strongly the largest gaps between views are preferred")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--widest-gap-fraction", o->widest_gap_fraction, "f: draw only among directions whose gap to the views so far is at least f times the widest (0: all)")->check(CLI::Range(0.0, 1.0))->capture_default_str();
   cmd->add_option("--damage-exponent", o->damage_exponent, "s: how strongly long absorber paths are avoided")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the planner's draws (and of the simulation)")->capture_default_str();
   cmd->add_option("--cols", o->cols, "Simulated detector columns")->check(CLI::Range(16, 100000))->capture_default_str();

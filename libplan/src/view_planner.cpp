@@ -26,16 +26,22 @@ std::vector<CandidateWeight> ViewPlanner::weights() const {
   // Half the sphere's area shared among the planned views: their typical spacing.
   const double g0 = std::sqrt(2.0 * M_PI / std::max(1, options_.planned_views));
   const double cos_unreachable = std::cos(options_.unreachable_radius_deg * kDegree);
-  double least = 1e300;
+  double least = 1e300, widest = 0;
+  std::vector<double> gap(candidates_.size(), 0.0);
   for (std::size_t c = 0; c < candidates_.size(); ++c) {
     const Eigen::Vector3d& d = candidates_[c];
     for (const Eigen::Vector3d& u : unreachable_)
       if (d.dot(u) >= cos_unreachable) w[c].reach = 0;
     double nearest = 1e300;
     for (const Eigen::Vector3d& a : acquired_) nearest = std::min(nearest, line_distance_rad(d, a));
+    gap[c] = nearest;
     if (!acquired_.empty()) w[c].spread = std::pow(1.0 - std::exp(-(nearest / g0) * (nearest / g0)), options_.spread_exponent);
+    if (w[c].reach > 0) widest = std::max(widest, nearest);
     if (!damage_.empty() && w[c].reach > 0) least = std::min(least, damage_[c] + options_.damage_floor_mm);
   }
+  if (!acquired_.empty() && options_.widest_gap_fraction > 0)
+    for (std::size_t c = 0; c < candidates_.size(); ++c)
+      if (gap[c] < options_.widest_gap_fraction * widest) w[c].spread = 0;
   if (!damage_.empty())
     for (std::size_t c = 0; c < candidates_.size(); ++c)
       w[c].damage = std::pow(least / (damage_[c] + options_.damage_floor_mm), options_.damage_exponent);
