@@ -22,6 +22,6 @@ void* allocate_large(std::size_t bytes) {
   return p;
 }
 
-void deallocate_large(void* p, std::size_t /*bytes*/) { std::free(p); }
+void deallocate_large(void* p) { std::free(p); }
 
 }  // namespace ctk::detail

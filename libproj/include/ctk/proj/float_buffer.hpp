@@ -15,12 +15,13 @@ namespace ctk {
 namespace detail {
 inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
 void* allocate_large(std::size_t bytes);           // 2 MB aligned, advised, never null
-void deallocate_large(void* p, std::size_t bytes);
+void deallocate_large(void* p);
 }  // namespace detail
 
 template <class T>
 struct HugePageAllocator {
   using value_type = T;
+  static constexpr std::align_val_t kSmallAlignment{alignof(T) > 64 ? alignof(T) : 64};  // a cache line
   HugePageAllocator() = default;
   template <class U>
   HugePageAllocator(const HugePageAllocator<U>&) noexcept {}
@@ -28,15 +29,14 @@ struct HugePageAllocator {
   T* allocate(std::size_t n) {
     if (n > static_cast<std::size_t>(-1) / sizeof(T)) throw std::bad_array_new_length();
     const std::size_t bytes = n * sizeof(T);
-    if (bytes < detail::kHugePageBytes) return static_cast<T*>(::operator new(bytes, std::align_val_t{alignof(T) > 64 ? alignof(T) : 64}));
+    if (bytes < detail::kHugePageBytes) return static_cast<T*>(::operator new(bytes, kSmallAlignment));
     return static_cast<T*>(detail::allocate_large(bytes));
   }
   void deallocate(T* p, std::size_t n) noexcept {
-    const std::size_t bytes = n * sizeof(T);
-    if (bytes < detail::kHugePageBytes)
-      ::operator delete(p, std::align_val_t{alignof(T) > 64 ? alignof(T) : 64});
+    if (n * sizeof(T) < detail::kHugePageBytes)
+      ::operator delete(p, kSmallAlignment);
     else
-      detail::deallocate_large(p, bytes);
+      detail::deallocate_large(p);
   }
   template <class U>
   bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
