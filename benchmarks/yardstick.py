@@ -176,6 +176,24 @@ def check_dump(folder, rays_per_view, voxels, rng):
             "voxels_checked": voxels}
 
 
+def this_cpu():
+    """The first processor's model name, family and model, read here (figures name their machine)."""
+    cpu = {}
+    with open("/proc/cpuinfo") as info:
+        for line in info:
+            if not line.strip():
+                break
+            key, _, value = line.partition(":")
+            key, value = key.strip(), value.strip()
+            if key == "model name":
+                cpu["model_name"] = value
+            elif key == "cpu family":
+                cpu["family"] = int(value)
+            elif key == "model":
+                cpu["model"] = int(value)
+    return cpu
+
+
 def run_bench(ctk, args, extra):
     cmd = [ctk, "bench", "--json", "--scale", str(args.scale), "--reference-views", str(args.reference_views)] + extra
     start = time.monotonic()
@@ -204,7 +222,11 @@ def main():
     failed = False
 
     with tempfile.TemporaryDirectory(prefix="ctk-yardstick-") as dump:
-        _, _ = run_bench(args.ctk, args, ["--views", str(args.reference_views), "--dump", dump])
+        _, reported = run_bench(args.ctk, args, ["--views", str(args.reference_views), "--dump", dump])
+        here = this_cpu()
+        ok = reported.get("cpu") == here
+        failed |= not ok
+        print(f"machine: the report names {reported.get('cpu')}, /proc/cpuinfo says {here}  {'ok' if ok else 'FAILED'}")
         for trajectory in ("circular", "spherical"):
             r = check_dump(os.path.join(dump, trajectory), args.rays, args.voxels, rng)
             ok = max(r["forward_rel_diff"], r["back_rel_diff"], r["adjointness"]) <= args.tolerance

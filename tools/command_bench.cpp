@@ -4,9 +4,12 @@
 // the project (benchmarks/yardstick.py) can check it with its own arithmetic.
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <string>
 
 #include "commands.hpp"
 #include "ctk/geom/atomic_write.hpp"
@@ -130,12 +133,35 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
           {"relative_difference_to_reference", agreement}};
 }
 
+// The processor, as Linux names it: figures from two machines must not be mixed up, and a
+// virtual machine's model name alone ("AMD EPYC") does not tell a Zen 3 from a Zen 5.
+nlohmann::json cpu_identity() {
+  nlohmann::json cpu = nlohmann::json::object();
+  std::ifstream info("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(info, line) && !line.empty()) {
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    std::string key = line.substr(0, colon);
+    key.erase(key.find_last_not_of(" \t") + 1);
+    const std::string value = colon + 2 <= line.size() ? line.substr(colon + 2) : "";
+    if (key == "model name") cpu["model_name"] = value;
+    if (key == "cpu family") cpu["family"] = std::atoi(value.c_str());
+    if (key == "model") cpu["model"] = std::atoi(value.c_str());
+  }
+  return cpu;
+}
+
 void run_bench(const BenchOptions& o) {
   std::ostream& log = o.json ? std::cerr : std::cout;
   const JosephProjector fast({o.threads, 8});
   nlohmann::json result;
   result["threads"] = fast.threads();
   result["simd"] = {{"target", JosephProjector::simd_target()}, {"float_lanes", JosephProjector::simd_lanes()}};
+  result["cpu"] = cpu_identity();
+  if (result["cpu"].contains("model_name"))
+    log << "cpu: " << result["cpu"]["model_name"].get<std::string>() << " (family " << result["cpu"].value("family", 0)
+        << ", model " << result["cpu"].value("model", 0) << ")\n";
   for (const auto trajectory : {StandardTrajectory::circular, StandardTrajectory::spherical}) {
     const StandardProblem p = standard_problem(trajectory, o.views, o.scale);
     if (!o.dump.empty()) {
