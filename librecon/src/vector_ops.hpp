@@ -1,7 +1,6 @@
 #pragma once
 // Threaded reductions and updates on float arrays, accumulating in double (solver internals).
 #include <cstddef>
-#include <vector>
 
 #include "ctk/proj/float_buffer.hpp"
 

@@ -1,7 +1,6 @@
 #pragma once
 // A stack of projections, views x rows x cols, float32, row-major per view (u = column fastest).
 #include <cstddef>
-#include <vector>
 
 #include "ctk/proj/float_buffer.hpp"
 

@@ -4,7 +4,6 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>
-#include <vector>
 
 #include "ctk/proj/float_buffer.hpp"
 
