@@ -124,6 +124,7 @@ class Loop {
     result.candidates = planner_.candidates();
     result.weights = planner_.weights();
     result.damage_mm = damage_;
+    result.planner = o_.planner;
     return result;
   }
 

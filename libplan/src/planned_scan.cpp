@@ -34,6 +34,16 @@ nlohmann::json trajectory_to_json(const PlanningResult& r) {
             {"threshold_per_mm", r.segmentation.threshold},
             {"holder_wall_per_mm", r.segmentation.wall_level},
             {"note", r.segmentation.note}}},
+          // How the draws were made, so a trajectory can be planned again or told apart.
+          {"planner",
+           {{"seed", r.planner.seed},
+            {"candidate_nside", r.planner.candidate_nside},
+            {"planned_views", r.planner.planned_views},
+            {"damage_exponent", r.planner.damage_exponent},
+            {"spread_exponent", r.planner.spread_exponent},
+            {"widest_gap_fraction", r.planner.widest_gap_fraction},
+            {"damage_floor_mm", r.planner.damage_floor_mm},
+            {"unreachable_radius_deg", r.planner.unreachable_radius_deg}}},
           {"planning_step_seconds",
            {{"mean", r.step_seconds.empty() ? 0.0 : sum / static_cast<double>(r.step_seconds.size())}, {"max", worst}}},
           {"views", views}};

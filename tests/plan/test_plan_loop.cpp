@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <thread>
 
 #include "../test_support.hpp"
@@ -109,6 +111,13 @@ TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
   const ScanDescription scan = read_scan(dir / "scan.json");
   EXPECT_EQ(scan.projections.count, 28);
   EXPECT_EQ(read_geometry(dir / "geometry.json").ok_views().size(), 28u);
+  // trajectory.json says how the draws were made.
+  std::ifstream trajectory(dir / "trajectory.json");
+  const nlohmann::json planner = nlohmann::json::parse(trajectory).at("planner");
+  EXPECT_EQ(planner.at("seed").get<int>(), 2);
+  EXPECT_EQ(planner.at("damage_exponent").get<double>(), 2.0);
+  EXPECT_EQ(planner.at("spread_exponent").get<double>(), 1.0);
+  EXPECT_EQ(planner.at("planned_views").get<int>(), 28);
 }
 
 TEST(LabExchange, RequestsAndAnswersThroughFiles) {

@@ -61,6 +61,7 @@ struct PlanningResult {
   std::vector<CandidateWeight> weights;  // at the end
   std::vector<double> damage_mm;         // per candidate, at the end
   std::vector<double> step_seconds;      // planner time of each planned (not scout) step
+  PlannerOptions planner;                // the settings the draws were made with
   int acquired() const;
 };
 

@@ -18,7 +18,8 @@
 // order with random ties): the views spread nearly as evenly as the whole-sphere order, and the
 // damage then only chooses among the widest gaps. Off by default: on sample 1 (f = 0.9, seeds 1
 // and 2) it moved the RMSE outside the plate from 0.00219 / 0.00232 to 0.00221 / 0.00217, but the
-// plate itself read higher and the whole RMSE rose (README, "Planning").
+// plate itself read higher and the whole RMSE rose; on sample 2 the profile gradient fell below a
+// random draw's; the walnut did not move (README, "Planning").
 // Why m is 4: with no absorber the draw should spread views as evenly as the whole-sphere order
 // does. At m = 1 (weights rising only as g^2 near a view) the draws left gaps and clusters, and
 // an evenly spread whole sphere beat the planned walnut (README, "Planning").
