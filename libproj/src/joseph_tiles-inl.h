@@ -83,6 +83,30 @@ HWY_INLINE void transpose16(__m512 (&r)[16]) {
     r[12 + i] = _mm512_shuffle_f32x4(t[4 + i], t[12 + i], 0xdd);
   }
 }
+#elif HWY_TARGET == HWY_AVX2
+// In place: row j of the input becomes column j (8 x 8).
+HWY_INLINE void transpose8(__m256 (&r)[8]) {
+  __m256 t[8], s[8];
+  for (int i = 0; i < 4; ++i) {
+    t[2 * i] = _mm256_unpacklo_ps(r[2 * i], r[2 * i + 1]);
+    t[2 * i + 1] = _mm256_unpackhi_ps(r[2 * i], r[2 * i + 1]);
+  }
+  for (int i = 0; i < 2; ++i) {  // s[4i + j]: rows 4i .. 4i + 3 of columns j and j + 4
+    s[4 * i] = _mm256_shuffle_ps(t[4 * i], t[4 * i + 2], 0x44);
+    s[4 * i + 1] = _mm256_shuffle_ps(t[4 * i], t[4 * i + 2], 0xEE);
+    s[4 * i + 2] = _mm256_shuffle_ps(t[4 * i + 1], t[4 * i + 3], 0x44);
+    s[4 * i + 3] = _mm256_shuffle_ps(t[4 * i + 1], t[4 * i + 3], 0xEE);
+  }
+  for (int j = 0; j < 4; ++j) {
+    r[j] = _mm256_permute2f128_ps(s[j], s[4 + j], 0x20);
+    r[4 + j] = _mm256_permute2f128_ps(s[j], s[4 + j], 0x31);
+  }
+}
+
+// Lanes below n (n <= 8): the mask of AVX2's masked loads and stores.
+HWY_INLINE __m256i first_lanes(int n) {
+  return _mm256_cmpgt_epi32(_mm256_set1_epi32(n), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+}
 #endif
 
 // tile = the volume in the tile's box (zero outside the volume).
@@ -104,6 +128,23 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid& g, cons
       }
       transpose16(r);
       for (int kk = 0; kk < tile.slices; ++kk) _mm512_storeu_ps(tile.data + tile.row(kk, zz) + yb, r[kk]);
+    }
+#elif HWY_TARGET == HWY_AVX2
+    // Blocks of 8 y by 8 slices; the scalar copy below read one float per stride_y and took half
+    // of a strip's forward projection on a Zen 3.
+    for (int k8 = 0; k8 < tile.slices; k8 += 8) {
+      const int n = std::min(8, tile.slices - k8);
+      const __m256i lanes = first_lanes(n);
+      for (int yb = 0; yb < tile.width; yb += 8) {
+        __m256 r[8];
+        for (int j = 0; j < 8; ++j) {
+          const int y = tile.y0 + yb + j;
+          const float* v = volume + tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
+          r[j] = !z_in || y < 0 || y >= g.ny ? _mm256_setzero_ps() : n == 8 ? _mm256_loadu_ps(v) : _mm256_maskload_ps(v, lanes);
+        }
+        transpose8(r);
+        for (int kk = 0; kk < n; ++kk) _mm256_storeu_ps(tile.data + tile.row(k8 + kk, zz) + yb, r[kk]);
+      }
     }
 #else
     for (int kk = 0; kk < tile.slices; ++kk)
@@ -133,6 +174,26 @@ HWY_INLINE void add_tile(const Tile& tile, const XGrid& g, float* HWY_RESTRICT v
         if (y < 0 || y >= g.ny) continue;
         float* v = volume + tile.k0 + y * g.stride_y + z * g.stride_z;
         _mm512_mask_storeu_ps(v, slices, _mm512_add_ps(_mm512_maskz_loadu_ps(slices, v), r[j]));
+      }
+    }
+#elif HWY_TARGET == HWY_AVX2
+    for (int k8 = 0; k8 < tile.slices; k8 += 8) {
+      const int n = std::min(8, tile.slices - k8);
+      const __m256i lanes = first_lanes(n);
+      for (int yb = 0; yb < tile.width; yb += 8) {
+        __m256 r[8];
+        for (int kk = 0; kk < 8; ++kk)
+          r[kk] = kk < n ? _mm256_loadu_ps(tile.data + tile.row(k8 + kk, zz) + yb) : _mm256_setzero_ps();
+        transpose8(r);
+        for (int j = 0; j < 8; ++j) {
+          const int y = tile.y0 + yb + j;
+          if (y < 0 || y >= g.ny) continue;
+          float* v = volume + tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
+          if (n == 8)
+            _mm256_storeu_ps(v, _mm256_add_ps(_mm256_loadu_ps(v), r[j]));
+          else
+            _mm256_maskstore_ps(v, lanes, _mm256_add_ps(_mm256_maskload_ps(v, lanes), r[j]));
+        }
       }
     }
 #else
