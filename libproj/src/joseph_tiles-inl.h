@@ -103,9 +103,15 @@ HWY_INLINE void transpose8(__m256 (&r)[8]) {
   }
 }
 
-// Lanes below n (n <= 8): the mask of AVX2's masked loads and stores.
-HWY_INLINE __m256i first_lanes(int n) {
-  return _mm256_cmpgt_epi32(_mm256_set1_epi32(n), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+// f(k8, n, lanes, yb) for each block of a tile row of 8 slices (k8 .. k8 + n - 1, n <= 8, and
+// `lanes` the first n, the mask of AVX2's masked loads and stores) by 8 voxels along y (from yb).
+template <class F>
+HWY_INLINE void for_each_block8(const Tile& tile, F&& f) {
+  for (int k8 = 0; k8 < tile.slices; k8 += 8) {
+    const int n = std::min(8, tile.slices - k8);
+    const __m256i lanes = _mm256_cmpgt_epi32(_mm256_set1_epi32(n), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    for (int yb = 0; yb < tile.width; yb += 8) f(k8, n, lanes, yb);
+  }
 }
 #endif
 
@@ -132,20 +138,16 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid& g, cons
 #elif HWY_TARGET == HWY_AVX2
     // Blocks of 8 y by 8 slices; the scalar copy below read one float per stride_y and took half
     // of a strip's forward projection on a Zen 3.
-    for (int k8 = 0; k8 < tile.slices; k8 += 8) {
-      const int n = std::min(8, tile.slices - k8);
-      const __m256i lanes = first_lanes(n);
-      for (int yb = 0; yb < tile.width; yb += 8) {
-        __m256 r[8];
-        for (int j = 0; j < 8; ++j) {
-          const int y = tile.y0 + yb + j;
-          const float* v = volume + tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
-          r[j] = !z_in || y < 0 || y >= g.ny ? _mm256_setzero_ps() : n == 8 ? _mm256_loadu_ps(v) : _mm256_maskload_ps(v, lanes);
-        }
-        transpose8(r);
-        for (int kk = 0; kk < n; ++kk) _mm256_storeu_ps(tile.data + tile.row(k8 + kk, zz) + yb, r[kk]);
+    for_each_block8(tile, [&](int k8, int n, __m256i lanes, int yb) {
+      __m256 r[8];
+      for (int j = 0; j < 8; ++j) {
+        const int y = tile.y0 + yb + j;
+        const float* v = volume + tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
+        r[j] = !z_in || y < 0 || y >= g.ny ? _mm256_setzero_ps() : n == 8 ? _mm256_loadu_ps(v) : _mm256_maskload_ps(v, lanes);
       }
-    }
+      transpose8(r);
+      for (int kk = 0; kk < n; ++kk) _mm256_storeu_ps(tile.data + tile.row(k8 + kk, zz) + yb, r[kk]);
+    });
 #else
     for (int kk = 0; kk < tile.slices; ++kk)
       for (int yy = 0; yy < tile.width; ++yy) {
@@ -177,25 +179,21 @@ HWY_INLINE void add_tile(const Tile& tile, const XGrid& g, float* HWY_RESTRICT v
       }
     }
 #elif HWY_TARGET == HWY_AVX2
-    for (int k8 = 0; k8 < tile.slices; k8 += 8) {
-      const int n = std::min(8, tile.slices - k8);
-      const __m256i lanes = first_lanes(n);
-      for (int yb = 0; yb < tile.width; yb += 8) {
-        __m256 r[8];
-        for (int kk = 0; kk < 8; ++kk)
-          r[kk] = kk < n ? _mm256_loadu_ps(tile.data + tile.row(k8 + kk, zz) + yb) : _mm256_setzero_ps();
-        transpose8(r);
-        for (int j = 0; j < 8; ++j) {
-          const int y = tile.y0 + yb + j;
-          if (y < 0 || y >= g.ny) continue;
-          float* v = volume + tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
-          if (n == 8)
-            _mm256_storeu_ps(v, _mm256_add_ps(_mm256_loadu_ps(v), r[j]));
-          else
-            _mm256_maskstore_ps(v, lanes, _mm256_add_ps(_mm256_maskload_ps(v, lanes), r[j]));
-        }
+    for_each_block8(tile, [&](int k8, int n, __m256i lanes, int yb) {
+      __m256 r[8];
+      for (int kk = 0; kk < 8; ++kk)
+        r[kk] = kk < n ? _mm256_loadu_ps(tile.data + tile.row(k8 + kk, zz) + yb) : _mm256_setzero_ps();
+      transpose8(r);
+      for (int j = 0; j < 8; ++j) {
+        const int y = tile.y0 + yb + j;
+        if (y < 0 || y >= g.ny) continue;
+        float* v = volume + tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
+        if (n == 8)
+          _mm256_storeu_ps(v, _mm256_add_ps(_mm256_loadu_ps(v), r[j]));
+        else
+          _mm256_maskstore_ps(v, lanes, _mm256_add_ps(_mm256_maskload_ps(v, lanes), r[j]));
       }
-    }
+    });
 #else
     for (int kk = 0; kk < tile.slices; ++kk)
       for (int yy = 0; yy < tile.width; ++yy) {
