@@ -13,6 +13,8 @@ It repeats the benchmark's checks:
   4. timing: two runs of `ctk bench` with N/2 and N views (the reference on the same views in
      both); the growth of the wall clock, measured here, is compared with the growth of the fast
      projector's own reported seconds. The reference's timing cancels out.
+  5. repeated runs (`--repeat 3`, the checking run): every reported time is the median of its
+     three runs, and all the runs together fit in the wall clock measured here.
 
 Usage: benchmarks/yardstick.py --ctk build/tools/ctk [--scale 1] [--views 360] [--no-timing]
 Exits non-zero when a check fails.
@@ -201,6 +203,21 @@ def run_bench(ctk, args, extra):
     return time.monotonic() - start, json.loads(out)
 
 
+def check_repeats(result):
+    """Whether each reported time is the median of its reported runs; and all runs' seconds
+    (the reference's as measured, not scaled to every view)."""
+    ok, total = True, 0.0
+    for section in (result, result["spherical"]):
+        for d in ("forward", "back"):
+            s = section[d]
+            fast, ref = s["fast_seconds_runs"], s["reference_seconds_runs"]
+            ok &= len(fast) == 3 and len(ref) == 3
+            ok &= sorted(fast)[1] == s["fast_seconds"] and sorted(ref)[1] == s["reference_seconds"]
+            scale = s["reference_seconds_measured"] / s["reference_seconds"]
+            total += sum(fast) + scale * sum(ref)
+    return ok, total
+
+
 def fast_seconds(result):
     sections = (result, result["spherical"])  # circular at the top level, spherical beside it
     return sum(s[d]["fast_seconds"] for s in sections for d in ("forward", "back"))
@@ -222,7 +239,11 @@ def main():
     failed = False
 
     with tempfile.TemporaryDirectory(prefix="ctk-yardstick-") as dump:
-        _, reported = run_bench(args.ctk, args, ["--views", str(args.reference_views), "--dump", dump])
+        wall, reported = run_bench(args.ctk, args, ["--views", str(args.reference_views), "--dump", dump, "--repeat", "3"])
+        ok, timed = check_repeats(reported)
+        ok = ok and timed <= wall
+        failed |= not ok
+        print(f"repeats: medians of 3 runs each, {timed:.2f} s of runs in {wall:.2f} s of wall clock  {'ok' if ok else 'FAILED'}")
         here = this_cpu()
         ok = reported.get("cpu") == here
         failed |= not ok

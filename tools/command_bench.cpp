@@ -13,6 +13,7 @@
 
 #include "commands.hpp"
 #include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/statistics.hpp"
 #include "ctk/proj/joseph_projector.hpp"
 #include "ctk/proj/reference_projector.hpp"
 #include "ctk/proj/standard_problem.hpp"
@@ -26,6 +27,7 @@ struct BenchOptions {
   int reference_views = 12;
   int scale = 1;
   int threads = 0;
+  int repeat = 1;
   bool json = false;
   std::filesystem::path dump;  // empty: no dump
 };
@@ -96,11 +98,19 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
   for (std::size_t i = 0; i < y.data.size(); ++i) y.data[i] = 1.0f + 0.5f * std::cos(0.01f * static_cast<float>(i));
   for (std::size_t i = 0; i < y_ref.data.size(); ++i) y_ref.data[i] = y.data[i];
 
-  double fast_s = 0, ref_s = 0, agreement = 0;
+  double agreement = 0;
+  std::vector<double> fast_runs, ref_runs;
   Volume out(p.layout), out_ref(p.layout), out_fast_subset(p.layout);
+  // With --repeat the two take turns, a whole run each, and the medians count: a shared
+  // machine's speed drifts by tens of percent within minutes.
+  for (int run = 0; run < o.repeat; ++run) {
+    fast_runs.push_back(seconds([&] { forward ? fast.forward(x, p.views, y) : fast.back(y, p.views, out); }));
+    ref_runs.push_back(seconds([&] {
+      forward ? forward_project_reference(x, ref_views, y_ref) : back_project_reference(y_ref, ref_views, out_ref);
+    }));
+  }
+  const double fast_s = median(fast_runs), ref_s = median(ref_runs);
   if (forward) {
-    fast_s = seconds([&] { fast.forward(x, p.views, y); });
-    ref_s = seconds([&] { forward_project_reference(x, ref_views, y_ref); });
     fast.forward(x, ref_views, y_fast_subset);
     agreement = relative_difference(y_fast_subset.data, y_ref.data);
     if (!dump.empty()) {
@@ -108,8 +118,6 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
       write_floats(dump / "forward.raw", y_fast_subset.data);
     }
   } else {
-    fast_s = seconds([&] { fast.back(y, p.views, out); });
-    ref_s = seconds([&] { back_project_reference(y_ref, ref_views, out_ref); });
     fast.back(y_ref, ref_views, out_fast_subset);
     agreement = relative_difference(out_fast_subset.data, out_ref.data);
     if (!dump.empty()) {
@@ -123,7 +131,11 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
       << std::setprecision(3) << std::setw(10) << fast_s << " s" << std::setw(12) << ref_full << " s" << std::setw(9)
       << std::setprecision(1) << ref_full / fast_s << "x" << std::setw(12) << std::scientific << std::setprecision(2)
       << voxel_views / fast_s << std::setw(12) << voxel_views / ref_full << std::setw(11) << agreement << "\n";
+  nlohmann::json ref_runs_full = nlohmann::json::array();
+  for (const double r : ref_runs) ref_runs_full.push_back(r * n_views / n_ref);
   return {{"fast_seconds", fast_s},
+          {"fast_seconds_runs", fast_runs},
+          {"reference_seconds_runs", ref_runs_full},
           {"reference_seconds", ref_full},
           {"reference_seconds_measured", ref_s},
           {"reference_views_measured", n_ref},
@@ -180,7 +192,8 @@ void run_bench(const BenchOptions& o) {
     log << p.trajectory << ": " << p.layout.size[0] << "^3 voxels, " << p.cols << " x " << p.rows << " detector, "
         << o.views << " views; fast on " << fast.threads() << " threads (" << JosephProjector::simd_target() << ", "
         << JosephProjector::simd_lanes() << " lanes), reference on 1 thread over " << std::min(o.reference_views, o.views)
-        << " views scaled to " << o.views << "\n"
+        << " views scaled to " << o.views << (o.repeat > 1 ? ", medians of " + std::to_string(o.repeat) + " alternating runs" : "")
+        << "\n"
         << "  direction     fast   reference  speedup  fast vox-views/s  ref vox-views/s  rel.diff\n";
     nlohmann::json section = {{"forward", measure(p, o, true, log)}, {"back", measure(p, o, false, log)}};
     if (trajectory == StandardTrajectory::circular) {
@@ -205,6 +218,9 @@ void register_bench(CLI::App& app) {
   cmd->add_option("--scale", options->scale, "Divide volume and detector sizes by this (1 = the standard problem)")
       ->capture_default_str()->check(CLI::Range(1, 64));
   cmd->add_option("--threads", options->threads, "Threads for the fast projector (0 = all)")->capture_default_str();
+  cmd->add_option("--repeat", options->repeat,
+                  "Time fast and reference this many times each, taking turns, and report the medians")
+      ->capture_default_str()->check(CLI::Range(1, 100));
   cmd->add_flag("--json", options->json, "Print the result as JSON on stdout (the table goes to stderr)");
   cmd->add_option("--dump", options->dump,
                   "Write the fast projector's results on the reference's views to this folder (for benchmarks/yardstick.py)");
