@@ -1,5 +1,6 @@
 // ctk bench: throughput of the fast Joseph projector against the naive reference, measured in
-// one run on the standard problem (see ctk/proj/standard_problem.hpp), as a table or JSON.
+// one run on the standard problem (see ctk/proj/standard_problem.hpp), as a table or JSON;
+// --repeat gives medians of runs in which the two take turns.
 // --dump writes what the fast projector computed on the reference's views, so a yardstick outside
 // the project (benchmarks/yardstick.py) can check it with its own arithmetic.
 #include <chrono>
@@ -102,7 +103,8 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
   std::vector<double> fast_runs, ref_runs;
   Volume out(p.layout), out_ref(p.layout), out_fast_subset(p.layout);
   // With --repeat the two take turns, a whole run each, and the medians count: a shared
-  // machine's speed drifts by tens of percent within minutes.
+  // machine's speed drifts by tens of percent within minutes. (Turns view by view were tried:
+  // every reference view then started with a cold cache, which flattered the fast projector.)
   for (int run = 0; run < o.repeat; ++run) {
     fast_runs.push_back(seconds([&] { forward ? fast.forward(x, p.views, y) : fast.back(y, p.views, out); }));
     ref_runs.push_back(seconds([&] {
