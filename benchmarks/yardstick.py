@@ -203,24 +203,29 @@ def run_bench(ctk, args, extra):
     return time.monotonic() - start, json.loads(out)
 
 
+def measurements(result):
+    """(trajectory, direction, figures) for each of the four measurements in a report: circular
+    at the top level, spherical beside it."""
+    for name, section in (("circular", result), ("spherical", result["spherical"])):
+        for d in ("forward", "back"):
+            yield name, d, section[d]
+
+
 def check_repeats(result):
     """Whether each reported time is the median of its reported runs; and all runs' seconds
     (the reference's as measured, not scaled to every view)."""
     ok, total = True, 0.0
-    for section in (result, result["spherical"]):
-        for d in ("forward", "back"):
-            s = section[d]
-            fast, ref = s["fast_seconds_runs"], s["reference_seconds_runs"]
-            ok &= len(fast) == 3 and len(ref) == 3
-            ok &= sorted(fast)[1] == s["fast_seconds"] and sorted(ref)[1] == s["reference_seconds"]
-            scale = s["reference_seconds_measured"] / s["reference_seconds"]
-            total += sum(fast) + scale * sum(ref)
+    for _, _, s in measurements(result):
+        fast, ref = s["fast_seconds_runs"], s["reference_seconds_runs"]
+        ok &= len(fast) == 3 and len(ref) == 3
+        ok &= sorted(fast)[1] == s["fast_seconds"] and sorted(ref)[1] == s["reference_seconds"]
+        scale = s["reference_seconds_measured"] / s["reference_seconds"]
+        total += sum(fast) + scale * sum(ref)
     return ok, total
 
 
 def fast_seconds(result):
-    sections = (result, result["spherical"])  # circular at the top level, spherical beside it
-    return sum(s[d]["fast_seconds"] for s in sections for d in ("forward", "back"))
+    return sum(s["fast_seconds"] for _, _, s in measurements(result))
 
 
 def main():
@@ -273,10 +278,8 @@ def main():
               f"{grown_fast:.2f} s of reported fast projection: ratio {ratio:.2f} {'ok' if ok else 'FAILED'} (0.9 to 1.3)")
         print(f"  fast projector, all four runs together, by this clock: {voxel_views / grown_wall:.3g} voxel-views/s; "
               f"by its own: {voxel_views / grown_fast:.3g}")
-        for name, section in (("circular", res_full), ("spherical", res_full["spherical"])):
-            for d in ("forward", "back"):
-                s = section[d]
-                print(f"  {name:9s} {d:7s} reported {s['voxel_views_per_s']:.3g} voxel-views/s, {s['speedup']:.1f}x the reference")
+        for name, d, s in measurements(res_full):
+            print(f"  {name:9s} {d:7s} reported {s['voxel_views_per_s']:.3g} voxel-views/s, {s['speedup']:.1f}x the reference")
     sys.exit(1 if failed else 0)
 
 
