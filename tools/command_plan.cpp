@@ -279,17 +279,21 @@ void compare(const PlanCommandOptions& o, const ScanSimulation& simulation) {
   if (o.random_draws > 1) std::cout << "random draws: " << draws.dump() << "\n";
   compared.resize(3);  // the picture shows planned, whole sphere and the first random draw
   write_trajectory_comparison_png(compared, truth, o.out / "comparison.png");
-  const nlohmann::json j = {{"format", "ctk-plan-comparison/1"},
-                            {"sample", sample.name},
-                            {"spectrum", {{"kvp", o.kvp}, {"filter_al_mm", o.filter_al_mm}}},
-                            {"volume", {{"size", layout.size}, {"voxel_mm", o.eval_voxel_mm}, {"iterations", o.eval_iterations},
-                                        {"lambda", o.eval_lambda}, {"binning", o.eval_binning}}},
-                            {"profile_through_voxel", through},
-                            {"absorbers_above_per_mm", absorber_above},
-                            {"truth_edge_gradient_per_mm2", compared.front().quality.truth_edge_gradient_per_mm2},
-                            {"truth_profile_gradient_per_mm2", compared.front().quality.truth_profile_gradient_per_mm2},
-                            {"trajectories", table},
-                            {"random_draws", draws}};
+  nlohmann::json j = {{"format", "ctk-plan-comparison/1"},
+                      {"sample", sample.name},
+                      {"volume", {{"size", layout.size}, {"voxel_mm", o.eval_voxel_mm}, {"iterations", o.eval_iterations},
+                                  {"lambda", o.eval_lambda}, {"binning", o.eval_binning}}},
+                      {"profile_through_voxel", through},
+                      {"absorbers_above_per_mm", absorber_above},
+                      {"truth_edge_gradient_per_mm2", compared.front().quality.truth_edge_gradient_per_mm2},
+                      {"truth_profile_gradient_per_mm2", compared.front().quality.truth_profile_gradient_per_mm2},
+                      {"trajectories", table},
+                      {"random_draws", draws}};
+  // The acquisition's settings are known only when this run acquired (not with --compare-only).
+  if (!o.compare_only) {
+    j["spectrum"] = {{"kvp", o.kvp}, {"filter_al_mm", o.filter_al_mm}};
+    j["flat_counts"] = o.flat_counts;
+  }
   write_text_atomically(o.out / "comparison.json", j.dump(2) + "\n");
   std::cout << "comparison written to " << (o.out / "comparison.json").string() << " and comparison.png\n";
 }
