@@ -156,7 +156,6 @@ HWY_INLINE void for_each_chunk(int k_lo, int k_hi, int k_begin, int k_end, F&& f
 // at a time it did not (25 % slower). Measured on Zen 3, benchmarks/README.md (session 21).
 constexpr int kVolumeChunkSlices = 8;
 
-
 // The tile for slices [k0, k1] of the strip, its rays' copies pointed at it; the bundles in
 // the volume instead when it would be too large (null when it fits).
 template <class DF>
