@@ -36,6 +36,8 @@ struct PlanCommandOptions {
   double damage_exponent = PlannerOptions{}.damage_exponent;
   double spread_exponent = PlannerOptions{}.spread_exponent;
   double widest_gap_fraction = PlannerOptions{}.widest_gap_fraction;
+  double edge_tangency_weight = PlannerOptions{}.edge_tangency_weight;
+  double tangent_width_deg = EdgeTangencyOptions{}.tangent_width_deg;
   std::uint64_t seed = 1;
   int cols = 720, rows = 720;
   double pitch_mm = 0.6, sdd_mm = 2150;
@@ -61,6 +63,8 @@ PlanningOptions planning_options(const PlanCommandOptions& o) {
   p.planner.damage_exponent = o.damage_exponent;
   p.planner.spread_exponent = o.spread_exponent;
   p.planner.widest_gap_fraction = o.widest_gap_fraction;
+  p.planner.edge_tangency_weight = o.edge_tangency_weight;
+  p.edge_tangency.tangent_width_deg = o.tangent_width_deg;
   p.planner.damage_floor_mm = 2 * o.coarse_voxel_mm;
   p.planner.seed = o.seed;
   p.reconstruction.binning = o.binning;
@@ -359,6 +363,8 @@ void register_plan(CLI::App& app) {
   cmd->add_option("--candidate-nside", o->candidate_nside, "HEALPix resolution of the candidate directions")->check(CLI::Range(1, 64))->capture_default_str();
   cmd->add_option("--spread-exponent", o->spread_exponent, "m: how strongly the largest gaps between views are preferred")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--widest-gap-fraction", o->widest_gap_fraction, "f: draw only among directions whose gap to the views so far is at least f times the widest (0: all)")->check(CLI::Range(0.0, 1.0))->capture_default_str();
+  cmd->add_option("--edge-tangency-weight", o->edge_tangency_weight, "b: share of the view density that follows the directions tangent to the sample's strong edges (0: even)")->check(CLI::Range(0.0, 1.0))->capture_default_str();
+  cmd->add_option("--tangent-width", o->tangent_width_deg, "How far from an edge's tangent plane a direction still counts as grazing it (deg)")->check(CLI::Range(1.0, 45.0))->capture_default_str();
   cmd->add_option("--damage-exponent", o->damage_exponent, "s: how strongly long absorber paths are avoided")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the planner's draws (and of the simulation)")->capture_default_str();
   cmd->add_option("--cols", o->cols, "Simulated detector columns")->check(CLI::Range(16, 100000))->capture_default_str();

@@ -76,6 +76,8 @@ class Loop {
     damage_.clear();
     for (const DirectionDamage& d : direction_damage(segmentation_, planner_.candidates(), g)) damage_.push_back(d.longest_path_mm);
     planner_.set_damage(segmentation_.voxels > 0 ? damage_ : std::vector<double>{});
+    if (o_.planner.edge_tangency_weight > 0)
+      planner_.set_edge_demand(tangent_edge_demand(recon_.volume(), o_.segmentation.region, planner_.candidates(), o_.edge_tangency));
     return seconds_since(start);
   }
 
@@ -125,6 +127,7 @@ class Loop {
     result.weights = planner_.weights();
     result.damage_mm = damage_;
     result.planner = o_.planner;
+    result.edge_tangency = o_.edge_tangency;
     return result;
   }
 

@@ -42,6 +42,8 @@ nlohmann::json trajectory_to_json(const PlanningResult& r) {
             {"damage_exponent", r.planner.damage_exponent},
             {"spread_exponent", r.planner.spread_exponent},
             {"widest_gap_fraction", r.planner.widest_gap_fraction},
+            {"edge_tangency_weight", r.planner.edge_tangency_weight},
+            {"tangent_width_deg", r.edge_tangency.tangent_width_deg},
             {"damage_floor_mm", r.planner.damage_floor_mm},
             {"unreachable_radius_deg", r.planner.unreachable_radius_deg}}},
           {"planning_step_seconds",

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace ctk {
 
@@ -21,6 +22,12 @@ void ViewPlanner::set_damage(const std::vector<double>& longest_path_mm) {
   damage_ = longest_path_mm;
 }
 
+void ViewPlanner::set_edge_demand(const std::vector<double>& relative_demand) {
+  if (!relative_demand.empty() && relative_demand.size() != candidates_.size())
+    throw std::invalid_argument("set_edge_demand: one value per candidate direction expected");
+  edge_demand_ = relative_demand;
+}
+
 std::vector<CandidateWeight> ViewPlanner::weights() const {
   std::vector<CandidateWeight> w(candidates_.size());
   // Half the sphere's area shared among the planned views: their typical spacing.
@@ -32,11 +39,15 @@ std::vector<CandidateWeight> ViewPlanner::weights() const {
     const Eigen::Vector3d& d = candidates_[c];
     for (const Eigen::Vector3d& u : unreachable_)
       if (d.dot(u) >= cos_unreachable) w[c].reach = 0;
+    // Where the edges want views more densely, the spacing they should have shrinks with the
+    // square root of the density (views per area).
+    if (!edge_demand_.empty()) w[c].density = (1 - options_.edge_tangency_weight) + options_.edge_tangency_weight * edge_demand_[c];
     double nearest = 1e300;
     for (const Eigen::Vector3d& a : acquired_) nearest = std::min(nearest, line_distance_rad(d, a));
-    gap[c] = nearest;
-    if (!acquired_.empty()) w[c].spread = std::pow(1.0 - std::exp(-(nearest / g0) * (nearest / g0)), options_.spread_exponent);
-    if (w[c].reach > 0) widest = std::max(widest, nearest);
+    const double spacings = nearest / g0 * std::sqrt(w[c].density);
+    gap[c] = spacings;
+    if (!acquired_.empty()) w[c].spread = std::pow(1.0 - std::exp(-spacings * spacings), options_.spread_exponent);
+    if (w[c].reach > 0) widest = std::max(widest, spacings);
     if (!damage_.empty() && w[c].reach > 0) least = std::min(least, damage_[c] + options_.damage_floor_mm);
   }
   if (!acquired_.empty() && options_.widest_gap_fraction > 0)

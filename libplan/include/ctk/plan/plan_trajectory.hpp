@@ -2,7 +2,8 @@
 // The planning loop (thesis chapter 7, done better): a scout scan on a coarse HEALPix sphere,
 // then view after view: calibrate the new view from its helix spheres (robot FK as first guess),
 // add it to the warm-started coarse reconstruction, segment the absorbers, score every candidate
-// direction by the absorber path it would look through, and draw the next direction (view_planner).
+// direction by the absorber path it would look through and by the edges it would graze, and draw
+// the next direction (view_planner).
 #include <functional>
 #include <optional>
 #include <string>
@@ -13,6 +14,7 @@
 #include "ctk/plan/absorber_segmentation.hpp"
 #include "ctk/plan/acquisition.hpp"
 #include "ctk/plan/direction_damage.hpp"
+#include "ctk/plan/edge_tangency.hpp"
 #include "ctk/plan/incremental_reconstruction.hpp"
 #include "ctk/plan/view_planner.hpp"
 
@@ -35,7 +37,8 @@ struct PlanningOptions {
   VolumeLayout coarse_volume;
   PlannerOptions planner;
   IncrementalOptions reconstruction;
-  SegmentationOptions segmentation;
+  SegmentationOptions segmentation;  // its region is also where edges are looked for
+  EdgeTangencyOptions edge_tangency;
   CalibrationOptions calibration;
 };
 
@@ -62,6 +65,7 @@ struct PlanningResult {
   std::vector<double> damage_mm;         // per candidate, at the end
   std::vector<double> step_seconds;      // planner time of each planned (not scout) step
   PlannerOptions planner;                // the settings the draws were made with
+  EdgeTangencyOptions edge_tangency;     // and how the edges' demand was found
   int acquired() const;
 };
 

@@ -7,8 +7,12 @@
 //              through long absorber paths become unlikely, the sharper the larger s;
 //   spread     (1 - exp(-(g / g0)^2))^m, g the angle to the nearest measured view or its opposite
 //              (a view and its opposite see nearly the same lines), g0 the spacing the planned
-//              number of views would have on the half sphere: keeps the data complete, no
-//              clustering; m = 4 makes the widest gaps much likelier than the rest;
+//              number of views would have on the half sphere at the density wanted there: keeps
+//              the data complete, no clustering; m = 4 makes the widest gaps much likelier than
+//              the rest. The density wanted is (1 - b) + b D, D the edges' demand relative to its
+//              mean (edge_tangency.hpp), so g0 shrinks by sqrt of it where the sample's strong
+//              edges need grazing rays, and with no edge or edges of every orientation (D = 1)
+//              the spread is even;
 //   reach      0 within `unreachable_radius` of a direction the robot could not take, else 1: a
 //              refusal rules out its neighbourhood only, so the borders of unreachable regions
 //              keep being explored.
@@ -45,6 +49,7 @@ struct PlannerOptions {
   double damage_exponent = 0.25;      // s: mild, see above
   double spread_exponent = 4.0;       // m: see above
   double widest_gap_fraction = 0;     // f: draw only where the gap is at least f times the widest (0: anywhere)
+  double edge_tangency_weight = 0.5;  // b: share of the view density that follows the edges' demand
   double damage_floor_mm = 1.0;       // added to every damage (about a coarse voxel)
   double unreachable_radius_deg = 4.0;
   std::uint64_t seed = 1;
@@ -52,6 +57,7 @@ struct PlannerOptions {
 
 struct CandidateWeight {
   double damage = 1, spread = 1, reach = 1;
+  double density = 1;  // view density wanted here, relative to an even spread (enters `spread`)
   double weight() const { return damage * spread * reach; }
 };
 
@@ -64,6 +70,9 @@ class ViewPlanner {
   void record_unreachable(const Eigen::Vector3d& direction);
   /// Damage (longest absorber path, mm) per candidate; an empty vector means none anywhere.
   void set_damage(const std::vector<double>& longest_path_mm);
+  /// The edges' demand per candidate, relative to its mean (`tangent_edge_demand`); an empty
+  /// vector means an even spread.
+  void set_edge_demand(const std::vector<double>& relative_demand);
 
   std::vector<CandidateWeight> weights() const;
   /// The next direction (a candidate cell's centre); nothing when every weight is zero.
@@ -75,7 +84,7 @@ class ViewPlanner {
  private:
   PlannerOptions options_;
   std::vector<Eigen::Vector3d> candidates_;
-  std::vector<double> damage_;
+  std::vector<double> damage_, edge_demand_;
   std::vector<Eigen::Vector3d> acquired_, unreachable_;
   std::mt19937_64 rng_;
 };
