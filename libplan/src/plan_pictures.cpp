@@ -37,20 +37,16 @@ cv::Mat labelled(const cv::Mat& picture, const std::string& line1, const std::st
   return out;
 }
 
-}  // namespace
-
-void write_plan_map_png(const PlanningResult& r, const std::filesystem::path& png) {
+// One equal-area map of the candidates coloured by `value` (scaled to its greatest), with the
+// requested directions marked.
+cv::Mat direction_map(const PlanningResult& r, const std::vector<double>& value, const std::string& title) {
   double most = 0;
-  for (double d : r.damage_mm) most = std::max(most, d);
-  Chart chart(900, 287, {-180, 180, -1, 1,
-                         "directions (equal-area); colour: predicted absorber path; . scout, o planned, x refused",
-                         "longitude about the holder axis (deg)", "sin(latitude)"});
+  for (double v : value) most = std::max(most, v);
+  Chart chart(900, 287, {-180, 180, -1, 1, title, "longitude about the holder axis (deg)", "sin(latitude)"});
   for (std::size_t c = 0; c < r.candidates.size(); ++c) {
     const MapPoint p = equal_area_map(r.candidates[c]);
     const bool refused = c < r.weights.size() && r.weights[c].reach == 0;
-    const cv::Scalar fill = refused ? colour::light
-                            : (most > 0 && c < r.damage_mm.size()) ? colour::ramp(r.damage_mm[c] / most)
-                                                                   : colour::ramp(0);
+    const cv::Scalar fill = refused ? colour::light : (most > 0 && c < value.size()) ? colour::ramp(value[c] / most) : colour::ramp(0);
     chart.dot(p.x * kDeg, p.y, fill, 6);
   }
   chart.ticks(60, 0.5);
@@ -61,7 +57,18 @@ void write_plan_map_png(const PlanningResult& r, const std::filesystem::path& pn
     else
       chart.dot(p.x * kDeg, p.y, v.scout ? colour::black : colour::blue, v.scout ? 2 : 4);
   }
-  chart.save(png);
+  return chart.canvas();
+}
+
+}  // namespace
+
+void write_plan_map_png(const PlanningResult& r, const std::filesystem::path& png) {
+  std::vector<double> density;
+  for (const CandidateWeight& w : r.weights) density.push_back(w.density);
+  cv::Mat picture;
+  cv::vconcat(direction_map(r, r.damage_mm, "directions (equal-area); colour: predicted absorber path; . scout, o planned, x refused"),
+              direction_map(r, density, "colour: view density the sample's edges want (from the last coarse volume)"), picture);
+  write_png_atomically(picture, png);
 }
 
 void write_trajectory_comparison_png(const std::vector<ComparedTrajectory>& t, const Volume& truth, const std::filesystem::path& png) {

@@ -1,7 +1,7 @@
 #pragma once
-// The planner's pictures: the candidate directions on an equal-area map coloured by the damage
-// the last picture of the sample predicts for them, with the scout, the planned and the refused
-// directions marked; and the comparison of trajectories — a slice of each reconstruction beside
+// The planner's pictures: the candidate directions on two equal-area maps, coloured by the damage
+// the last picture of the sample predicts for them and by the view density its edges want, with
+// the scout, the planned and the refused directions marked; and the comparison of trajectories — a slice of each reconstruction beside
 // the truth's, and line profiles against the truth's.
 #include <filesystem>
 #include <string>
