@@ -1,8 +1,8 @@
 #pragma once
 // The planner's pictures: the candidate directions on two equal-area maps, coloured by the damage
 // the last picture of the sample predicts for them and by the view density its edges want, with
-// the scout, the planned and the refused directions marked; and the comparison of trajectories — a slice of each reconstruction beside
-// the truth's, and line profiles against the truth's.
+// the scout, the planned and the refused directions marked; and the comparison of trajectories:
+// a slice of each reconstruction beside the truth's, and line profiles against the truth's.
 #include <filesystem>
 #include <string>
 #include <vector>
