@@ -18,9 +18,10 @@
 //              keep being explored.
 // The next direction is drawn from the weights with a seeded generator: the same seed and the
 // same measurements give the same trajectory. With widest_gap_fraction f > 0 only candidates
-// whose gap g is at least f times the widest reachable gap take part (f = 1 is a farthest-point
-// order with random ties): the views spread nearly as evenly as the whole-sphere order, and the
-// damage then only chooses among the widest gaps. Off by default: on sample 1 (f = 0.9, seeds 1
+// whose gap g / g0 (in the spacing wanted there) is at least f times the widest reachable one
+// take part (f = 1 is a farthest-point order with random ties): the views spread nearly as evenly
+// as the whole-sphere order, and the damage then only chooses among the widest gaps. Off by
+// default (measured before the edges' demand existed): on sample 1 (f = 0.9, seeds 1
 // and 2) it moved the RMSE outside the plate from 0.00219 / 0.00232 to 0.00221 / 0.00217, but the
 // plate itself read higher and the whole RMSE rose; on sample 2 the profile gradient fell below a
 // random draw's; the walnut did not move (README, "Planning").
