@@ -37,16 +37,20 @@ cv::Mat labelled(const cv::Mat& picture, const std::string& line1, const std::st
   return out;
 }
 
-// One equal-area map of the candidates coloured by `value` (scaled to its greatest), with the
-// requested directions marked.
+// One equal-area map of the candidates coloured by `value` (from its least to its greatest), with
+// the requested directions marked.
 cv::Mat direction_map(const PlanningResult& r, const std::vector<double>& value, const std::string& title) {
-  double most = 0;
-  for (double v : value) most = std::max(most, v);
+  double least = 0, most = 0;
+  if (!value.empty()) {
+    const auto [lo, hi] = std::minmax_element(value.begin(), value.end());
+    least = *lo;
+    most = *hi;
+  }
   Chart chart(900, 287, {-180, 180, -1, 1, title, "longitude about the holder axis (deg)", "sin(latitude)"});
   for (std::size_t c = 0; c < r.candidates.size(); ++c) {
     const MapPoint p = equal_area_map(r.candidates[c]);
     const bool refused = c < r.weights.size() && r.weights[c].reach == 0;
-    const cv::Scalar fill = refused ? colour::light : (most > 0 && c < value.size()) ? colour::ramp(value[c] / most) : colour::ramp(0);
+    const cv::Scalar fill = refused ? colour::light : (most > least && c < value.size()) ? colour::ramp((value[c] - least) / (most - least)) : colour::ramp(0);
     chart.dot(p.x * kDeg, p.y, fill, 6);
   }
   chart.ticks(60, 0.5);
@@ -67,7 +71,7 @@ void write_plan_map_png(const PlanningResult& r, const std::filesystem::path& pn
   for (const CandidateWeight& w : r.weights) density.push_back(w.density);
   cv::Mat picture;
   cv::vconcat(direction_map(r, r.damage_mm, "directions (equal-area); colour: predicted absorber path; . scout, o planned, x refused"),
-              direction_map(r, density, "colour: view density the sample's edges want (from the last coarse volume)"), picture);
+              direction_map(r, density, "colour: view density the sample's edges want, least to most (from the last coarse volume)"), picture);
   write_png_atomically(picture, png);
 }
 
