@@ -50,7 +50,8 @@ cv::Mat direction_map(const PlanningResult& r, const std::vector<double>& value,
   for (std::size_t c = 0; c < r.candidates.size(); ++c) {
     const MapPoint p = equal_area_map(r.candidates[c]);
     const bool refused = c < r.weights.size() && r.weights[c].reach == 0;
-    const cv::Scalar fill = refused ? colour::light : (most > least && c < value.size()) ? colour::ramp((value[c] - least) / (most - least)) : colour::ramp(0);
+    const double level = (most > least && c < value.size()) ? (value[c] - least) / (most - least) : 0.0;
+    const cv::Scalar fill = refused ? colour::light : colour::ramp(level);
     chart.dot(p.x * kDeg, p.y, fill, 6);
   }
   chart.ticks(60, 0.5);
@@ -70,8 +71,9 @@ void write_plan_map_png(const PlanningResult& r, const std::filesystem::path& pn
   std::vector<double> density;
   for (const CandidateWeight& w : r.weights) density.push_back(w.density);
   cv::Mat picture;
-  cv::vconcat(direction_map(r, r.damage_mm, "directions (equal-area); colour: predicted absorber path; . scout, o planned, x refused"),
-              direction_map(r, density, "colour: view density the sample's edges want, least to most (from the last coarse volume)"), picture);
+  const cv::Mat damage = direction_map(r, r.damage_mm, "directions (equal-area); colour: predicted absorber path; . scout, o planned, x refused");
+  const cv::Mat wanted = direction_map(r, density, "colour: view density the sample's edges want, least to most (from the last coarse volume)");
+  cv::vconcat(damage, wanted, picture);
   write_png_atomically(picture, png);
 }
 
