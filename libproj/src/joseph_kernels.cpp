@@ -29,15 +29,17 @@ HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_
   auto sum = hn::Zero(df);
   for (int k = k_lo; k <= k_hi; ++k) {
     if (k >= b.in_lo && k <= b.in_hi) {
-      hn::Vec<DF> sample;
-      if (!b.window || !interpolate_window(df, t, volume, b.r, k, sample)) {
-        const auto c = interior_corners_at(df, t, b.r, k);
-        sample = b.pairs ? interpolate_pairs(df, volume, c) : interpolate(df, volume, c);
+      if (b.window) {  // every interior slice of this call at once
+        const int last = std::min(k_hi, b.in_hi);
+        sum = add_window_samples(df, t, volume, b.r, k, last, sum);
+        k = last;
+        continue;
       }
-      sum = hn::Add(sum, sample);
+      const auto c = interior_corners_at(df, t, b.r, k);
+      sum = hn::Add(sum, b.pairs ? interpolate_pairs(df, volume, c) : interpolate(df, volume, c));
     } else {
       hn::Vec<DF> sample;
-      if (!b.window || !interpolate_window<true>(df, t, volume, b.r, k, sample))
+      if (!b.window || !interpolate_window(df, t, volume, b.r, k, sample))
         sample = interpolate(df, volume, corners_at(df, t, b.r, k, all));
       sum = hn::Add(sum, sample);
     }
