@@ -150,14 +150,8 @@ HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float*
     for (int i = 0; i < count; ++i) {
       hn::Vec<DF> sample;
       if (fits[i]) {
-        SamplePosition<DF> p;
-        p.fb = hn::Load(df, fb[i]);
-        p.fc = hn::Load(df, fc[i]);
-        const auto one = hn::Set(df, 1.0f);
-        p.gb = hn::Sub(one, p.fb);
-        p.gc = hn::Sub(one, p.fc);
         hn::Vec<DF> weight[4];
-        bilinear_weights(p, weight);
+        bilinear_weights(hn::Load(df, fb[i]), hn::Load(df, fc[i]), weight);
         sample = window_sample(df, row[i], sc, hn::Load(di, pos[i]), hn::Load(di, dc[i]), weight);
       } else {
         sample = interpolate_pairs(df, volume, interior_corners_at(df, t, r, k0 + i));

@@ -37,7 +37,7 @@ struct Corners {
 template <class DF>
 struct SamplePosition {
   hn::Vec<hn::RebindToSigned<DF>> ib, ic;
-  hn::Vec<DF> fb, fc, gb, gc;  // g = 1 - f
+  hn::Vec<DF> fb, fc;  // fractions along b and c
 };
 
 // Lane l at slice k[l]; indices relative to the grid's origin (RayTable::origin_b, origin_c).
@@ -53,9 +53,6 @@ HWY_INLINE SamplePosition<DF> position_at(DF df, const RayTable& t, std::size_t 
   s.ic = hn::Sub(hn::ConvertTo(di, fc0), hn::Set(di, t.origin_c));
   s.fb = hn::Sub(pb, fb0);
   s.fc = hn::Sub(pc, fc0);
-  const auto one = hn::Set(df, 1.0f);
-  s.gb = hn::Sub(one, s.fb);
-  s.gc = hn::Sub(one, s.fc);
   return s;
 }
 
@@ -64,14 +61,22 @@ HWY_INLINE SamplePosition<DF> position_at(DF df, const RayTable& t, std::size_t 
   return position_at(df, t, r, hn::Set(df, static_cast<float>(k)));
 }
 
-// The bilinear weights of corners (b, c), (b + 1, c), (b, c + 1), (b + 1, c + 1): every path
-// (masked, interior, row window, both directions) takes them from here.
+// The bilinear weights of corners (b, c), (b + 1, c), (b, c + 1), (b + 1, c + 1) from the
+// fractions fb, fc: every path (masked, interior, row window, both directions) takes them from
+// here.
+template <class V>
+HWY_INLINE void bilinear_weights(V fb, V fc, V (&weight)[4]) {
+  const V one = hn::Set(hn::DFromV<V>(), 1.0f);
+  const V gb = hn::Sub(one, fb), gc = hn::Sub(one, fc);
+  weight[0] = hn::Mul(gb, gc);
+  weight[1] = hn::Mul(fb, gc);
+  weight[2] = hn::Mul(gb, fc);
+  weight[3] = hn::Mul(fb, fc);
+}
+
 template <class DF>
 HWY_INLINE void bilinear_weights(const SamplePosition<DF>& p, hn::Vec<DF> (&weight)[4]) {
-  weight[0] = hn::Mul(p.gb, p.gc);
-  weight[1] = hn::Mul(p.fb, p.gc);
-  weight[2] = hn::Mul(p.gb, p.fc);
-  weight[3] = hn::Mul(p.fb, p.fc);
+  bilinear_weights(p.fb, p.fc, weight);
 }
 
 template <class DF>
