@@ -56,7 +56,7 @@ HWY_INLINE void march_back(DF df, const RayTable& t, const Bundle& b, hn::Vec<DF
     if (k >= b.in_lo && k <= b.in_hi) {
 #if HWY_TARGET <= HWY_AVX3
       if (b.window && scatter_window(t, volume, b.r, k, value)) continue;
-      scatter_add_interior(df, interior_corners_at(df, t, b.r, k), value, volume);
+      scatter_add_interior_slices(df, t, b.r, k, k, value, volume);
 #else  // no row window for the back projection: every interior slice of this call at once
       const int last = std::min(k_hi, b.in_hi);
       scatter_add_interior_slices(df, t, b.r, k, last, value, volume);
