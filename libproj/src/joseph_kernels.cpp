@@ -21,12 +21,12 @@ namespace ctk::detail {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-// The forward sum of bundle b over slices [k_lo, k_hi], not yet times the path length.
+// `sum` plus the forward samples of bundle b over slices [k_lo, k_hi] in order, not yet times
+// the path length.
 template <class DF>
 HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_RESTRICT volume, const Bundle& b,
-                                     int k_lo, int k_hi) {
+                                     int k_lo, int k_hi, hn::Vec<DF> sum) {
   const auto all = hn::FirstN(df, hn::Lanes(df));
-  auto sum = hn::Zero(df);
   for (int k = k_lo; k <= k_hi; ++k) {
     if (k >= b.in_lo && k <= b.in_hi) {
       if (b.window) {  // every interior slice of this call at once
@@ -177,6 +177,28 @@ HWY_INLINE TileFit start_chunk(DF df, const RayTable& t, int axis, int k0, int k
   return fit;
 }
 
+// Chunk [k0, k1] of a strip through tiles: one, or where the rays cross it too steeply for one
+// tile (rays that drift as far across x as along it widen a 16-slice tile past its bounds), its
+// first half and then the rest, halving down to kMinTileSlices before the bundles march in the
+// volume itself (gathers, and on the back projection a scatter across rows and planes).
+// f(k_lo, k_hi, fit, in_volume) for each part in slice order, its tile (or in_volume) ready;
+// parts where no lane has a sample are skipped.
+constexpr int kMinTileSlices = 4;
+template <class DF, class F>
+HWY_INLINE void for_each_tile(DF df, const RayTable& t, int axis, int k0, int k1, StripWorkspace& w, Tile& tile, F&& f) {
+  for (int k_lo = k0; k_lo <= k1;) {
+    int k_hi = k1;
+    const Bundle* in_volume;
+    TileFit fit = start_chunk(df, t, axis, k_lo, k_hi, w, tile, in_volume);
+    while (fit == TileFit::too_large && k_hi - k_lo + 1 > kMinTileSlices) {
+      k_hi = k_lo + (k_hi - k_lo + 1) / 2 - 1;
+      fit = start_chunk(df, t, axis, k_lo, k_hi, w, tile, in_volume);
+    }
+    if (fit != TileFit::nothing) f(k_lo, k_hi, fit, in_volume);
+    k_lo = k_hi + 1;
+  }
+}
+
 template <class DF>
 HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRICT volume, StripWorkspace& w,
                               float* HWY_RESTRICT out) {
@@ -187,17 +209,25 @@ HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRIC
   const XGrid g = x_grid(t, s, hn::Lanes(df));
   Tile tile;
   tile.data = w.tile_data.data();
+  // A chunk's sums, carried from tile to tile when the chunk takes several (each lane then adds
+  // its samples in the same order as through one tile).
+  HWY_ALIGN float chunk_sums[XStrip::kMaxBundles * kMaxLanes];
   for_each_chunk(s.k_lo, s.k_hi, 0, 1 << 30, [&](int k0, int k1) {
-    const Bundle* in_volume;
-    const TileFit fit = start_chunk(df, t, -1, k0, k1, w, tile, in_volume);
-    if (fit == TileFit::nothing) return;
-    if (fit == TileFit::fits) fill_tile(volume, g, tile);
+    for (int i = 0; i < s.count; ++i) hn::Store(hn::Zero(df), df, chunk_sums + i * kMaxLanes);
+    for_each_tile(df, t, -1, k0, k1, w, tile, [&](int k_lo, int k_hi, TileFit fit, const Bundle* in_volume) {
+      if (fit == TileFit::fits) fill_tile(volume, g, tile);
+      for (int i = 0; i < s.count; ++i) {
+        const Bundle& b = in_volume ? in_volume[i] : s.tile[i];
+        float* part = chunk_sums + i * kMaxLanes;
+        const int first = std::max(k_lo, b.k_lo), last = std::min(k_hi, b.k_hi);
+        hn::Store(in_volume ? march_forward(df, t, volume, b, first, last, hn::Load(df, part))
+                            : march_forward(df, local, tile.data, b, first, last, hn::Load(df, part)),
+                  df, part);
+      }
+    });
     for (int i = 0; i < s.count; ++i) {
-      const Bundle& b = in_volume ? in_volume[i] : s.tile[i];
-      const auto sum = in_volume ? march_forward(df, t, volume, b, std::max(k0, b.k_lo), std::min(k1, b.k_hi))
-                                 : march_forward(df, local, tile.data, b, std::max(k0, b.k_lo), std::min(k1, b.k_hi));
       float* acc = sums + i * kMaxLanes;
-      hn::Store(hn::Add(hn::Load(df, acc), sum), df, acc);
+      hn::Store(hn::Add(hn::Load(df, acc), hn::Load(df, chunk_sums + i * kMaxLanes)), df, acc);
     }
   });
   for (int i = 0; i < s.count; ++i) {
@@ -217,24 +247,23 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
   Tile tile;
   tile.data = w.tile_data.data();
   for_each_chunk(s.k_lo, s.k_hi, k_begin, k_end, [&](int k0, int k1) {
-    const Bundle* in_volume;
-    const TileFit fit = start_chunk(df, t, 0, k0, k1, w, tile, in_volume);
-    if (fit == TileFit::nothing) return;
-    if (fit == TileFit::fits) std::fill_n(tile.data, tile.row(tile.slices, 0), 0.0f);
-    for (int i = 0; i < s.count; ++i) {
-      const std::size_t r = s.entries[i];
-      const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
-      if (!in_volume) {
-        const Bundle& b = s.tile[i];
-        march_back(df, local, b, value, all, std::max(k0, b.k_lo), std::min(k1, b.k_hi), tile.data);
-      } else {
-        const Bundle& b = in_volume[i];
-        const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(hn::RebindToSigned<DF>(), t.axis.data() + r),
-                                                       hn::Zero(hn::RebindToSigned<DF>())));
-        march_back(df, t, b, value, on_axis, std::max(k0, b.k_lo), std::min(k1, b.k_hi), volume);
+    for_each_tile(df, t, 0, k0, k1, w, tile, [&](int k_lo, int k_hi, TileFit fit, const Bundle* in_volume) {
+      if (fit == TileFit::fits) std::fill_n(tile.data, tile.row(tile.slices, 0), 0.0f);
+      for (int i = 0; i < s.count; ++i) {
+        const std::size_t r = s.entries[i];
+        const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
+        if (!in_volume) {
+          const Bundle& b = s.tile[i];
+          march_back(df, local, b, value, all, std::max(k_lo, b.k_lo), std::min(k_hi, b.k_hi), tile.data);
+        } else {
+          const Bundle& b = in_volume[i];
+          const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(hn::RebindToSigned<DF>(), t.axis.data() + r),
+                                                         hn::Zero(hn::RebindToSigned<DF>())));
+          march_back(df, t, b, value, on_axis, std::max(k_lo, b.k_lo), std::min(k_hi, b.k_hi), volume);
+        }
       }
-    }
-    if (fit == TileFit::fits) add_tile(tile, g, volume);
+      if (fit == TileFit::fits) add_tile(tile, g, volume);
+    });
   });
 }
 
@@ -285,7 +314,7 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
         const int first = std::max(k0, b.k_lo), last = std::min(k1, b.k_hi);
         if (first > last) continue;
         float* acc = sums.data() + i * kMaxLanes;
-        hn::StoreU(hn::Add(hn::LoadU(df, acc), march_forward(df, t, volume, b, first, last)), df, acc);
+        hn::StoreU(hn::Add(hn::LoadU(df, acc), march_forward(df, t, volume, b, first, last, hn::Zero(df))), df, acc);
       }
     }
     for (std::size_t i = 0; i < in_volume.size(); ++i)
@@ -300,7 +329,7 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
           in_volume.push_back(b);
           return;
         }
-        hn::StoreU(hn::Mul(march_forward(df, t, volume, b, b.k_lo, b.k_hi), hn::LoadU(df, t.weight.data() + r)), df,
+        hn::StoreU(hn::Mul(march_forward(df, t, volume, b, b.k_lo, b.k_hi, hn::Zero(df)), hn::LoadU(df, t.weight.data() + r)), df,
                    out + r);
       },
       [&] { forward_strip(df, t, volume, w, out); });

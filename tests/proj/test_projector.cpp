@@ -179,8 +179,9 @@ TEST(JosephProjector, RowWindowPathsAgreeWithTheReferenceAndAreAdjoint) {
 
 // Rays along x through a volume long in y: the fast projector marches them through small
 // transposed tiles of 16 slices. Neighbouring rays a voxel apart and closer (tiles that fit),
-// rays far apart and steep (tiles too large: the volume is marched instead), ends of the x range
-// that are not a whole tile, and rays leaving the volume sideways (tile voxels outside it).
+// rays steep across x (16 slices too large a tile: tiles of 8 or 4 slices instead), rays far
+// apart (too large even at 4 slices: the volume is marched instead), ends of the x range that
+// are not a whole tile, and rays leaving the volume sideways (tile voxels outside it).
 Problem rays_along_x_problem() {
   return problem_with_views(VolumeLayout::centred({37, 90, 30}, {1.0, 1.0, 1.0}), 20, 40, 250, 400,
                             {{Eigen::Vector3d(1, 0, 0), 1.6},
