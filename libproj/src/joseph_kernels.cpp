@@ -177,12 +177,13 @@ HWY_INLINE TileFit start_chunk(DF df, const RayTable& t, int axis, int k0, int k
   return fit;
 }
 
-// Chunk [k0, k1] of a strip through tiles: one, or where the rays cross it too steeply for one
-// tile (rays that drift as far across x as along it widen a 16-slice tile past its bounds), its
-// first half and then the rest, halving down to kMinTileSlices before the bundles march in the
-// volume itself (gathers, and on the back projection a scatter across rows and planes).
-// f(k_lo, k_hi, fit, in_volume) for each part in slice order, its tile (or in_volume) ready;
-// parts where no lane has a sample are skipped.
+// Chunk [k0, k1] of a strip through tiles: one, or where its box is too large for one (rays that
+// drift across y and z about as far as they advance along x, in oblique views), its first half
+// and then the rest, halving down to kMinTileSlices before the bundles march in the volume
+// itself (gathers, and on the back projection a scatter across rows and planes; 12 % of the
+// tile chunks of spherical views did, benchmarks/README.md session 24). f(k_lo, k_hi, fit,
+// in_volume) for each part in slice order, its tile (or in_volume) ready; parts where no lane
+// has a sample are skipped.
 constexpr int kMinTileSlices = 4;
 template <class DF, class F>
 HWY_INLINE void for_each_tile(DF df, const RayTable& t, int axis, int k0, int k1, StripWorkspace& w, Tile& tile, F&& f) {
