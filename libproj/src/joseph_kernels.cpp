@@ -211,7 +211,9 @@ HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRIC
   Tile tile;
   tile.data = w.tile_data.data();
   // A chunk's sums, carried from tile to tile when the chunk takes several (each lane then adds
-  // its samples in the same order as through one tile).
+  // its samples in the same order as through one tile). Summing straight into `sums` instead
+  // saves this buffer and 0.5 % of instructions but measured 0.94 to 0.99 on circular views
+  // (1.03 spherical; session 24), so the buffer stays.
   HWY_ALIGN float chunk_sums[XStrip::kMaxBundles * kMaxLanes];
   for_each_chunk(s.k_lo, s.k_hi, 0, 1 << 30, [&](int k0, int k1) {
     for (int i = 0; i < s.count; ++i) hn::Store(hn::Zero(df), df, chunk_sums + i * kMaxLanes);
