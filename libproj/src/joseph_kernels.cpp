@@ -160,7 +160,11 @@ HWY_INLINE void for_each_chunk(int k_lo, int k_hi, int k_begin, int k_end, F&& f
 // the one before had been evicted by then (slices along z are 256 kB apart in a 256^3 volume, so
 // no prefetcher foresees the next). Per-bundle state stays in registers over a chunk; one slice
 // at a time it did not (25 % slower). Measured on Zen 3, benchmarks/README.md (session 21).
-constexpr int kVolumeChunkSlices = 8;
+// The forward projection takes 16: each bundle's call then makes one full pass of
+// add_window_samples, whose set-up costs about 300 instructions (1.01-1.13x over 8, session 25);
+// the back projection measured no better with 16 (0.97-1.01) and keeps 8.
+constexpr int kForwardChunkSlices = 16;
+constexpr int kBackChunkSlices = 8;
 
 // The tile for slices [k0, k1] of the strip, its rays' copies pointed at it; the bundles in
 // the volume instead when it would be too large (null when it fits).
@@ -291,7 +295,7 @@ HWY_INLINE void for_each_bundle(const RayTable& t, int lanes, bool tiles, StripW
 }
 
 // Rays along x go strip by strip through tiles (above); the others chunk by chunk through the
-// volume (kVolumeChunkSlices), once every strip has been through.
+// volume (kForwardChunkSlices), once every strip has been through.
 void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY_RESTRICT out) {
   const hn::ScalableTag<float> df;
   const int N = static_cast<int>(hn::Lanes(df));
@@ -310,8 +314,8 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
       hi = std::max(hi, in_volume[i].k_hi);
       hn::StoreU(hn::Zero(df), df, sums.data() + i * kMaxLanes);
     }
-    for (int k0 = lo; k0 <= hi; k0 += kVolumeChunkSlices) {
-      const int k1 = std::min(hi, k0 + kVolumeChunkSlices - 1);
+    for (int k0 = lo; k0 <= hi; k0 += kForwardChunkSlices) {
+      const int k1 = std::min(hi, k0 + kForwardChunkSlices - 1);
       for (std::size_t i = 0; i < in_volume.size(); ++i) {
         const Bundle& b = in_volume[i];
         const int first = std::max(k0, b.k_lo), last = std::min(k1, b.k_hi);
@@ -364,8 +368,8 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
       },
       [&] { back_strip(df, t, k_begin, k_end, w, volume); });
   const auto all = hn::FirstN(df, hn::Lanes(df));
-  for (int k0 = k_begin; k0 < k_end; k0 += kVolumeChunkSlices) {
-    const int k1 = std::min(k_end - 1, k0 + kVolumeChunkSlices - 1);
+  for (int k0 = k_begin; k0 < k_end; k0 += kBackChunkSlices) {
+    const int k1 = std::min(k_end - 1, k0 + kBackChunkSlices - 1);
     for (const Bundle& b : in_volume) {
       const int first = std::max(k0, b.k_lo), last = std::min(k1, b.k_hi);
       if (first > last) continue;

@@ -116,16 +116,110 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
 #endif
 }
 
+// Slices per pass of add_window_samples (below).
+inline constexpr int kWindowBatch = 16;
+
+#if HWY_TARGET == HWY_AVX2
+// add_window_samples for 8 lanes of AVX2, written with the instructions it needs: the same
+// arithmetic (results bit for bit), without what the portable form adds per sample (float to
+// int conversion with overflow fix-up, clamps and compares done twice, masks rebuilt).
+// A lookup in the 16-voxel window is two permutes (vpermps reads the low three bits of each
+// index) and a blend on bit 3 moved to the sign.
+HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r, int k_lo,
+                                          int k_hi, __m256 sum) {
+  constexpr int N = 8;
+  const std::ptrdiff_t sc = t.stride_c[r];
+  const std::ptrdiff_t slice = t.stride_a[r];
+  const int x_max = t.n_b[r] - 2 * N;
+  const __m256 k_mid = _mm256_loadu_ps(t.k_mid.data() + r);
+  const __m256 beta_b = _mm256_loadu_ps(t.beta_b.data() + r), pb_mid = _mm256_loadu_ps(t.pb_mid.data() + r);
+  const __m256 beta_c = _mm256_loadu_ps(t.beta_c.data() + r), pc_mid = _mm256_loadu_ps(t.pc_mid.data() + r);
+  const __m256i origin_b = _mm256_set1_epi32(t.origin_b), origin_c = _mm256_set1_epi32(t.origin_c);
+  const __m256i one = _mm256_set1_epi32(1), two = _mm256_set1_epi32(2), last_pos = _mm256_set1_epi32(2 * N - 2);
+  const __m256 one_f = _mm256_set1_ps(1.0f);
+  HWY_ALIGN std::int32_t pos[kWindowBatch][N], dc[kWindowBatch][N];
+  HWY_ALIGN float fb[kWindowBatch][N], fc[kWindowBatch][N];
+  std::ptrdiff_t offset[kWindowBatch];
+  for (int k0 = k_lo; k0 <= k_hi; k0 += kWindowBatch) {
+    const int count = std::min(kWindowBatch, k_hi - k0 + 1);
+    unsigned misfits = 0;  // bit i: slice k0 + i does not fit the window
+    for (int i = 0; i < count; ++i) {
+      const int k = k0 + i;
+      const __m256 dk = _mm256_sub_ps(_mm256_set1_ps(static_cast<float>(k)), k_mid);
+      const __m256 pb = _mm256_fmadd_ps(dk, beta_b, pb_mid), pc = _mm256_fmadd_ps(dk, beta_c, pc_mid);
+      const __m256 fb0 = _mm256_floor_ps(pb), fc0 = _mm256_floor_ps(pc);
+      const __m256i ib = _mm256_sub_epi32(_mm256_cvttps_epi32(fb0), origin_b);
+      const __m256i ic = _mm256_sub_epi32(_mm256_cvttps_epi32(fc0), origin_c);
+      const int x0 = std::min(std::max(std::min(_mm256_cvtsi256_si32(ib), _mm256_extract_epi32(ib, N - 1)), 0), x_max);
+      __m256i c0 = _mm256_min_epi32(ic, _mm256_permute2x128_si256(ic, ic, 1));
+      c0 = _mm256_min_epi32(c0, _mm256_shuffle_epi32(c0, _MM_SHUFFLE(1, 0, 3, 2)));
+      c0 = _mm256_min_epi32(c0, _mm256_shuffle_epi32(c0, _MM_SHUFFLE(2, 3, 0, 1)));
+      const __m256i p = _mm256_sub_epi32(ib, _mm256_set1_epi32(x0)), d = _mm256_sub_epi32(ic, c0);
+      // Outside the window: p < 0, p + 1 > 2N - 1 or d > 2 (d >= 0), each a sign bit.
+      const __m256i out = _mm256_or_si256(_mm256_or_si256(p, _mm256_sub_epi32(last_pos, p)), _mm256_sub_epi32(two, d));
+      misfits |= (_mm256_movemask_ps(_mm256_castsi256_ps(out)) != 0 ? 1u : 0u) << i;
+      _mm256_store_si256(reinterpret_cast<__m256i*>(pos[i]), p);
+      _mm256_store_si256(reinterpret_cast<__m256i*>(dc[i]), d);
+      _mm256_store_ps(fb[i], _mm256_sub_ps(pb, fb0));
+      _mm256_store_ps(fc[i], _mm256_sub_ps(pc, fc0));
+      offset[i] = static_cast<std::ptrdiff_t>(k - t.origin_a) * slice + static_cast<std::ptrdiff_t>(_mm256_cvtsi256_si32(c0)) * sc + x0;
+    }
+    for (int i = 0; i < count; ++i) {
+      if (misfits >> i & 1u) {
+        const hn::Full256<float> df;
+        sum = _mm256_add_ps(sum, interpolate_pairs(df, volume, interior_corners_at(df, t, r, k0 + i)).raw);
+        continue;
+      }
+      const __m256 fbv = _mm256_load_ps(fb[i]), fcv = _mm256_load_ps(fc[i]);
+      const __m256 gb = _mm256_sub_ps(one_f, fbv), gc = _mm256_sub_ps(one_f, fcv);
+      const __m256i p = _mm256_load_si256(reinterpret_cast<const __m256i*>(pos[i])), p1 = _mm256_add_epi32(p, one);
+      const __m256 hi0 = _mm256_castsi256_ps(_mm256_slli_epi32(p, 28)), hi1 = _mm256_castsi256_ps(_mm256_slli_epi32(p1, 28));
+      const auto lookup = [&](const float* row, __m256i at, __m256 hi) {
+        return _mm256_blendv_ps(_mm256_permutevar8x32_ps(_mm256_loadu_ps(row), at),
+                                _mm256_permutevar8x32_ps(_mm256_loadu_ps(row + N), at), hi);
+      };
+      const float* row = volume + offset[i];
+      __m256 c00 = lookup(row, p, hi0), c10 = lookup(row, p1, hi1);
+      __m256 c01 = lookup(row + sc, p, hi0), c11 = lookup(row + sc, p1, hi1);
+      const __m256i d = _mm256_load_si256(reinterpret_cast<const __m256i*>(dc[i]));
+      if (!_mm256_testz_si256(d, d)) {  // some lanes a row up: shift them by a row
+        const __m256 up = _mm256_castsi256_ps(_mm256_cmpgt_epi32(d, _mm256_setzero_si256()));
+        const __m256 c02 = lookup(row + 2 * sc, p, hi0), c12 = lookup(row + 2 * sc, p1, hi1);
+        c00 = _mm256_blendv_ps(c00, c01, up);
+        c10 = _mm256_blendv_ps(c10, c11, up);
+        c01 = _mm256_blendv_ps(c01, c02, up);
+        c11 = _mm256_blendv_ps(c11, c12, up);
+        const __m256 top = _mm256_castsi256_ps(_mm256_cmpeq_epi32(d, two));
+        if (_mm256_movemask_ps(top) != 0) {  // and some two rows up: shift those by one more
+          c00 = _mm256_blendv_ps(c00, c02, top);
+          c10 = _mm256_blendv_ps(c10, c12, top);
+          c01 = _mm256_blendv_ps(c01, lookup(row + 3 * sc, p, hi0), top);
+          c11 = _mm256_blendv_ps(c11, lookup(row + 3 * sc, p1, hi1), top);
+        }
+      }
+      // weigh() with bilinear_weights(), unrolled.
+      const __m256 sample = _mm256_fmadd_ps(
+          c11, _mm256_mul_ps(fbv, fcv),
+          _mm256_fmadd_ps(c01, _mm256_mul_ps(gb, fcv), _mm256_fmadd_ps(c10, _mm256_mul_ps(fbv, gc), _mm256_mul_ps(c00, _mm256_mul_ps(gb, gc)))));
+      sum = _mm256_add_ps(sum, sample);
+    }
+  }
+  return sum;
+}
+#endif
+
 // The interior slices [k_lo, k_hi] of a window bundle, their samples added to `sum` in order: the
 // rows of the window where the lanes fit it, gathers where they spread wider. Two passes over up
 // to kWindowBatch slices: first every slice's window (origin, lanes' places, fractions), then
 // the loads. A sample's chain from the table to its rows is long; in one pass the processor had
 // fewer than two samples in flight, each waiting for its rows almost alone (10-15 % faster on
 // the Zen 3, benchmarks/README.md, session 23).
-inline constexpr int kWindowBatch = 16;
 template <class DF>
 HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r,
                                           int k_lo, int k_hi, hn::Vec<DF> sum) {
+#if HWY_TARGET == HWY_AVX2
+  return hn::Vec<DF>{add_window_samples_avx2(t, volume, r, k_lo, k_hi, sum.raw)};
+#else
   const hn::RebindToSigned<DF> di;
   const std::ptrdiff_t sc = t.stride_c[r];
   const std::ptrdiff_t slice = t.stride_a[r];
@@ -160,6 +254,7 @@ HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float*
     }
   }
   return sum;
+#endif
 }
 
 #if HWY_TARGET <= HWY_AVX3
