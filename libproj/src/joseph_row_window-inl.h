@@ -131,10 +131,7 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
   const std::ptrdiff_t sc = t.stride_c[r];
   const std::ptrdiff_t slice = t.stride_a[r];
   const int x_max = t.n_b[r] - 2 * N;
-  const __m256 k_mid = _mm256_loadu_ps(t.k_mid.data() + r);
-  const __m256 beta_b = _mm256_loadu_ps(t.beta_b.data() + r), pb_mid = _mm256_loadu_ps(t.pb_mid.data() + r);
-  const __m256 beta_c = _mm256_loadu_ps(t.beta_c.data() + r), pc_mid = _mm256_loadu_ps(t.pc_mid.data() + r);
-  const __m256i origin_b = _mm256_set1_epi32(t.origin_b), origin_c = _mm256_set1_epi32(t.origin_c);
+  const BundlePositionAvx2 position(t, r);
   const __m256i one = _mm256_set1_epi32(1), two = _mm256_set1_epi32(2), last_pos = _mm256_set1_epi32(2 * N - 2);
   const __m256 one_f = _mm256_set1_ps(1.0f);
   HWY_ALIGN std::int32_t pos[kWindowBatch][N], dc[kWindowBatch][N];
@@ -145,11 +142,9 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
     unsigned misfits = 0;  // bit i: slice k0 + i does not fit the window
     for (int i = 0; i < count; ++i) {
       const int k = k0 + i;
-      const __m256 dk = _mm256_sub_ps(_mm256_set1_ps(static_cast<float>(k)), k_mid);
-      const __m256 pb = _mm256_fmadd_ps(dk, beta_b, pb_mid), pc = _mm256_fmadd_ps(dk, beta_c, pc_mid);
-      const __m256 fb0 = _mm256_floor_ps(pb), fc0 = _mm256_floor_ps(pc);
-      const __m256i ib = _mm256_sub_epi32(_mm256_cvttps_epi32(fb0), origin_b);
-      const __m256i ic = _mm256_sub_epi32(_mm256_cvttps_epi32(fc0), origin_c);
+      __m256i ib, ic;
+      __m256 fbi, fci;
+      position.at(k, ib, ic, fbi, fci);
       const int x0 = std::min(std::max(std::min(_mm256_cvtsi256_si32(ib), _mm256_extract_epi32(ib, N - 1)), 0), x_max);
       __m256i c0 = _mm256_min_epi32(ic, _mm256_permute2x128_si256(ic, ic, 1));
       c0 = _mm256_min_epi32(c0, _mm256_shuffle_epi32(c0, _MM_SHUFFLE(1, 0, 3, 2)));
@@ -160,8 +155,8 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
       misfits |= (_mm256_movemask_ps(_mm256_castsi256_ps(out)) != 0 ? 1u : 0u) << i;
       _mm256_store_si256(reinterpret_cast<__m256i*>(pos[i]), p);
       _mm256_store_si256(reinterpret_cast<__m256i*>(dc[i]), d);
-      _mm256_store_ps(fb[i], _mm256_sub_ps(pb, fb0));
-      _mm256_store_ps(fc[i], _mm256_sub_ps(pc, fc0));
+      _mm256_store_ps(fb[i], fbi);
+      _mm256_store_ps(fc[i], fci);
       offset[i] = static_cast<std::ptrdiff_t>(k - t.origin_a) * slice + static_cast<std::ptrdiff_t>(_mm256_cvtsi256_si32(c0)) * sc + x0;
     }
     for (int i = 0; i < count; ++i) {
