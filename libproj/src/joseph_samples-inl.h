@@ -267,13 +267,6 @@ HWY_INLINE void scatter_add(DF df, const Corners<DF>& c, hn::Vec<DF> value, floa
       if (weight[q][l] != 0.0f) volume[index[q][l]] += weight[q][l];
 }
 
-// The interior slices [k_lo, k_hi] of bundle r, in order, scattered lane by lane like
-// scatter_add but where every lane is on the slab's axis and every corner inside the volume: no
-// test per corner, and corners 1 to 3 are offsets of corner 0. Two passes over up to
-// kInteriorBatch slices: every slice's corners first, then the scatters (as the forward
-// projection's add_window_samples; 6-14 % faster on the Zen 3, session 23).
-inline constexpr int kInteriorBatch = 16;
-
 #if HWY_TARGET == HWY_AVX2
 // position_at for one bundle of 8 lanes on AVX2, its rays loaded once: the same arithmetic in
 // the instructions it needs. Highway's ConvertTo fixes up float-to-int overflow (about five
@@ -326,6 +319,13 @@ HWY_INLINE void interior_corners_avx2(const RayTable& t, std::size_t r, int k0, 
   }
 }
 #endif
+
+// The interior slices [k_lo, k_hi] of bundle r, in order, scattered lane by lane like
+// scatter_add but where every lane is on the slab's axis and every corner inside the volume: no
+// test per corner, and corners 1 to 3 are offsets of corner 0. Two passes over up to
+// kInteriorBatch slices: every slice's corners first, then the scatters (as the forward
+// projection's add_window_samples; 6-14 % faster on the Zen 3, session 23).
+inline constexpr int kInteriorBatch = 16;
 template <class DF>
 HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_t r, int k_lo, int k_hi, hn::Vec<DF> value,
                                             float* HWY_RESTRICT volume) {
