@@ -121,10 +121,10 @@ inline constexpr int kWindowBatch = 16;
 
 #if HWY_TARGET == HWY_AVX2
 // add_window_samples for 8 lanes of AVX2, written with the instructions it needs: the same
-// arithmetic (results bit for bit), without what the portable form adds per sample (float to
-// int conversion with overflow fix-up, clamps and compares done twice, masks rebuilt).
-// A lookup in the 16-voxel window is two permutes (vpermps reads the low three bits of each
-// index) and a blend on bit 3 moved to the sign.
+// arithmetic (results bit for bit), without what the portable form adds per sample (the
+// position's overflow fix-up, see BundlePositionAvx2; clamps and compares done twice, masks
+// rebuilt). A lookup in the 16-voxel window is two permutes (vpermps reads the low three bits
+// of each index) and a blend on bit 3 moved to the sign.
 HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r, int k_lo,
                                           int k_hi, __m256 sum) {
   constexpr int N = 8;

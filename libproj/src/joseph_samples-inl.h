@@ -329,7 +329,6 @@ inline constexpr int kInteriorBatch = 16;
 template <class DF>
 HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_t r, int k_lo, int k_hi, hn::Vec<DF> value,
                                             float* HWY_RESTRICT volume) {
-  const hn::RebindToSigned<DF> di;
   const int N = static_cast<int>(hn::Lanes(df));
   HWY_ALIGN std::int32_t index[kInteriorBatch][kMaxLanes];
   HWY_ALIGN float weight[kInteriorBatch][4][kMaxLanes];
@@ -341,7 +340,7 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
 #else
     for (int i = 0; i < count; ++i) {
       const Corners<DF> c = interior_corners_at(df, t, r, k0 + i);
-      hn::Store(c.index[0], di, index[i]);
+      hn::Store(c.index[0], hn::RebindToSigned<DF>(), index[i]);
       for (int q = 0; q < 4; ++q) hn::Store(hn::Mul(c.weight[q], value), df, weight[i][q]);
     }
 #endif
