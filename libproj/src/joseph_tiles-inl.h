@@ -140,10 +140,15 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid& g, cons
     // of a strip's forward projection on a Zen 3.
     for_each_block8(tile, [&](int k8, int n, __m256i lanes, int yb) {
       __m256 r[8];
-      for (int j = 0; j < 8; ++j) {
-        const int y = tile.y0 + yb + j;
-        const float* v = volume + tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
-        r[j] = !z_in || y < 0 || y >= g.ny ? _mm256_setzero_ps() : n == 8 ? _mm256_loadu_ps(v) : _mm256_maskload_ps(v, lanes);
+      const int y = tile.y0 + yb;
+      const std::ptrdiff_t at = tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
+      if (z_in && n == 8 && y >= 0 && y + 8 <= g.ny) {  // the usual block: whole and inside
+        for (int j = 0; j < 8; ++j) r[j] = _mm256_loadu_ps(volume + at + j * g.stride_y);
+      } else {
+        for (int j = 0; j < 8; ++j) {
+          const float* v = volume + at + j * g.stride_y;
+          r[j] = !z_in || y + j < 0 || y + j >= g.ny ? _mm256_setzero_ps() : n == 8 ? _mm256_loadu_ps(v) : _mm256_maskload_ps(v, lanes);
+        }
       }
       transpose8(r);
       for (int kk = 0; kk < n; ++kk) _mm256_storeu_ps(tile.data + tile.row(k8 + kk, zz) + yb, r[kk]);
@@ -184,10 +189,14 @@ HWY_INLINE void add_tile(const Tile& tile, const XGrid& g, float* HWY_RESTRICT v
       for (int kk = 0; kk < 8; ++kk)
         r[kk] = kk < n ? _mm256_loadu_ps(tile.data + tile.row(k8 + kk, zz) + yb) : _mm256_setzero_ps();
       transpose8(r);
-      for (int j = 0; j < 8; ++j) {
-        const int y = tile.y0 + yb + j;
-        if (y < 0 || y >= g.ny) continue;
-        float* v = volume + tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
+      const int y = tile.y0 + yb;
+      float* v = volume + tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
+      if (n == 8 && y >= 0 && y + 8 <= g.ny) {  // the usual block: whole and inside
+        for (int j = 0; j < 8; ++j, v += g.stride_y) _mm256_storeu_ps(v, _mm256_add_ps(_mm256_loadu_ps(v), r[j]));
+        return;
+      }
+      for (int j = 0; j < 8; ++j, v += g.stride_y) {
+        if (y + j < 0 || y + j >= g.ny) continue;
         if (n == 8)
           _mm256_storeu_ps(v, _mm256_add_ps(_mm256_loadu_ps(v), r[j]));
         else
