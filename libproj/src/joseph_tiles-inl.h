@@ -141,13 +141,14 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid& g, cons
     for_each_block8(tile, [&](int k8, int n, __m256i lanes, int yb) {
       __m256 r[8];
       const int y = tile.y0 + yb;
-      const std::ptrdiff_t at = tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
+      const std::ptrdiff_t at = tile.k0 + k8 + y * g.stride_y + z * g.stride_z;  // row j at + j stride_y, if inside
       if (z_in && n == 8 && y >= 0 && y + 8 <= g.ny) {  // the usual block: whole and inside
         for (int j = 0; j < 8; ++j) r[j] = _mm256_loadu_ps(volume + at + j * g.stride_y);
       } else {
         for (int j = 0; j < 8; ++j) {
-          const float* v = volume + at + j * g.stride_y;
-          r[j] = !z_in || y + j < 0 || y + j >= g.ny ? _mm256_setzero_ps() : n == 8 ? _mm256_loadu_ps(v) : _mm256_maskload_ps(v, lanes);
+          const bool inside = z_in && y + j >= 0 && y + j < g.ny;
+          const float* v = inside ? volume + at + j * g.stride_y : volume;
+          r[j] = !inside ? _mm256_setzero_ps() : n == 8 ? _mm256_loadu_ps(v) : _mm256_maskload_ps(v, lanes);
         }
       }
       transpose8(r);
@@ -190,13 +191,17 @@ HWY_INLINE void add_tile(const Tile& tile, const XGrid& g, float* HWY_RESTRICT v
         r[kk] = kk < n ? _mm256_loadu_ps(tile.data + tile.row(k8 + kk, zz) + yb) : _mm256_setzero_ps();
       transpose8(r);
       const int y = tile.y0 + yb;
-      float* v = volume + tile.k0 + k8 + y * g.stride_y + z * g.stride_z;
+      const std::ptrdiff_t at = tile.k0 + k8 + y * g.stride_y + z * g.stride_z;  // row j at + j stride_y, if inside
       if (n == 8 && y >= 0 && y + 8 <= g.ny) {  // the usual block: whole and inside
-        for (int j = 0; j < 8; ++j, v += g.stride_y) _mm256_storeu_ps(v, _mm256_add_ps(_mm256_loadu_ps(v), r[j]));
+        for (int j = 0; j < 8; ++j) {
+          float* v = volume + at + j * g.stride_y;
+          _mm256_storeu_ps(v, _mm256_add_ps(_mm256_loadu_ps(v), r[j]));
+        }
         return;
       }
-      for (int j = 0; j < 8; ++j, v += g.stride_y) {
+      for (int j = 0; j < 8; ++j) {
         if (y + j < 0 || y + j >= g.ny) continue;
+        float* v = volume + at + j * g.stride_y;
         if (n == 8)
           _mm256_storeu_ps(v, _mm256_add_ps(_mm256_loadu_ps(v), r[j]));
         else
