@@ -281,7 +281,7 @@ HWY_INLINE void for_each_bundle(const RayTable& t, int lanes, bool tiles, StripW
   for (int slot = 0; slot < t.views; ++slot) {
     for (int col0 = 0; col0 < t.row_stride; col0 += kStripColumns * lanes) {
       w.strip.count = 0;
-      for (int row = 0; row < t.rows; ++row)
+      for (int row = 0; row < t.rows_in(slot); ++row)
         for (int col = col0; col < std::min(t.row_stride, col0 + kStripColumns * lanes); col += lanes) {
           const std::size_t r = t.entry(slot, row, col);
           if (tiles && w.strip.count < XStrip::kMaxBundles && along_x(t, r, static_cast<std::size_t>(lanes)))
@@ -382,7 +382,11 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
 // Every lane on one axis (the usual case): the bundle restricted to that axis is the bundle.
 void PrepareBundles(RayTable& t, std::size_t begin, std::size_t end) {
   const std::size_t n = hn::Lanes(hn::ScalableTag<float>());
-  for (std::size_t i = begin; i < end; ++i) t.bundles[i] = bundle_at(t, i * n, n, -1);
+  const auto view_stride = static_cast<std::size_t>(t.view_stride), row_stride = static_cast<std::size_t>(t.row_stride);
+  for (std::size_t i = begin; i < end; ++i) {
+    const std::size_t r = i * n, slot = r / view_stride;
+    if (r % view_stride / row_stride < static_cast<std::size_t>(t.rows_in(static_cast<int>(slot)))) t.bundles[i] = bundle_at(t, r, n, -1);
+  }
 }
 
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }

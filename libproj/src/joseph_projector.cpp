@@ -115,20 +115,20 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
         for (int task = 0; task < in_batch * n_threads; ++task) {
           const int slot = task / n_threads, part = task % n_threads, v = v0 + slot;
           const auto& path = paths.path[static_cast<std::size_t>(v)];
-          // Lines past this view's last are empty rows of the shared table.
+          // Lines past this view's last: rows of the shared table the kernels skip (slot_rows).
           const int rows = std::clamp(path.lines - line_begin, 0, rows_per_block);
           const int begin = std::min(count, part * chunk), end = std::min(count, begin + chunk);
           const std::size_t first = table.entry(slot, 0, 0);
-          const int filled = std::min(end, rows * table.row_stride);
+          const int filled = std::min(end, rows * table.row_stride);  // the kernels skip the rows past `rows`
           table.fill(paths.rays[static_cast<std::size_t>(v)], x.layout, slot, path, line_begin, begin,
                      std::max(begin, filled));
-          if (filled < end) table.empty(first + static_cast<std::size_t>(std::max(begin, filled)), first + static_cast<std::size_t>(end));
+          if (part == 0) table.slot_rows[static_cast<std::size_t>(slot)] = rows;
           for (int r = begin; r < filled; ++r) {
             const int row = r / table.row_stride, lane = r % table.row_stride;
             const float* pixel = pixel_of(y, v, path, line_begin + row, lane);
             table.value[first + static_cast<std::size_t>(r)] = pixel ? *pixel : 0.0f;
           }
-          if (task == 0) table.views = in_batch;  // every slot keeps rows_per_block rows
+          if (task == 0) table.views = in_batch;
         }
         // Each bundle once for every slab task that marches it.
         const auto bundles_in_use = static_cast<std::size_t>(in_batch) * table.bundles.size() / static_cast<std::size_t>(batch);

@@ -4,6 +4,7 @@
 // padded to a multiple of kMaxLanes, so a SIMD bundle never straddles two rows and the bundles
 // of one column strip in consecutive rows march through neighbouring voxels. Both fast kernels
 // read the same table.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -71,6 +72,11 @@ struct LanePath {
 struct RayTable {
   int views = 0;        // views in use, each at slot * view_stride
   int rows = 0;         // detector rows in use per view
+  // Rows in use in each slot, where fewer than `rows` (a view whose lines end before the
+  // others' in a shared back-projection table): the kernels skip the rest, which need not be
+  // filled or emptied.
+  std::vector<int> slot_rows;
+  int rows_in(int slot) const { return std::min(rows, slot_rows[static_cast<std::size_t>(slot)]); }
   int row_stride = 0;   // entries per row: the lanes rounded up to kMaxLanes
   int view_stride = 0;  // entries per view: the row capacity times row_stride
   std::vector<float> pb_mid, beta_b, pc_mid, beta_c, weight, k_mid, value;
