@@ -274,21 +274,37 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
   });
 }
 
-// Every bundle of the table, strip by strip: with `tiles`, the bundles along x of
-// a strip are collected in w.strip and handed to `strip` together; the others go to `one`.
+// Every bundle of the table. With `tiles`, the bundles along x of each strip (kStripColumns
+// bundles of every row) are collected in w.strip and handed to `strip` together, after the
+// others; those go to `one` in groups of kGroupColumns bundles of every row, the order in which
+// neighbouring lines share rows of the volume (kForwardChunkSlices). Strips twice as wide as
+// those groups copy fewer voxels into tiles (views mostly along x 1.1x faster) but, as the order
+// of the others, made views along y and z 6 % slower (session 26).
+constexpr int kGroupColumns = 4;
 template <class One, class Strip>
 HWY_INLINE void for_each_bundle(const RayTable& t, int lanes, bool tiles, StripWorkspace& w, One&& one, Strip&& strip) {
+  const auto n = static_cast<std::size_t>(lanes);
   for (int slot = 0; slot < t.views; ++slot) {
+    const int rows = t.rows_in(slot);
+    // f(r) for the entries of `columns` bundles from column col0, row by row.
+    const auto group = [&](int col0, int columns, auto&& f) {
+      for (int row = 0; row < rows; ++row)
+        for (int col = col0; col < std::min(t.row_stride, col0 + columns * lanes); col += lanes) f(t.entry(slot, row, col));
+    };
+    for (int col0 = 0; col0 < t.row_stride; col0 += kGroupColumns * lanes)
+      group(col0, kGroupColumns, [&](std::size_t r) {
+        if (!tiles || !along_x(t, r, n)) one(r);
+      });
+    if (!tiles) continue;
     for (int col0 = 0; col0 < t.row_stride; col0 += kStripColumns * lanes) {
       w.strip.count = 0;
-      for (int row = 0; row < t.rows_in(slot); ++row)
-        for (int col = col0; col < std::min(t.row_stride, col0 + kStripColumns * lanes); col += lanes) {
-          const std::size_t r = t.entry(slot, row, col);
-          if (tiles && w.strip.count < XStrip::kMaxBundles && along_x(t, r, static_cast<std::size_t>(lanes)))
-            w.strip.entries[w.strip.count++] = r;
-          else
-            one(r);
-        }
+      group(col0, kStripColumns, [&](std::size_t r) {
+        if (!along_x(t, r, n)) return;
+        if (w.strip.count < XStrip::kMaxBundles)
+          w.strip.entries[w.strip.count++] = r;
+        else
+          one(r);
+      });
       if (w.strip.count > 0) strip();
     }
   }
