@@ -119,7 +119,7 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
           const int rows = std::clamp(path.lines - line_begin, 0, rows_per_block);
           const int begin = std::min(count, part * chunk), end = std::min(count, begin + chunk);
           const std::size_t first = table.entry(slot, 0, 0);
-          const int filled = std::min(end, rows * table.row_stride);  // the kernels skip the rows past `rows`
+          const int filled = std::min(end, rows * table.row_stride);
           table.fill(paths.rays[static_cast<std::size_t>(v)], x.layout, slot, path, line_begin, begin,
                      std::max(begin, filled));
           if (part == 0) table.slot_rows[static_cast<std::size_t>(slot)] = rows;

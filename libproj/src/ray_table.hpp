@@ -71,14 +71,14 @@ struct LanePath {
 
 struct RayTable {
   int views = 0;        // views in use, each at slot * view_stride
-  int rows = 0;         // detector rows in use per view
+  int rows = 0;         // detector rows in use per view (fewer where slot_rows says so)
+  int row_stride = 0;   // entries per row: the lanes rounded up to kMaxLanes
+  int view_stride = 0;  // entries per view: the row capacity times row_stride
   // Rows in use in each slot, where fewer than `rows` (a view whose lines end before the
   // others' in a shared back-projection table): the kernels skip the rest, which need not be
   // filled or emptied.
   std::vector<int> slot_rows;
   int rows_in(int slot) const { return std::min(rows, slot_rows[static_cast<std::size_t>(slot)]); }
-  int row_stride = 0;   // entries per row: the lanes rounded up to kMaxLanes
-  int view_stride = 0;  // entries per view: the row capacity times row_stride
   std::vector<float> pb_mid, beta_b, pc_mid, beta_c, weight, k_mid, value;
   std::vector<std::int32_t> k_first, k_last, axis, stride_a, stride_b, stride_c, n_b, n_c;
   // Slices where all four corners of the entry's sample are inside the grid (by 1e-3 voxel):
