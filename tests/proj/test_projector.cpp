@@ -124,10 +124,10 @@ TEST(JosephProjector, ForwardAndBackAreAdjoint) {
 
 // The fast projector against the reference on `p`, both ways, for random x and y (from `seed`);
 // returns the fast pair's adjointness mismatch |<Ax, y> - <x, A'y>| / (|Ax| |y|).
-double expect_fast_matches_reference(const Problem& p, std::uint64_t seed) {
+double expect_fast_matches_reference(const Problem& p, std::uint64_t seed, const ProjectorOptions& options = {}) {
   Volume x(p.layout);
   x.data = random_values(x.data.size(), seed);
-  const JosephProjector A;
+  const JosephProjector A(options);
   ProjectionStack fast(static_cast<int>(p.views.size()), p.rows, p.cols), ref = fast;
   // The forward projection writes every pixel, those whose rays miss the volume too.
   std::fill(fast.data.begin(), fast.data.end(), std::numeric_limits<float>::quiet_NaN());
@@ -208,6 +208,18 @@ TEST(JosephProjector, RaysAlongXThroughTilesAgreeWithTheReferenceAndAreAdjoint) 
       EXPECT_LT(std::abs(dot(Ax.data, y.data) - dot(x.data, Aty.data)) / (norm(Ax.data) * norm(y.data)), 1e-5);
     }
   });
+}
+
+// A table of many lines on a wide detector: a strip of bundles along x (8 bundles' columns of
+// every line) then holds more than a strip takes (XStrip::kMaxBundles, 128) on every SIMD
+// width, and the bundles past it march through the volume instead of a tile.
+TEST(JosephProjector, StripsOfMoreBundlesThanATileTakesAgreeWithTheReference) {
+  const Problem p = problem_with_views(VolumeLayout::centred({30, 70, 40}, {1.0, 1.0, 1.0}), 24, 130, 250, 400,
+                                       {{Eigen::Vector3d(1, 0, 0), 0.8}, {Eigen::Vector3d(-1, 0.3, 0.2), 0.8}},
+                                       {0.02, -0.03}, {0.2, 0.1}, Eigen::Vector3d(0.3, 1.0, -0.2));
+  ProjectorOptions options;
+  options.rows_per_block = 24;
+  testing::on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 61, options), 1e-5); });
 }
 
 // Detectors turned about the beam: the fast projector deals each view's pixels to SIMD lanes
