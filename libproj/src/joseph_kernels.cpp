@@ -277,9 +277,9 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
 // Every bundle of the table. With `tiles`, the bundles along x of each strip (kStripColumns
 // bundles of every row) are collected in w.strip and handed to `strip` together, after the
 // others; those go to `one` in groups of kGroupColumns bundles of every row, the order in which
-// neighbouring lines share rows of the volume (kForwardChunkSlices). Strips twice as wide as
-// those groups copy fewer voxels into tiles (views mostly along x 1.1x faster) but, as the order
-// of the others, made views along y and z 6 % slower (session 26).
+// neighbouring lines share rows of the volume (kForwardChunkSlices). Strips are twice as wide as
+// the groups, so fewer voxels are copied into tiles (views mostly along x 1.1x faster); walking
+// the other bundles in groups that wide made views along y and z 6 % slower (session 26).
 constexpr int kGroupColumns = 4;
 template <class One, class Strip>
 HWY_INLINE void for_each_bundle(const RayTable& t, int lanes, bool tiles, StripWorkspace& w, One&& one, Strip&& strip) {
@@ -396,6 +396,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
 }
 
 // Every lane on one axis (the usual case): the bundle restricted to that axis is the bundle.
+// Rows past a slot's rows in use (RayTable::slot_rows) hold stale rays and are left alone.
 void PrepareBundles(RayTable& t, std::size_t begin, std::size_t end) {
   const std::size_t n = hn::Lanes(hn::ScalableTag<float>());
   const auto view_stride = static_cast<std::size_t>(t.view_stride), row_stride = static_cast<std::size_t>(t.row_stride);
