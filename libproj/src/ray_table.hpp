@@ -33,6 +33,9 @@ struct Bundle {
 // round(m slope)); the lines partition the pixels of the volume's footprint. Pixels the staircase
 // puts outside the detector still get their rays (the bundle stays whole), but are never read or
 // written; pixels outside the footprint are in no line (their rays miss the volume).
+// One path per view, for the dominant axis at the detector's centre. In a view between two axes
+// the other axis's lanes then spread over several rows and gather; a path per axis removed
+// those gathers but measured no faster (benchmarks/README.md, session 27).
 struct LanePath {
   bool along_u = true;            // the major axis is u (columns)
   double slope = 0;               // minor pixels per lane, |slope| <= 1
