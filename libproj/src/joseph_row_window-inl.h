@@ -130,7 +130,7 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
   constexpr int N = 8;
   const std::ptrdiff_t sc = t.stride_c[r];
   const std::ptrdiff_t slice = t.stride_a[r];
-  const int x_max = t.n_b[r] - 2 * N;
+  const int x_max = t.n_b[r] - 2 * N, origin_a = t.origin_a;  // (read once: the stores below may alias t)
   const BundlePositionAvx2 position(t, r);
   const __m256i one = _mm256_set1_epi32(1), two = _mm256_set1_epi32(2), last_pos = _mm256_set1_epi32(2 * N - 2);
   const __m256 one_f = _mm256_set1_ps(1.0f);
@@ -157,7 +157,7 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
       _mm256_store_si256(reinterpret_cast<__m256i*>(dc[i]), d);
       _mm256_store_ps(fb[i], fbi);
       _mm256_store_ps(fc[i], fci);
-      offset[i] = static_cast<std::ptrdiff_t>(k - t.origin_a) * slice + static_cast<std::ptrdiff_t>(_mm256_cvtsi256_si32(c0)) * sc + x0;
+      offset[i] = static_cast<std::ptrdiff_t>(k - origin_a) * slice + static_cast<std::ptrdiff_t>(_mm256_cvtsi256_si32(c0)) * sc + x0;
     }
     for (int i = 0; i < count; ++i) {
       if (misfits >> i & 1u) {
@@ -218,6 +218,8 @@ HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float*
   const hn::RebindToSigned<DF> di;
   const std::ptrdiff_t sc = t.stride_c[r];
   const std::ptrdiff_t slice = t.stride_a[r];
+  const int n_b = t.n_b[r], origin_a = t.origin_a;  // read once, like the rays: the stores below may alias t
+  const BundlePosition<DF> position(df, t, r);
   HWY_ALIGN std::int32_t pos[kWindowBatch][kMaxLanes], dc[kWindowBatch][kMaxLanes];
   HWY_ALIGN float fb[kWindowBatch][kMaxLanes], fc[kWindowBatch][kMaxLanes];
   const float* row[kWindowBatch];
@@ -225,16 +227,16 @@ HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float*
   for (int k0 = k_lo; k0 <= k_hi; k0 += kWindowBatch) {
     const int count = std::min(kWindowBatch, k_hi - k0 + 1);
     for (int i = 0; i < count; ++i) {
-      const SamplePosition<DF> p = position_at(df, t, r, k0 + i);
+      const SamplePosition<DF> p = position.at(df, k0 + i);
       int x0, c0;
-      window_origin(df, p, t.n_b[r], x0, c0);
+      window_origin(df, p, n_b, x0, c0);
       const auto pi = hn::Sub(p.ib, hn::Set(di, x0)), dci = hn::Sub(p.ic, hn::Set(di, c0));
       fits[i] = fits_window(di, pi, dci);
       hn::Store(pi, di, pos[i]);
       hn::Store(dci, di, dc[i]);
       hn::Store(p.fb, df, fb[i]);
       hn::Store(p.fc, df, fc[i]);
-      row[i] = volume + static_cast<std::ptrdiff_t>(k0 + i - t.origin_a) * slice + static_cast<std::ptrdiff_t>(c0) * sc + x0;
+      row[i] = volume + static_cast<std::ptrdiff_t>(k0 + i - origin_a) * slice + static_cast<std::ptrdiff_t>(c0) * sc + x0;
     }
     for (int i = 0; i < count; ++i) {
       hn::Vec<DF> sample;

@@ -40,20 +40,40 @@ struct SamplePosition {
   hn::Vec<DF> fb, fc;  // fractions along b and c
 };
 
-// Lane l at slice k[l]; indices relative to the grid's origin (RayTable::origin_b, origin_c).
+// The rays of bundle r, loaded once for the samples of several slices (a loop that stores
+// would otherwise reload them: vector stores may alias the table).
+template <class DF>
+struct BundlePosition {
+  hn::Vec<DF> k_mid, beta_b, pb_mid, beta_c, pc_mid;
+  int origin_b, origin_c;
+  BundlePosition(DF df, const RayTable& t, std::size_t r)
+      : k_mid(hn::LoadU(df, t.k_mid.data() + r)),
+        beta_b(hn::LoadU(df, t.beta_b.data() + r)),
+        pb_mid(hn::LoadU(df, t.pb_mid.data() + r)),
+        beta_c(hn::LoadU(df, t.beta_c.data() + r)),
+        pc_mid(hn::LoadU(df, t.pc_mid.data() + r)),
+        origin_b(t.origin_b),
+        origin_c(t.origin_c) {}
+  // Lane l at slice k[l]; indices relative to the grid's origin (RayTable::origin_b, origin_c).
+  SamplePosition<DF> at(DF df, hn::Vec<DF> k) const {
+    const hn::RebindToSigned<DF> di;
+    const auto dk = hn::Sub(k, k_mid);
+    const auto pb = hn::MulAdd(dk, beta_b, pb_mid);
+    const auto pc = hn::MulAdd(dk, beta_c, pc_mid);
+    const auto fb0 = hn::Floor(pb), fc0 = hn::Floor(pc);
+    SamplePosition<DF> s;
+    s.ib = hn::Sub(hn::ConvertTo(di, fb0), hn::Set(di, origin_b));
+    s.ic = hn::Sub(hn::ConvertTo(di, fc0), hn::Set(di, origin_c));
+    s.fb = hn::Sub(pb, fb0);
+    s.fc = hn::Sub(pc, fc0);
+    return s;
+  }
+  SamplePosition<DF> at(DF df, int k) const { return at(df, hn::Set(df, static_cast<float>(k))); }
+};
+
 template <class DF>
 HWY_INLINE SamplePosition<DF> position_at(DF df, const RayTable& t, std::size_t r, hn::Vec<DF> k) {
-  const hn::RebindToSigned<DF> di;
-  const auto dk = hn::Sub(k, hn::LoadU(df, t.k_mid.data() + r));
-  const auto pb = hn::MulAdd(dk, hn::LoadU(df, t.beta_b.data() + r), hn::LoadU(df, t.pb_mid.data() + r));
-  const auto pc = hn::MulAdd(dk, hn::LoadU(df, t.beta_c.data() + r), hn::LoadU(df, t.pc_mid.data() + r));
-  const auto fb0 = hn::Floor(pb), fc0 = hn::Floor(pc);
-  SamplePosition<DF> s;
-  s.ib = hn::Sub(hn::ConvertTo(di, fb0), hn::Set(di, t.origin_b));
-  s.ic = hn::Sub(hn::ConvertTo(di, fc0), hn::Set(di, t.origin_c));
-  s.fb = hn::Sub(pb, fb0);
-  s.fc = hn::Sub(pc, fc0);
-  return s;
+  return BundlePosition<DF>(df, t, r).at(df, k);
 }
 
 template <class DF>
@@ -302,13 +322,14 @@ HWY_INLINE void interior_corners_avx2(const RayTable& t, std::size_t r, int k0, 
                                       std::int32_t (*index)[kMaxLanes], float (*weight)[4][kMaxLanes]) {
   const BundlePositionAvx2 position(t, r);
   const __m256i sb = _mm256_set1_epi32(t.stride_b[r]), sc = _mm256_set1_epi32(t.stride_c[r]);
+  const int origin_a = t.origin_a, sa = t.stride_a[r];  // read once: the stores below may alias t
   const __m256 one = _mm256_set1_ps(1.0f);
   for (int i = 0; i < count; ++i) {
     const int k = k0 + i;
     __m256i ib, ic;
     __m256 fb, fc;
     position.at(k, ib, ic, fb, fc);
-    const __m256i base = _mm256_set1_epi32((k - t.origin_a) * t.stride_a[r]);
+    const __m256i base = _mm256_set1_epi32((k - origin_a) * sa);
     const __m256i i00 = _mm256_add_epi32(base, _mm256_add_epi32(_mm256_mullo_epi32(ib, sb), _mm256_mullo_epi32(ic, sc)));
     _mm256_store_si256(reinterpret_cast<__m256i*>(index[i]), i00);
     const __m256 gb = _mm256_sub_ps(one, fb), gc = _mm256_sub_ps(one, fc);
