@@ -146,22 +146,38 @@ HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k
 }
 
 // Same sample as corners_at for lanes known to be well inside the volume (all four corners
-// valid) and inside their ray's range: identical arithmetic, no masks.
+// valid) and inside their ray's range: identical arithmetic, no masks. The bundle's rays and
+// strides are read once, for loops over slices (as BundlePosition).
+template <class DF>
+struct InteriorBundle {
+  using VI = hn::Vec<hn::RebindToSigned<DF>>;
+  BundlePosition<DF> position;
+  VI sa, sb, sc;
+  int origin_a;
+  InteriorBundle(DF df, const RayTable& t, std::size_t r)
+      : position(df, t, r),
+        sa(hn::LoadU(hn::RebindToSigned<DF>(), t.stride_a.data() + r)),
+        sb(hn::LoadU(hn::RebindToSigned<DF>(), t.stride_b.data() + r)),
+        sc(hn::LoadU(hn::RebindToSigned<DF>(), t.stride_c.data() + r)),
+        origin_a(t.origin_a) {}
+  Corners<DF> at(DF df, int k) const {
+    const hn::RebindToSigned<DF> di;
+    const VI vk = hn::Set(di, k - origin_a);
+    const SamplePosition<DF> p = position.at(df, k);
+    const VI i00 = hn::Add(hn::Mul(vk, sa), hn::Add(hn::Mul(p.ib, sb), hn::Mul(p.ic, sc)));
+    Corners<DF> out;
+    out.index[0] = i00;
+    out.index[1] = hn::Add(i00, sb);
+    out.index[2] = hn::Add(i00, sc);
+    out.index[3] = hn::Add(out.index[1], sc);
+    bilinear_weights(p, out.weight);
+    return out;
+  }
+};
+
 template <class DF>
 HWY_INLINE Corners<DF> interior_corners_at(DF df, const RayTable& t, std::size_t r, int k) {
-  const hn::RebindToSigned<DF> di;
-  using VI = hn::Vec<decltype(di)>;
-  const VI vk = hn::Set(di, k - t.origin_a);
-  const SamplePosition<DF> p = position_at(df, t, r, k);
-  const VI sb = hn::LoadU(di, t.stride_b.data() + r), sc = hn::LoadU(di, t.stride_c.data() + r);
-  const VI i00 = hn::Add(hn::Mul(vk, hn::LoadU(di, t.stride_a.data() + r)), hn::Add(hn::Mul(p.ib, sb), hn::Mul(p.ic, sc)));
-  Corners<DF> out;
-  out.index[0] = i00;
-  out.index[1] = hn::Add(i00, sb);
-  out.index[2] = hn::Add(i00, sc);
-  out.index[3] = hn::Add(out.index[1], sc);
-  bilinear_weights(p, out.weight);
-  return out;
+  return InteriorBundle<DF>(df, t, r).at(df, k);
 }
 
 // Slices where every lane of the bundle (those with `axis`, or all when axis < 0) is inside its
@@ -368,13 +384,16 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
   HWY_ALIGN float weight[kInteriorBatch][4][kMaxLanes];  // weight[i][q][l], or paired: weight[i][q][2l + (0, 1)]
   const std::int32_t db = t.stride_b[r], dc = t.stride_c[r];  // corner offsets, as in interior_corners_at
   const bool pairs = HWY_TARGET != HWY_SCALAR && db == 1;
+#if HWY_TARGET != HWY_AVX2
+  const InteriorBundle<DF> bundle(df, t, r);
+#endif
   for (int k0 = k_lo; k0 <= k_hi; k0 += kInteriorBatch) {
     const int count = std::min(kInteriorBatch, k_hi - k0 + 1);
 #if HWY_TARGET == HWY_AVX2
     interior_corners_avx2(t, r, k0, count, value.raw, pairs, index, weight);
 #else
     for (int i = 0; i < count; ++i) {
-      const Corners<DF> c = interior_corners_at(df, t, r, k0 + i);
+      const Corners<DF> c = bundle.at(df, k0 + i);
       hn::Store(c.index[0], hn::RebindToSigned<DF>(), index[i]);
       hn::Vec<DF> w[4];
       for (int q = 0; q < 4; ++q) w[q] = hn::Mul(c.weight[q], value);
