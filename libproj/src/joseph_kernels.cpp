@@ -52,10 +52,13 @@ HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_
 template <class DF>
 HWY_INLINE void march_back(DF df, const RayTable& t, const Bundle& b, hn::Vec<DF> value, hn::Mask<DF> lanes, int k_lo,
                            int k_hi, float* HWY_RESTRICT volume) {
+#if HWY_TARGET <= HWY_AVX3
+  const WindowRays rays(t, b.r);
+#endif
   for (int k = k_lo; k <= k_hi; ++k) {
     if (k >= b.in_lo && k <= b.in_hi) {
 #if HWY_TARGET <= HWY_AVX3
-      if (b.window && scatter_window(t, volume, b.r, k, value)) continue;
+      if (b.window && scatter_window(rays, volume, k, value)) continue;
       scatter_add_interior_slices(df, t, b.r, k, k, value, volume);
 #else  // no row window for the back projection: every interior slice of this call at once
       const int last = std::min(k_hi, b.in_hi);

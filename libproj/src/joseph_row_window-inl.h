@@ -260,14 +260,23 @@ HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float*
 // puts lane after lane at the set bits of a mask), in the slice's rows c0 .. c0 + 3, which are
 // then updated whole. Lanes on the same voxel (rays closer than a voxel) are first summed
 // into one. False (and nothing written) when the lanes spread wider, or three share a voxel.
-HWY_INLINE bool scatter_window(const RayTable& t, float* HWY_RESTRICT volume, std::size_t r, int k,
-                               hn::Vec<hn::ScalableTag<float>> value) {
+// What scatter_window reads of a bundle, read once for all its slices (its stores may alias
+// the table).
+struct WindowRays {
+  BundlePosition<hn::ScalableTag<float>> position;
+  int n_b, origin_a;
+  std::ptrdiff_t sa, sc;
+  WindowRays(const RayTable& t, std::size_t r)
+      : position(hn::ScalableTag<float>(), t, r), n_b(t.n_b[r]), origin_a(t.origin_a), sa(t.stride_a[r]), sc(t.stride_c[r]) {}
+};
+
+HWY_INLINE bool scatter_window(const WindowRays& rays, float* HWY_RESTRICT volume, int k, hn::Vec<hn::ScalableTag<float>> value) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
   constexpr int N = 16;
-  const auto p = position_at(df, t, r, k);
+  const auto p = rays.position.at(df, k);
   int x0, c0;
-  window_origin(df, p, t.n_b[r], x0, c0);
+  window_origin(df, p, rays.n_b, x0, c0);
   auto pos = hn::Sub(p.ib, hn::Set(di, x0)), dc = hn::Sub(p.ic, hn::Set(di, c0));
   hn::Vec<decltype(df)> bilinear[4];
   bilinear_weights(p, bilinear);
@@ -328,8 +337,8 @@ HWY_INLINE bool scatter_window(const RayTable& t, float* HWY_RESTRICT volume, st
     _mm512_storeu_ps(row, _mm512_add_ps(_mm512_loadu_ps(row), lo));
     _mm512_storeu_ps(row + N, _mm512_add_ps(_mm512_loadu_ps(row + N), hi));
   };
-  const std::ptrdiff_t sc = t.stride_c[r];
-  float* base = volume + static_cast<std::ptrdiff_t>(k - t.origin_a) * t.stride_a[r] + static_cast<std::ptrdiff_t>(c0) * sc + x0;
+  const std::ptrdiff_t sc = rays.sc;
+  float* base = volume + static_cast<std::ptrdiff_t>(k - rays.origin_a) * rays.sa + static_cast<std::ptrdiff_t>(c0) * sc + x0;
   const Map all = map_of(keep);
   if (all.voxels == _mm_popcnt_u32(keep)) {
     // Every lane on its own voxel along b (the usual case): one map serves every row. Row
