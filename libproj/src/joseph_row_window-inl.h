@@ -130,7 +130,7 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
   constexpr int N = 8;
   const std::ptrdiff_t sc = t.stride_c[r];
   const std::ptrdiff_t slice = t.stride_a[r];
-  const int x_max = t.n_b[r] - 2 * N, origin_a = t.origin_a;  // (read once: the stores below may alias t)
+  const int x_max = t.n_b[r] - 2 * N, origin_a = t.origin_a;  // read once: the stores below may alias t
   const BundlePositionAvx2 position(t, r);
   const __m256i one = _mm256_set1_epi32(1), two = _mm256_set1_epi32(2), last_pos = _mm256_set1_epi32(2 * N - 2);
   const __m256 one_f = _mm256_set1_ps(1.0f);
@@ -255,11 +255,6 @@ HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float*
 }
 
 #if HWY_TARGET <= HWY_AVX3
-// The adjoint of interpolate_window for 16 lanes, without a scatter: each lane's four corner
-// weights times `value` are placed at their voxels of a window of 32 voxels along b (expand
-// puts lane after lane at the set bits of a mask), in the slice's rows c0 .. c0 + 3, which are
-// then updated whole. Lanes on the same voxel (rays closer than a voxel) are first summed
-// into one. False (and nothing written) when the lanes spread wider, or three share a voxel.
 // What scatter_window reads of a bundle, read once for all its slices (its stores may alias
 // the table).
 struct WindowRays {
@@ -270,6 +265,11 @@ struct WindowRays {
       : position(hn::ScalableTag<float>(), t, r), n_b(t.n_b[r]), origin_a(t.origin_a), sa(t.stride_a[r]), sc(t.stride_c[r]) {}
 };
 
+// The adjoint of interpolate_window for 16 lanes, without a scatter: each lane's four corner
+// weights times `value` are placed at their voxels of a window of 32 voxels along b (expand
+// puts lane after lane at the set bits of a mask), in the slice's rows c0 .. c0 + 3, which are
+// then updated whole. Lanes on the same voxel (rays closer than a voxel) are first summed
+// into one. False (and nothing written) when the lanes spread wider, or three share a voxel.
 HWY_INLINE bool scatter_window(const WindowRays& rays, float* HWY_RESTRICT volume, int k, hn::Vec<hn::ScalableTag<float>> value) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
