@@ -213,7 +213,7 @@ TEST(JosephProjector, RaysAlongXThroughTilesAgreeWithTheReferenceAndAreAdjoint) 
 // A table of many lines on a wide detector: a strip of bundles along x (8 bundles' columns of
 // every line) then holds more than a strip takes (XStrip::kMaxBundles, 128) on every SIMD
 // width, and the bundles past it march through the volume instead of a tile.
-TEST(JosephProjector, StripsOfMoreBundlesThanATileTakesAgreeWithTheReference) {
+TEST(JosephProjector, StripsOverTheirBundleLimitAgreeWithTheReference) {
   const Problem p = problem_with_views(VolumeLayout::centred({30, 70, 40}, {1.0, 1.0, 1.0}), 24, 130, 250, 400,
                                        {{Eigen::Vector3d(1, 0, 0), 0.8}, {Eigen::Vector3d(-1, 0.3, 0.2), 0.8}},
                                        {0.02, -0.03}, {0.2, 0.1}, Eigen::Vector3d(0.3, 1.0, -0.2));
