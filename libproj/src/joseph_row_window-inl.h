@@ -119,6 +119,12 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
 // Slices per pass of add_window_samples (below).
 inline constexpr int kWindowBatch = 16;
 
+// prefetch_span for a window's rows from `row` (rows sc apart): two, or three when a lane sits
+// a row up.
+HWY_INLINE void prefetch_window(const float* row, std::ptrdiff_t sc, int width, bool row_up) {
+  for (int j = 0; j < (row_up ? 3 : 2); ++j) prefetch_span(row + j * sc, row + j * sc + width - 1);
+}
+
 #if HWY_TARGET == HWY_AVX2
 // add_window_samples for 8 lanes of AVX2, written with the instructions it needs: the same
 // arithmetic (results bit for bit), without what the portable form adds per sample (the
@@ -126,7 +132,7 @@ inline constexpr int kWindowBatch = 16;
 // rebuilt). A lookup in the 16-voxel window is two permutes (vpermps reads the low three bits
 // of each index) and a blend on bit 3 moved to the sign.
 HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r, int k_lo,
-                                          int k_hi, __m256 sum) {
+                                          int k_hi, __m256 sum, bool prefetch) {
   constexpr int N = 8;
   const std::ptrdiff_t sc = t.stride_c[r];
   const std::ptrdiff_t slice = t.stride_a[r];
@@ -158,6 +164,7 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
       _mm256_store_ps(fb[i], fbi);
       _mm256_store_ps(fc[i], fci);
       offset[i] = static_cast<std::ptrdiff_t>(k - origin_a) * slice + static_cast<std::ptrdiff_t>(_mm256_cvtsi256_si32(c0)) * sc + x0;
+      if (prefetch) prefetch_window(volume + offset[i], sc, 2 * N, !_mm256_testz_si256(d, d));
     }
     for (int i = 0; i < count; ++i) {
       if (misfits >> i & 1u) {
@@ -208,12 +215,13 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
 // to kWindowBatch slices: first every slice's window (origin, lanes' places, fractions), then
 // the loads. A sample's chain from the table to its rows is long; in one pass the processor had
 // fewer than two samples in flight, each waiting for its rows almost alone (10-15 % faster on
-// the Zen 3, benchmarks/README.md, session 23).
+// the Zen 3, benchmarks/README.md, session 23). With `prefetch`, the first pass also asks for
+// the rows (prefetch_span).
 template <class DF>
 HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r,
-                                          int k_lo, int k_hi, hn::Vec<DF> sum) {
+                                          int k_lo, int k_hi, hn::Vec<DF> sum, bool prefetch) {
 #if HWY_TARGET == HWY_AVX2
-  return hn::Vec<DF>{add_window_samples_avx2(t, volume, r, k_lo, k_hi, sum.raw)};
+  return hn::Vec<DF>{add_window_samples_avx2(t, volume, r, k_lo, k_hi, sum.raw, prefetch)};
 #else
   const hn::RebindToSigned<DF> di;
   const std::ptrdiff_t sc = t.stride_c[r];
@@ -237,6 +245,7 @@ HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float*
       hn::Store(p.fb, df, fb[i]);
       hn::Store(p.fc, df, fc[i]);
       row[i] = volume + static_cast<std::ptrdiff_t>(k0 + i - origin_a) * slice + static_cast<std::ptrdiff_t>(c0) * sc + x0;
+      if (prefetch) prefetch_window(row[i], sc, 2 * static_cast<int>(hn::Lanes(df)), !hn::AllFalse(di, hn::Gt(dci, hn::Zero(di))));
     }
     for (int i = 0; i < count; ++i) {
       hn::Vec<DF> sample;
