@@ -308,8 +308,8 @@ HWY_INLINE void scatter_add(DF df, const Corners<DF>& c, hn::Vec<DF> value, floa
 // kernels' first pass finds every slice's voxels a whole pass before the second loads them. In
 // spherical views those voxels are mostly outside L2 (each view reads the whole volume, and the
 // next view shares little of it), and without asking, the second pass met the misses about one
-// slice at a time (spherical forward and back 1.15x on the Zen 3, benchmarks/README.md session
-// 29). Not for tiles: they were just filled.
+// slice at a time (spherical views 1.05-1.2x faster each way on the Zen 3, circular ones
+// unchanged; benchmarks/README.md, session 29). Not for tiles: they were just filled.
 HWY_INLINE void prefetch_span(const float* first, const float* last) {
   for (const float* p = first; p < last; p += 16) hwy::Prefetch(p);  // 16 floats: a 64-byte line
   hwy::Prefetch(last);
