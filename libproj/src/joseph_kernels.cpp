@@ -22,16 +22,16 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 // `sum` plus the forward samples of bundle b over slices [k_lo, k_hi] in order, not yet times
-// the path length. `prefetch`: ask for the rows ahead (prefetch_span), false in tiles.
+// the path length.
 template <class DF>
 HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_RESTRICT volume, const Bundle& b,
-                                     int k_lo, int k_hi, hn::Vec<DF> sum, bool prefetch) {
+                                     int k_lo, int k_hi, hn::Vec<DF> sum, Rows fetch) {
   const auto all = hn::FirstN(df, hn::Lanes(df));
   for (int k = k_lo; k <= k_hi; ++k) {
     if (k >= b.in_lo && k <= b.in_hi) {
       if (b.window) {  // every interior slice of this call at once
         const int last = std::min(k_hi, b.in_hi);
-        sum = add_window_samples(df, t, volume, b.r, k, last, sum, prefetch);
+        sum = add_window_samples(df, t, volume, b.r, k, last, sum, fetch);
         k = last;
         continue;
       }
@@ -51,18 +51,19 @@ HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_
 // lanes in `lanes`.
 template <class DF>
 HWY_INLINE void march_back(DF df, const RayTable& t, const Bundle& b, hn::Vec<DF> value, hn::Mask<DF> lanes, int k_lo,
-                           int k_hi, float* HWY_RESTRICT volume, bool prefetch) {
+                           int k_hi, float* HWY_RESTRICT volume, Rows fetch) {
 #if HWY_TARGET <= HWY_AVX3
   const WindowRays rays(t, b.r);
+  (void)fetch;  // one slice at a time (below): nothing comes between asking and using
 #endif
   for (int k = k_lo; k <= k_hi; ++k) {
     if (k >= b.in_lo && k <= b.in_hi) {
 #if HWY_TARGET <= HWY_AVX3
       if (b.window && scatter_window(rays, volume, k, value)) continue;
-      scatter_add_interior_slices(df, t, b.r, k, k, value, volume, false);  // one slice: no time to fetch ahead
+      scatter_add_interior_slices(df, t, b.r, k, k, value, volume, Rows::cached);
 #else  // no row window for the back projection: every interior slice of this call at once
       const int last = std::min(k_hi, b.in_hi);
-      scatter_add_interior_slices(df, t, b.r, k, last, value, volume, prefetch);
+      scatter_add_interior_slices(df, t, b.r, k, last, value, volume, fetch);
       k = last;
 #endif
     } else {
@@ -230,8 +231,8 @@ HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRIC
         const Bundle& b = in_volume ? in_volume[i] : s.tile[i];
         float* part = chunk_sums + i * kMaxLanes;
         const int first = std::max(k_lo, b.k_lo), last = std::min(k_hi, b.k_hi);
-        hn::Store(in_volume ? march_forward(df, t, volume, b, first, last, hn::Load(df, part), true)
-                            : march_forward(df, local, tile.data, b, first, last, hn::Load(df, part), false),
+        hn::Store(in_volume ? march_forward(df, t, volume, b, first, last, hn::Load(df, part), Rows::fetch_ahead)
+                            : march_forward(df, local, tile.data, b, first, last, hn::Load(df, part), Rows::cached),
                   df, part);
       }
     });
@@ -264,12 +265,12 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
         const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
         if (!in_volume) {
           const Bundle& b = s.tile[i];
-          march_back(df, local, b, value, all, std::max(k_lo, b.k_lo), std::min(k_hi, b.k_hi), tile.data, false);
+          march_back(df, local, b, value, all, std::max(k_lo, b.k_lo), std::min(k_hi, b.k_hi), tile.data, Rows::cached);
         } else {
           const Bundle& b = in_volume[i];
           const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(hn::RebindToSigned<DF>(), t.axis.data() + r),
                                                          hn::Zero(hn::RebindToSigned<DF>())));
-          march_back(df, t, b, value, on_axis, std::max(k_lo, b.k_lo), std::min(k_hi, b.k_hi), volume, true);
+          march_back(df, t, b, value, on_axis, std::max(k_lo, b.k_lo), std::min(k_hi, b.k_hi), volume, Rows::fetch_ahead);
         }
       }
       if (fit == TileFit::fits) add_tile(tile, g, volume);
@@ -340,7 +341,7 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
         const int first = std::max(k0, b.k_lo), last = std::min(k1, b.k_hi);
         if (first > last) continue;
         float* acc = sums.data() + i * kMaxLanes;
-        hn::StoreU(hn::Add(hn::LoadU(df, acc), march_forward(df, t, volume, b, first, last, hn::Zero(df), true)), df, acc);
+        hn::StoreU(hn::Add(hn::LoadU(df, acc), march_forward(df, t, volume, b, first, last, hn::Zero(df), Rows::fetch_ahead)), df, acc);
       }
     }
     for (std::size_t i = 0; i < in_volume.size(); ++i)
@@ -355,7 +356,7 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
           in_volume.push_back(b);
           return;
         }
-        hn::StoreU(hn::Mul(march_forward(df, t, volume, b, b.k_lo, b.k_hi, hn::Zero(df), true), hn::LoadU(df, t.weight.data() + r)), df,
+        hn::StoreU(hn::Mul(march_forward(df, t, volume, b, b.k_lo, b.k_hi, hn::Zero(df), Rows::fetch_ahead), hn::LoadU(df, t.weight.data() + r)), df,
                    out + r);
       },
       [&] { forward_strip(df, t, volume, w, out); });
@@ -383,7 +384,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
           return;
         }
         const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
-        march_back(df, t, b, value, on_axis, std::max(b.k_lo, k_begin), std::min(b.k_hi, k_end - 1), volume, true);
+        march_back(df, t, b, value, on_axis, std::max(b.k_lo, k_begin), std::min(b.k_hi, k_end - 1), volume, Rows::fetch_ahead);
       },
       [&] { back_strip(df, t, k_begin, k_end, w, volume); });
   const auto all = hn::FirstN(df, hn::Lanes(df));
@@ -393,7 +394,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
       const int first = std::max(k0, b.k_lo), last = std::min(k1, b.k_hi);
       if (first > last) continue;
       const auto value = hn::Mul(hn::LoadU(df, t.value.data() + b.r), hn::LoadU(df, t.weight.data() + b.r));
-      march_back(df, t, b, value, all, first, last, volume, true);
+      march_back(df, t, b, value, all, first, last, volume, Rows::fetch_ahead);
     }
   }
 }

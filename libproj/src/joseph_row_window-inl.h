@@ -132,7 +132,7 @@ HWY_INLINE void prefetch_window(const float* row, std::ptrdiff_t sc, int width, 
 // rebuilt). A lookup in the 16-voxel window is two permutes (vpermps reads the low three bits
 // of each index) and a blend on bit 3 moved to the sign.
 HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r, int k_lo,
-                                          int k_hi, __m256 sum, bool prefetch) {
+                                          int k_hi, __m256 sum, Rows fetch) {
   constexpr int N = 8;
   const std::ptrdiff_t sc = t.stride_c[r];
   const std::ptrdiff_t slice = t.stride_a[r];
@@ -164,7 +164,7 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
       _mm256_store_ps(fb[i], fbi);
       _mm256_store_ps(fc[i], fci);
       offset[i] = static_cast<std::ptrdiff_t>(k - origin_a) * slice + static_cast<std::ptrdiff_t>(_mm256_cvtsi256_si32(c0)) * sc + x0;
-      if (prefetch) prefetch_window(volume + offset[i], sc, 2 * N, !_mm256_testz_si256(d, d));
+      if (fetch == Rows::fetch_ahead) prefetch_window(volume + offset[i], sc, 2 * N, !_mm256_testz_si256(d, d));
     }
     for (int i = 0; i < count; ++i) {
       if (misfits >> i & 1u) {
@@ -215,13 +215,13 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
 // to kWindowBatch slices: first every slice's window (origin, lanes' places, fractions), then
 // the loads. A sample's chain from the table to its rows is long; in one pass the processor had
 // fewer than two samples in flight, each waiting for its rows almost alone (10-15 % faster on
-// the Zen 3, benchmarks/README.md, session 23). With `prefetch`, the first pass also asks for
-// the rows (prefetch_span).
+// the Zen 3, benchmarks/README.md, session 23). With Rows::fetch_ahead, the first pass also asks
+// for the rows (prefetch_span).
 template <class DF>
 HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r,
-                                          int k_lo, int k_hi, hn::Vec<DF> sum, bool prefetch) {
+                                          int k_lo, int k_hi, hn::Vec<DF> sum, Rows fetch) {
 #if HWY_TARGET == HWY_AVX2
-  return hn::Vec<DF>{add_window_samples_avx2(t, volume, r, k_lo, k_hi, sum.raw, prefetch)};
+  return hn::Vec<DF>{add_window_samples_avx2(t, volume, r, k_lo, k_hi, sum.raw, fetch)};
 #else
   const hn::RebindToSigned<DF> di;
   const std::ptrdiff_t sc = t.stride_c[r];
@@ -245,7 +245,7 @@ HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float*
       hn::Store(p.fb, df, fb[i]);
       hn::Store(p.fc, df, fc[i]);
       row[i] = volume + static_cast<std::ptrdiff_t>(k0 + i - origin_a) * slice + static_cast<std::ptrdiff_t>(c0) * sc + x0;
-      if (prefetch) prefetch_window(row[i], sc, 2 * static_cast<int>(hn::Lanes(df)), !hn::AllFalse(di, hn::Gt(dci, hn::Zero(di))));
+      if (fetch == Rows::fetch_ahead) prefetch_window(row[i], sc, 2 * static_cast<int>(hn::Lanes(df)), !hn::AllFalse(di, hn::Gt(dci, hn::Zero(di))));
     }
     for (int i = 0; i < count; ++i) {
       hn::Vec<DF> sample;

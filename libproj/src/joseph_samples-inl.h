@@ -304,6 +304,10 @@ HWY_INLINE void scatter_add(DF df, const Corners<DF>& c, hn::Vec<DF> value, floa
       if (weight[q][l] != 0.0f) volume[index[q][l]] += weight[q][l];
 }
 
+// Whether a kernel asks for its rows ahead (prefetch_span, below): in the volume, yes; in a tile,
+// which was just filled, no.
+enum class Rows { fetch_ahead, cached };
+
 // Asks for the cache lines of volume[first .. last] (a few lines) ahead of the loads. The
 // kernels' first pass finds every slice's voxels a whole pass before the second loads them. In
 // spherical views those voxels are mostly outside L2 (each view reads the whole volume, and the
@@ -392,12 +396,12 @@ HWY_INLINE void interior_corners_avx2(const RayTable& t, std::size_t r, int k0, 
 // (1.05-1.06x, session 26). Where b is the contiguous axis (all but rays along x outside tiles),
 // corners b and b + 1 are added as one pair of floats, their weights stored interleaved: half
 // the loads and stores (1.04-1.13x, session 26). A voxel still receives its lanes in order and
-// each its own float addition, so the sums are those of scatter_add. With `prefetch`, the pairs'
-// lines are asked for between the passes (prefetch_span, above).
+// each its own float addition, so the sums are those of scatter_add. With Rows::fetch_ahead, the
+// pairs' lines are asked for between the passes (prefetch_span, above).
 inline constexpr int kInteriorBatch = 16;
 template <class DF>
 HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_t r, int k_lo, int k_hi, hn::Vec<DF> value,
-                                            float* HWY_RESTRICT volume, bool prefetch) {
+                                            float* HWY_RESTRICT volume, Rows fetch) {
   const int N = static_cast<int>(hn::Lanes(df));
   HWY_ALIGN std::int32_t index[kInteriorBatch][kMaxLanes];
   HWY_ALIGN float weight[kInteriorBatch][4][kMaxLanes];  // weight[i][q][l], or paired: weight[i][q][2l + (0, 1)]
@@ -422,7 +426,7 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
         for (int q = 0; q < 4; q += 2) hn::StoreInterleaved2(w[q], w[q + 1], df, weight[i][q]);
     }
 #endif
-    if (pairs && prefetch)  // both rows under every 8th lane's pair and the last's (8 lanes span a line or two)
+    if (pairs && fetch == Rows::fetch_ahead)  // both rows under every 8th lane's pair and the last's (8 lanes span a line or two)
       for (int i = 0; i < count; ++i) {
         for (int l = 0; l < N; l += 8) prefetch_corner_rows(volume + index[i][l], dc);
         prefetch_corner_rows(volume + index[i][N - 1] + 1, dc);
