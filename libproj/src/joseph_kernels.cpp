@@ -48,24 +48,19 @@ HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_
 }
 
 // volume += the adjoint of march_forward for `value` (already times the path length), for the
-// lanes in `lanes`.
+// lanes in `lanes`. The interior slices go lane by lane through scatter_add_interior_slices on
+// every target. (AVX-512 had a row window for them, placing the lanes' weights by expand and
+// permutes and updating the rows whole, one slice at a time: on the Zen 4 it took 1.12-1.3x
+// longer than this scatter, with or without its rows asked for ahead; benchmarks/README.md,
+// session 30.)
 template <class DF>
 HWY_INLINE void march_back(DF df, const RayTable& t, const Bundle& b, hn::Vec<DF> value, hn::Mask<DF> lanes, int k_lo,
                            int k_hi, float* HWY_RESTRICT volume, Rows fetch) {
-#if HWY_TARGET <= HWY_AVX3
-  const WindowRays rays(t, b.r);
-  (void)fetch;  // one slice at a time (below): nothing comes between asking and using
-#endif
   for (int k = k_lo; k <= k_hi; ++k) {
-    if (k >= b.in_lo && k <= b.in_hi) {
-#if HWY_TARGET <= HWY_AVX3
-      if (b.window && scatter_window(rays, volume, k, value)) continue;
-      scatter_add_interior_slices(df, t, b.r, k, k, value, volume, Rows::cached);
-#else  // no row window for the back projection: every interior slice of this call at once
+    if (k >= b.in_lo && k <= b.in_hi) {  // every interior slice of this call at once
       const int last = std::min(k_hi, b.in_hi);
       scatter_add_interior_slices(df, t, b.r, k, last, value, volume, fetch);
       k = last;
-#endif
     } else {
       scatter_add(df, corners_at(df, t, b.r, k, lanes), value, volume);
     }

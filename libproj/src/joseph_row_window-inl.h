@@ -1,7 +1,6 @@
-// Per SIMD target: the row window. When a bundle's lanes lie within 2N neighbouring voxels of
-// a contiguous axis and two neighbouring rows, a sample loads those rows whole and picks its
-// corners by permutes (forward), and the back projection places its weights into the rows
-// whole; no gathers, no scatters.
+// Per SIMD target: the forward projection's row window. When a bundle's lanes lie within 2N
+// neighbouring voxels of a contiguous axis and two neighbouring rows, a sample loads those rows
+// whole and picks its corners by permutes; no gathers.
 #if defined(CTK_PROJ_JOSEPH_ROW_WINDOW_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef CTK_PROJ_JOSEPH_ROW_WINDOW_INL_H_
 #undef CTK_PROJ_JOSEPH_ROW_WINDOW_INL_H_
@@ -262,127 +261,6 @@ HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float*
   return sum;
 #endif
 }
-
-#if HWY_TARGET <= HWY_AVX3
-// What scatter_window reads of a bundle, read once for all its slices (its stores may alias
-// the table).
-struct WindowRays {
-  BundlePosition<hn::ScalableTag<float>> position;
-  int n_b, origin_a;
-  std::ptrdiff_t sa, sc;
-  WindowRays(const RayTable& t, std::size_t r)
-      : position(hn::ScalableTag<float>(), t, r), n_b(t.n_b[r]), origin_a(t.origin_a), sa(t.stride_a[r]), sc(t.stride_c[r]) {}
-};
-
-// The adjoint of interpolate_window for 16 lanes, without a scatter: each lane's four corner
-// weights times `value` are placed at their voxels of a window of 32 voxels along b (expand
-// puts lane after lane at the set bits of a mask), in the slice's rows c0 .. c0 + 3, which are
-// then updated whole. Lanes on the same voxel (rays closer than a voxel) are first summed
-// into one. False (and nothing written) when the lanes spread wider, or three share a voxel.
-HWY_INLINE bool scatter_window(const WindowRays& rays, float* HWY_RESTRICT volume, int k, hn::Vec<hn::ScalableTag<float>> value) {
-  const hn::ScalableTag<float> df;
-  const hn::RebindToSigned<decltype(df)> di;
-  constexpr int N = 16;
-  const auto p = rays.position.at(df, k);
-  int x0, c0;
-  window_origin(df, p, rays.n_b, x0, c0);
-  auto pos = hn::Sub(p.ib, hn::Set(di, x0)), dc = hn::Sub(p.ic, hn::Set(di, c0));
-  hn::Vec<decltype(df)> bilinear[4];
-  bilinear_weights(p, bilinear);
-  __m512 w[4];
-  for (int q = 0; q < 4; ++q) w[q] = hn::Mul(bilinear[q], value).raw;
-  if (hn::ExtractLane(p.ib, N - 1) < hn::GetLane(p.ib)) {  // lanes in increasing b
-    pos = hn::Reverse(di, pos), dc = hn::Reverse(di, dc);
-    for (auto& v : w) v = hn::Reverse(df, hn::Vec<decltype(df)>{v}).raw;
-  }
-  const __m512i P = pos.raw, C = dc.raw;
-  // Every lane inside the window (with its b + 1 corner) and on rows c0 to c0 + 2; b never
-  // decreasing from lane to lane.
-  const __mmask16 inside = _mm512_cmpge_epi32_mask(P, _mm512_setzero_si512()) &
-                           _mm512_cmplt_epi32_mask(P, _mm512_set1_epi32(2 * N - 1)) &
-                           _mm512_cmpge_epi32_mask(C, _mm512_setzero_si512()) & _mm512_cmple_epi32_mask(C, _mm512_set1_epi32(2));
-  const __m512i P_next = _mm512_alignr_epi32(P, P, 1);  // lane l holds P[l + 1] (l < N - 1)
-  if (inside != 0xFFFF || (_mm512_cmpge_epi32_mask(P_next, P) & 0x7FFF) != 0x7FFF) return false;
-  // A lane on the same voxel as the lane before it takes that lane's weights; that lane is dropped.
-  const __m512i key = _mm512_add_epi32(P, _mm512_slli_epi32(C, 6));
-  const __m512i key_prev = _mm512_alignr_epi32(key, _mm512_set1_epi32(-1), 15);  // lane l holds key[l - 1]
-  const __mmask16 same_as_prev = _mm512_cmpeq_epi32_mask(key, key_prev);
-  if ((same_as_prev & (same_as_prev << 1)) != 0) return false;
-  const auto keep = static_cast<__mmask16>(~(same_as_prev >> 1));
-  for (auto& v : w) v = _mm512_mask_add_ps(
-           v, same_as_prev, v, _mm512_castsi512_ps(_mm512_alignr_epi32(_mm512_castps_si512(v), _mm512_setzero_si512(), 15)));
-  // Which lane feeds each of the 32 window voxels: the lanes' numbers, in order, expanded to
-  // the voxels they occupy (lanes are sorted along b); corner b + 1 sits one voxel further, the
-  // same map shifted up by one. The weights are then placed with permutes: one compress and two
-  // expands per map instead of per corner (each costs about five cycles on Zen 5, a permute
-  // about two).
-  const __m512i lane_number = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  struct Map {
-    __m512i from_lo, from_hi, from1_lo, from1_hi;
-    __mmask16 bits_lo, bits_hi, bits1_lo, bits1_hi;
-    int voxels;  // distinct voxels the lanes occupy
-  };
-  const auto map_of = [&](__mmask16 lanes) {
-    Map m;
-    const auto bits = static_cast<std::uint32_t>(_mm512_reduce_or_epi32(_mm512_maskz_sllv_epi32(lanes, _mm512_set1_epi32(1), P)));
-    m.voxels = _mm_popcnt_u32(bits);
-    m.bits_lo = static_cast<__mmask16>(bits & 0xFFFFu), m.bits_hi = static_cast<__mmask16>(bits >> 16);
-    const __m512i kept = lanes == 0xFFFF ? lane_number : _mm512_maskz_compress_epi32(lanes, lane_number);
-    m.from_lo = _mm512_maskz_expand_epi32(m.bits_lo, kept);
-    m.from_hi = _mm512_maskz_expand_epi32(
-        m.bits_hi, _mm512_permutexvar_epi32(_mm512_add_epi32(lane_number, _mm512_set1_epi32(_mm_popcnt_u32(m.bits_lo))), kept));
-    m.from1_lo = _mm512_alignr_epi32(m.from_lo, _mm512_setzero_si512(), 15);
-    m.from1_hi = _mm512_alignr_epi32(m.from_hi, m.from_lo, 15);
-    const auto bits1 = bits << 1;
-    m.bits1_lo = static_cast<__mmask16>(bits1 & 0xFFFFu), m.bits1_hi = static_cast<__mmask16>(bits1 >> 16);
-    return m;
-  };
-  // row += the lanes' weights wb at their voxel b and wb1 at b + 1.
-  const auto add_row = [&](const Map& m, __m512 wb, __m512 wb1, float* row) {
-    const __m512 lo = _mm512_add_ps(_mm512_maskz_permutexvar_ps(m.bits_lo, m.from_lo, wb),
-                                    _mm512_maskz_permutexvar_ps(m.bits1_lo, m.from1_lo, wb1));
-    const __m512 hi = _mm512_add_ps(_mm512_maskz_permutexvar_ps(m.bits_hi, m.from_hi, wb),
-                                    _mm512_maskz_permutexvar_ps(m.bits1_hi, m.from1_hi, wb1));
-    _mm512_storeu_ps(row, _mm512_add_ps(_mm512_loadu_ps(row), lo));
-    _mm512_storeu_ps(row + N, _mm512_add_ps(_mm512_loadu_ps(row + N), hi));
-  };
-  const std::ptrdiff_t sc = rays.sc;
-  float* base = volume + static_cast<std::ptrdiff_t>(k - rays.origin_a) * rays.sa + static_cast<std::ptrdiff_t>(c0) * sc + x0;
-  const Map all = map_of(keep);
-  if (all.voxels == _mm_popcnt_u32(keep)) {
-    // Every lane on its own voxel along b (the usual case): one map serves every row. Row
-    // c0 + j takes corner c of the lanes on row j and corner c + 1 of those on row j - 1.
-    const int rows = 1 + _mm512_mask_reduce_max_epi32(keep, C);
-    for (int j = 0; j <= rows; ++j) {
-      const auto here = static_cast<__mmask16>(keep & _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(j)));
-      const auto below = static_cast<__mmask16>(keep & _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(j - 1)));
-      add_row(all, _mm512_mask_mov_ps(_mm512_maskz_mov_ps(here, w[0]), below, w[2]),
-              _mm512_mask_mov_ps(_mm512_maskz_mov_ps(here, w[1]), below, w[3]), base + j * sc);
-    }
-    return true;
-  }
-  // Lanes by the row of their corner c (c0, c0 + 1, c0 + 2). Each row's lanes must sit on
-  // distinct voxels: with rays closer than a voxel, a staircase that zigzags across a row
-  // boundary puts two lanes on one voxel with a lane of the other row between them, which the
-  // merge above (neighbouring lanes only) leaves apart. Such a sample is left to the scatter,
-  // before anything is written.
-  Map maps[3] = {};
-  __mmask16 lanes[3] = {};
-  for (int layer = 0; layer < 3; ++layer) {
-    lanes[layer] = static_cast<__mmask16>(keep & _mm512_cmpeq_epi32_mask(C, _mm512_set1_epi32(layer)));
-    if (lanes[layer] == 0) continue;
-    maps[layer] = map_of(lanes[layer]);
-    if (maps[layer].voxels != _mm_popcnt_u32(lanes[layer])) return false;
-  }
-  for (int layer = 0; layer < 3; ++layer) {
-    if (lanes[layer] == 0) continue;
-    float* row = base + layer * sc;
-    add_row(maps[layer], w[0], w[1], row);
-    add_row(maps[layer], w[2], w[3], row + sc);
-  }
-  return true;
-}
-#endif
 
 }  // namespace HWY_NAMESPACE
 }  // namespace ctk::detail

@@ -150,8 +150,8 @@ TEST(JosephProjector, AgreesWithTheReference) {
 
 // Rays along y and z through a volume long in x, about one voxel apart (magnification 1.5,
 // 1.5 mm pixels, 1 mm voxels) and a little more or less (tilted, oblique): the geometry where
-// the fast projector loads whole rows of a slice instead of gathering, and its back projection
-// places whole rows (both need 32 voxels along x).
+// the fast projector loads whole rows of a slice instead of gathering (it needs 2N voxels along
+// x), and its back projection adds corner pairs lane by lane, a row apart.
 Problem row_window_problem() {
   Problem p;
   p.layout = VolumeLayout::centred({70, 22, 18}, {1.0, 1.0, 1.0});
@@ -318,7 +318,8 @@ RandomCase random_case(std::uint64_t seed) {
 
 // Before session 16, 15 % of these cases failed on AVX-512 (back projection 0.3 to 7 % off):
 // with rays closer than a voxel, a staircase zigzagging across a row boundary put two lanes on
-// one voxel with a lane of the other row between them, and the row window's map lost one.
+// one voxel with a lane of the other row between them, and the AVX-512 back projection's row
+// window (removed in session 30) lost one.
 TEST(JosephProjector, RandomGeometriesAgreeWithTheReference) {
   for (std::uint64_t seed = 0; seed < 60; ++seed) {
     const RandomCase c = random_case(seed);
