@@ -28,10 +28,14 @@ namespace hn = hwy::HWY_NAMESPACE;
 // do to rays along y and z. Voxels outside the volume are zeros in the tile, as the masked
 // paths make them. A tile is at most kTileSlices x kTileMaxHeight x kTileMaxWidth floats (192 kB).
 constexpr int kTileSlices = 16;
-// Bundles of this many neighbouring columns (and every row of the table) share a tile: wider
-// tiles copy each voxel fewer times (a tile's width is its lanes' span plus the rays' drift).
-// 8 rather than 4 since session 26: spherical views 1.04x each way.
-constexpr int kStripColumns = 8;
+// Bundles of this many neighbouring columns (and every row of the table) share a tile: 64
+// pixels of a line, whatever the lanes. Wider tiles copy each voxel fewer times (a tile's width
+// is its lanes' span plus the rays' drift): 64 pixels rather than 32 on AVX2 since session 26
+// (spherical views 1.04x each way). But 128 pixels span about 137 voxels in the standard
+// problem, more than kTileMaxWidth: with 8 bundles of 16 lanes, AVX-512 sent nearly every ray
+// along x to the gathers (until session 30; 64 pixels made the Zen 4's circular forward 1.4x
+// and back 1.28x faster, 96 pixels or 256-voxel tiles less so).
+constexpr int kStripColumns = 64 / static_cast<int>(HWY_LANES(float));
 constexpr int kTileMaxWidth = 128, kTileMaxHeight = 24;
 
 struct Tile {
