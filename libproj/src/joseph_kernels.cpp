@@ -1,8 +1,9 @@
 // SIMD kernels of the fast Joseph projector, compiled once per x86 target by Highway and chosen
 // at run time. Lanes are neighbouring rays; each lane carries its own axis, strides and range.
 // Here bundles of lanes are marched slice by slice; where one sample falls and how it reads and
-// writes its corners is in joseph_samples-inl.h, the gather-free row window in
-// joseph_row_window-inl.h, and the tiles that rays along x march through in joseph_tiles-inl.h.
+// writes its corners is in joseph_samples-inl.h, the forward projection's gather-free row window
+// in joseph_row_window-inl.h, and the tiles that rays along x march through in
+// joseph_tiles-inl.h.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "joseph_kernels.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
