@@ -151,7 +151,7 @@ TEST(JosephProjector, AgreesWithTheReference) {
 // Rays along y and z through a volume long in x, about one voxel apart (magnification 1.5,
 // 1.5 mm pixels, 1 mm voxels) and a little more or less (tilted, oblique): the geometry where
 // the fast projector loads whole rows of a slice instead of gathering (it needs 2N voxels along
-// x), and its back projection adds corner pairs lane by lane, a row apart.
+// x), and its back projection adds each lane's corner pairs to two rows.
 Problem row_window_problem() {
   Problem p;
   p.layout = VolumeLayout::centred({70, 22, 18}, {1.0, 1.0, 1.0});
