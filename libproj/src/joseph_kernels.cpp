@@ -38,6 +38,10 @@ HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_
       }
       const auto c = interior_corners_at(df, t, b.r, k);
       sum = hn::Add(sum, b.pairs ? interpolate_pairs(df, volume, c) : interpolate(df, volume, c));
+    } else if (b.pairs) {  // every rim slice up to the interior or the end
+      const int last = k < b.in_lo ? std::min(k_hi, b.in_lo - 1) : k_hi;
+      sum = add_rim_samples(df, t, volume, b, k, last, sum, fetch);
+      k = last;
     } else {
       hn::Vec<DF> sample;
       if (!b.window || !interpolate_window(df, t, volume, b.r, k, sample))
@@ -61,6 +65,10 @@ HWY_INLINE void march_back(DF df, const RayTable& t, const Bundle& b, hn::Vec<DF
     if (k >= b.in_lo && k <= b.in_hi) {  // every interior slice of this call at once
       const int last = std::min(k_hi, b.in_hi);
       scatter_add_interior_slices(df, t, b.r, k, last, value, volume, fetch);
+      k = last;
+    } else if (b.pairs) {  // every rim slice up to the interior or the end
+      const int last = k < b.in_lo ? std::min(k_hi, b.in_lo - 1) : k_hi;
+      scatter_add_rim_slices(df, t, b.r, k, last, lanes, value, volume, fetch);
       k = last;
     } else {
       scatter_add(df, corners_at(df, t, b.r, k, lanes), value, volume);

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "ray_table.hpp"
 
@@ -100,49 +101,115 @@ HWY_INLINE void bilinear_weights(const SamplePosition<DF>& p, hn::Vec<DF> (&weig
   bilinear_weights(p.fb, p.fc, weight);
 }
 
+// What the masked paths (corners_at, pair_corners_at) know of the sample at slice k of the
+// rays at entry r: where it falls, which lanes take part (in `lanes` and in their ray's range)
+// and which corners are inside the volume.
+template <class DF>
+struct MaskedSample {
+  using DI = hn::RebindToSigned<DF>;
+  using VI = hn::Vec<DI>;
+  SamplePosition<DF> p;
+  hn::Mask<DF> active;
+  hn::Mask<DF> vb0, vb1, vc0, vc1;  // corners b, b + 1, c, c + 1 inside: -1 < index < n
+  VI nb, nc, sb, sc;
+  VI base;  // slice k's first voxel
+  MaskedSample(DF df, const RayTable& t, std::size_t r, int k, hn::Mask<DF> lanes) {
+    const DI di;
+    const VI vk = hn::Set(di, k);
+    const VI k_first = hn::LoadU(di, t.k_first.data() + r), k_last = hn::LoadU(di, t.k_last.data() + r);
+    const VI minus_one = hn::Set(di, -1), one = hn::Set(di, 1);
+    // (Highway 1.0 compares signed lanes with Lt/Gt only.)
+    const auto in_range = hn::And(hn::Lt(k_first, hn::Add(vk, one)), hn::Lt(vk, hn::Add(k_last, one)));
+    active = hn::And(lanes, hn::RebindMask(df, in_range));
+    p = position_at(df, t, r, k);
+    nb = hn::LoadU(di, t.n_b.data() + r);
+    nc = hn::LoadU(di, t.n_c.data() + r);
+    const VI ib1 = hn::Add(p.ib, one), ic1 = hn::Add(p.ic, one);
+    vb0 = hn::RebindMask(df, hn::And(hn::Gt(p.ib, minus_one), hn::Lt(p.ib, nb)));
+    vb1 = hn::RebindMask(df, hn::And(hn::Gt(ib1, minus_one), hn::Lt(ib1, nb)));
+    vc0 = hn::RebindMask(df, hn::And(hn::Gt(p.ic, minus_one), hn::Lt(p.ic, nc)));
+    vc1 = hn::RebindMask(df, hn::And(hn::Gt(ic1, minus_one), hn::Lt(ic1, nc)));
+    sb = hn::LoadU(di, t.stride_b.data() + r);
+    sc = hn::LoadU(di, t.stride_c.data() + r);
+    base = hn::Mul(hn::Set(di, k - t.origin_a), hn::LoadU(di, t.stride_a.data() + r));
+  }
+  // The voxel at (jb, jc) of slice k for the active lanes; voxel 0 for the others (slice k may
+  // lie outside the volume for a lane of another axis). Their weights are zero.
+  VI index(VI jb, VI jc) const {
+    return hn::IfThenElseZero(hn::RebindMask(DI(), active), hn::Add(base, hn::Add(hn::Mul(jb, sb), hn::Mul(jc, sc))));
+  }
+};
+
 template <class DF>
 HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k, hn::Mask<DF> lanes) {
   const hn::RebindToSigned<DF> di;
-  using VI = hn::Vec<decltype(di)>;
-  const VI vk = hn::Set(di, k);
-  const VI k_first = hn::LoadU(di, t.k_first.data() + r), k_last = hn::LoadU(di, t.k_last.data() + r);
-  const VI minus_one = hn::Set(di, -1), one_i = hn::Set(di, 1);
-  // (Highway 1.0 compares signed lanes with Lt/Gt only.)
-  const auto in_range = hn::And(hn::Lt(k_first, hn::Add(vk, one_i)), hn::Lt(vk, hn::Add(k_last, one_i)));
-  const auto active = hn::And(lanes, hn::RebindMask(df, in_range));
-
-  const SamplePosition<DF> p = position_at(df, t, r, k);
-  const VI ib = p.ib, ic = p.ic;
-
-  const VI nb = hn::LoadU(di, t.n_b.data() + r), nc = hn::LoadU(di, t.n_c.data() + r);
-  const VI zero = hn::Zero(di);
-  const VI nb1 = hn::Sub(nb, one_i), nc1 = hn::Sub(nc, one_i);
-  const VI ib1 = hn::Add(ib, one_i), ic1 = hn::Add(ic, one_i);
-  // Corner validity: -1 < index < n.
-  const auto vb0 = hn::RebindMask(df, hn::And(hn::Gt(ib, minus_one), hn::Lt(ib, nb)));
-  const auto vb1 = hn::RebindMask(df, hn::And(hn::Gt(ib1, minus_one), hn::Lt(ib1, nb)));
-  const auto vc0 = hn::RebindMask(df, hn::And(hn::Gt(ic, minus_one), hn::Lt(ic, nc)));
-  const auto vc1 = hn::RebindMask(df, hn::And(hn::Gt(ic1, minus_one), hn::Lt(ic1, nc)));
-
-  const VI sa = hn::LoadU(di, t.stride_a.data() + r), sb = hn::LoadU(di, t.stride_b.data() + r),
-           sc = hn::LoadU(di, t.stride_c.data() + r);
-  const VI base = hn::Mul(hn::Set(di, k - t.origin_a), sa);
-  const VI ob0 = hn::Mul(hn::Min(hn::Max(ib, zero), nb1), sb), ob1 = hn::Mul(hn::Min(hn::Max(ib1, zero), nb1), sb);
-  const VI oc0 = hn::Mul(hn::Min(hn::Max(ic, zero), nc1), sc), oc1 = hn::Mul(hn::Min(hn::Max(ic1, zero), nc1), sc);
-
-  // Lanes out of their range read voxel 0 (slice k may lie outside the volume for a lane of
-  // another axis); their weights are zero.
-  const auto active_i = hn::RebindMask(di, active);
+  const MaskedSample<DF> s(df, t, r, k, lanes);
+  const auto zero = hn::Zero(di), one = hn::Set(di, 1);
+  const auto nb1 = hn::Sub(s.nb, one), nc1 = hn::Sub(s.nc, one);
+  const auto jb0 = hn::Min(hn::Max(s.p.ib, zero), nb1), jb1 = hn::Min(hn::Max(hn::Add(s.p.ib, one), zero), nb1);
+  const auto jc0 = hn::Min(hn::Max(s.p.ic, zero), nc1), jc1 = hn::Min(hn::Max(hn::Add(s.p.ic, one), zero), nc1);
   Corners<DF> out;
-  out.index[0] = hn::IfThenElseZero(active_i, hn::Add(base, hn::Add(ob0, oc0)));
-  out.index[1] = hn::IfThenElseZero(active_i, hn::Add(base, hn::Add(ob1, oc0)));
-  out.index[2] = hn::IfThenElseZero(active_i, hn::Add(base, hn::Add(ob0, oc1)));
-  out.index[3] = hn::IfThenElseZero(active_i, hn::Add(base, hn::Add(ob1, oc1)));
-  bilinear_weights(p, out.weight);
-  out.weight[0] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc0)), out.weight[0]);
-  out.weight[1] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc0)), out.weight[1]);
-  out.weight[2] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc1)), out.weight[2]);
-  out.weight[3] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc1)), out.weight[3]);
+  out.index[0] = s.index(jb0, jc0);
+  out.index[1] = s.index(jb1, jc0);
+  out.index[2] = s.index(jb0, jc1);
+  out.index[3] = s.index(jb1, jc1);
+  bilinear_weights(s.p, out.weight);
+  out.weight[0] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb0, s.vc0)), out.weight[0]);
+  out.weight[1] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb1, s.vc0)), out.weight[1]);
+  out.weight[2] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb0, s.vc1)), out.weight[2]);
+  out.weight[3] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb1, s.vc1)), out.weight[3]);
+  return out;
+}
+
+// The sample of corners_at as two pairs of neighbouring floats, for bundles whose b is the
+// contiguous axis (Bundle::pairs): `corners` as an interior sample has them (index[0] the pair in
+// row c, index[2] the pair in row c + 1; corners 1 and 3 one voxel on), with each pair's first
+// voxel clamped so that both pairs are inside the volume. A corner outside the volume then has
+// no place in the pairs, or its neighbour inside takes its place: at b = -1 the pair starts at
+// 0 and its first float weighs corner b + 1; at b = n - 1 it starts at n - 2 and its second
+// float weighs corner b. Along c the same. The weights are corners_at's, bit for bit, moved;
+// lanes outside `active` read voxel 0 with weight zero. Half the gathers of corners_at's four
+// on the volume's rim, and no test per corner in the back projection's scatter.
+template <class DF>
+struct PairCorners {
+  Corners<DF> corners;
+  hn::Mask<DF> active;
+};
+
+// Weights of a pair of floats at j = clamp(i, 0, n - 2) along one axis, from the corners'
+// weights w0 (corner i) and w1 (corner i + 1), each already zero where outside.
+template <class DF>
+HWY_INLINE void pair_weights(DF df, hn::Vec<hn::RebindToSigned<DF>> i, hn::Vec<hn::RebindToSigned<DF>> n2, hn::Vec<DF> w0,
+                             hn::Vec<DF> w1, hn::Vec<DF>& first, hn::Vec<DF>& second) {
+  const auto low = hn::RebindMask(df, hn::Lt(i, hn::Zero(hn::RebindToSigned<DF>())));  // corner i + 1 at j
+  const auto high = hn::RebindMask(df, hn::Gt(i, n2));  // corner i at j + 1
+  first = hn::IfThenElse(low, w1, hn::IfThenZeroElse(high, w0));
+  second = hn::IfThenZeroElse(low, hn::IfThenElse(high, w0, w1));
+}
+
+template <class DF>
+HWY_INLINE PairCorners<DF> pair_corners_at(DF df, const RayTable& t, std::size_t r, int k, hn::Mask<DF> lanes) {
+  const hn::RebindToSigned<DF> di;
+  const MaskedSample<DF> s(df, t, r, k, lanes);
+  const auto zero = hn::Zero(di), two = hn::Set(di, 2);
+  const auto nb2 = hn::Sub(s.nb, two), nc2 = hn::Sub(s.nc, two);
+  const auto jb = hn::Min(hn::Max(s.p.ib, zero), nb2), jc = hn::Min(hn::Max(s.p.ic, zero), nc2);
+  const auto one = hn::Set(df, 1.0f);
+  hn::Vec<DF> b0, b1, c0, c1;
+  pair_weights(df, s.p.ib, nb2, hn::IfThenElseZero(s.vb0, hn::Sub(one, s.p.fb)), hn::IfThenElseZero(s.vb1, s.p.fb), b0, b1);
+  pair_weights(df, s.p.ic, nc2, hn::IfThenElseZero(s.vc0, hn::Sub(one, s.p.fc)), hn::IfThenElseZero(s.vc1, s.p.fc), c0, c1);
+  PairCorners<DF> out;
+  out.active = s.active;
+  Corners<DF>& c = out.corners;
+  c.index[0] = s.index(jb, jc);
+  c.index[1] = hn::Add(c.index[0], hn::Set(di, 1));
+  c.index[2] = hn::Add(c.index[0], s.sc);
+  c.index[3] = hn::Add(c.index[2], hn::Set(di, 1));
+  // As bilinear_weights multiplies them.
+  c.weight[0] = hn::IfThenElseZero(s.active, hn::Mul(b0, c0));
+  c.weight[1] = hn::IfThenElseZero(s.active, hn::Mul(b1, c0));
+  c.weight[2] = hn::IfThenElseZero(s.active, hn::Mul(b0, c1));
+  c.weight[3] = hn::IfThenElseZero(s.active, hn::Mul(b1, c1));
   return out;
 }
 
@@ -222,7 +289,7 @@ HWY_INLINE Bundle bundle_at(const RayTable& t, std::size_t r, std::size_t n, int
   b.pairs = true;
   for (std::size_t l = 0; l < n; ++l) {
     const std::size_t i = r + l;
-    b.pairs = b.pairs && t.stride_b[i] == 1;
+    b.pairs = b.pairs && t.stride_b[i] == 1 && t.n_b[i] >= 2 && t.n_c[i] >= 2;  // two pairs fit (pair_corners_at)
     if (axis >= 0 && t.axis[i] != axis) {
       all_on_axis = false;
       continue;
@@ -304,6 +371,18 @@ HWY_INLINE void scatter_add(DF df, const Corners<DF>& c, hn::Vec<DF> value, floa
       if (weight[q][l] != 0.0f) volume[index[q][l]] += weight[q][l];
 }
 
+// v[0] += w[0] and v[1] += w[1]: a pair of floats, with one load, add and store where the
+// target has 64-bit vectors.
+HWY_INLINE void add_pair(float* HWY_RESTRICT v, const float* HWY_RESTRICT w) {
+#if HWY_TARGET == HWY_SCALAR
+  v[0] += w[0];
+  v[1] += w[1];
+#else
+  const hn::CappedTag<float, 2> d2;
+  hn::StoreU(hn::Add(hn::LoadU(d2, v), hn::LoadU(d2, w)), d2, v);
+#endif
+}
+
 // Whether a kernel asks for its rows ahead (prefetch_span, below): in the volume, yes; in a tile,
 // which was just filled, no.
 enum class Rows { fetch_ahead, cached };
@@ -323,6 +402,62 @@ HWY_INLINE void prefetch_span(const float* first, const float* last) {
 HWY_INLINE void prefetch_corner_rows(const float* v, std::ptrdiff_t dc) {
   hwy::Prefetch(v);
   hwy::Prefetch(v + dc);
+}
+
+// The lines of the pairs at row0[l] and row1[l] (voxel indices) of every 8th lane and the last:
+// 8 lanes' pairs span a line or two.
+HWY_INLINE void prefetch_pair_rows(const float* volume, const std::int32_t* row0, const std::int32_t* row1, int lanes) {
+  for (int l = 0; l < lanes; l += 8) {
+    hwy::Prefetch(volume + row0[l]);
+    hwy::Prefetch(volume + row1[l]);
+  }
+  hwy::Prefetch(volume + row0[lanes - 1] + 1);
+  hwy::Prefetch(volume + row1[lanes - 1] + 1);
+}
+
+// Slices per pass of the rim paths (scatter_add_rim_slices below, add_rim_samples).
+inline constexpr int kRimBatch = 16;
+
+// The lanes of a mask as bits (lane l at bit l).
+template <class DF>
+HWY_INLINE std::uint32_t lane_bits(DF df, hn::Mask<DF> m) {
+  std::uint8_t bytes[8] = {};
+  hn::StoreMaskBits(df, m, bytes);
+  return static_cast<std::uint32_t>(bytes[0]) | static_cast<std::uint32_t>(bytes[1]) << 8;
+}
+
+// The back projection's rim slices [k_lo, k_hi] of a pairs bundle for the lanes in `lanes`:
+// scatter_add for pair_corners_at's samples, two pairs per lane and no test per corner. Two
+// passes, as scatter_add_interior_slices (and for the same reasons): every slice's pairs first,
+// their lines asked for with Rows::fetch_ahead, then the additions lane by lane. Lanes outside
+// a slice's active ones touch nothing there: their voxel 0 may be in another thread's slab.
+template <class DF>
+HWY_INLINE void scatter_add_rim_slices(DF df, const RayTable& t, std::size_t r, int k_lo, int k_hi, hn::Mask<DF> lanes,
+                                       hn::Vec<DF> value, float* HWY_RESTRICT volume, Rows fetch) {
+  const hn::RebindToSigned<DF> di;
+  const int N = static_cast<int>(hn::Lanes(df));
+  HWY_ALIGN std::int32_t row0[kRimBatch][kMaxLanes], row1[kRimBatch][kMaxLanes];
+  HWY_ALIGN float weight0[kRimBatch][2 * kMaxLanes], weight1[kRimBatch][2 * kMaxLanes];  // lane l's pair at 2l
+  std::uint32_t active[kRimBatch];
+  for (int k0 = k_lo; k0 <= k_hi; k0 += kRimBatch) {
+    const int count = std::min(kRimBatch, k_hi - k0 + 1);
+    for (int i = 0; i < count; ++i) {
+      const PairCorners<DF> c = pair_corners_at(df, t, r, k0 + i, lanes);
+      hn::Store(c.corners.index[0], di, row0[i]);
+      hn::Store(c.corners.index[2], di, row1[i]);
+      const auto weight = [&](int q) { return hn::Mul(c.corners.weight[q], value); };
+      hn::StoreInterleaved2(weight(0), weight(1), df, weight0[i]);
+      hn::StoreInterleaved2(weight(2), weight(3), df, weight1[i]);
+      active[i] = lane_bits(df, c.active);
+      if (fetch == Rows::fetch_ahead) prefetch_pair_rows(volume, row0[i], row1[i], N);
+    }
+    for (int l = 0; l < N; ++l)
+      for (int i = 0; i < count; ++i) {
+        if (!(active[i] >> l & 1u)) continue;
+        add_pair(volume + row0[i][l], weight0[i] + 2 * l);
+        add_pair(volume + row1[i][l], weight1[i] + 2 * l);
+      }
+  }
 }
 
 #if HWY_TARGET == HWY_AVX2
@@ -432,12 +567,11 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
         prefetch_corner_rows(volume + index[i][N - 1] + 1, dc);
       }
     if (pairs) {
-      const hn::CappedTag<float, 2> d2;
       for (int l = 0; l < N; ++l)
         for (int i = 0; i < count; ++i) {
           float* v = volume + index[i][l];
-          hn::StoreU(hn::Add(hn::LoadU(d2, v), hn::LoadU(d2, weight[i][0] + 2 * l)), d2, v);
-          hn::StoreU(hn::Add(hn::LoadU(d2, v + dc), hn::LoadU(d2, weight[i][2] + 2 * l)), d2, v + dc);
+          add_pair(v, weight[i][0] + 2 * l);
+          add_pair(v + dc, weight[i][2] + 2 * l);
         }
       continue;
     }
