@@ -45,7 +45,7 @@ HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_
     } else {
       hn::Vec<DF> sample;
       if (!b.window || !interpolate_window(df, t, volume, b.r, k, sample))
-        sample = interpolate(df, volume, corners_at(df, t, b.r, k, all));
+        sample = interpolate(df, volume, corners_at(df, t, b.r, k, all).corners);
       sum = hn::Add(sum, sample);
     }
   }
@@ -54,7 +54,8 @@ HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_
 
 // volume += the adjoint of march_forward for `value` (already times the path length), for the
 // lanes in `lanes`. The interior slices go lane by lane through scatter_add_interior_slices on
-// every target. (AVX-512 had a row window for them, placing the lanes' weights by expand and
+// every target, the masked ones (on the rim, or with lanes of other axes) through
+// scatter_add_rim_slices. (AVX-512 had a row window for them, placing the lanes' weights by expand and
 // permutes and updating the rows whole, one slice at a time: on the Zen 4 it took 1.12-1.3x
 // longer than this scatter, with or without its rows asked for ahead; benchmarks/README.md,
 // session 30.)
@@ -66,12 +67,10 @@ HWY_INLINE void march_back(DF df, const RayTable& t, const Bundle& b, hn::Vec<DF
       const int last = std::min(k_hi, b.in_hi);
       scatter_add_interior_slices(df, t, b.r, k, last, value, volume, fetch);
       k = last;
-    } else if (b.pairs) {  // every rim slice up to the interior or the end
+    } else {  // every masked slice up to the interior or the end
       const int last = k < b.in_lo ? std::min(k_hi, b.in_lo - 1) : k_hi;
-      scatter_add_rim_slices(df, t, b.r, k, last, lanes, value, volume, fetch);
+      scatter_add_rim_slices(df, t, b, k, last, lanes, value, volume, fetch);
       k = last;
-    } else {
-      scatter_add(df, corners_at(df, t, b.r, k, lanes), value, volume);
     }
   }
 }

@@ -140,24 +140,34 @@ struct MaskedSample {
   }
 };
 
+// A masked sample's corners and the lanes that take part (the others read voxel 0 with weight
+// zero).
 template <class DF>
-HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k, hn::Mask<DF> lanes) {
+struct MaskedCorners {
+  Corners<DF> corners;
+  hn::Mask<DF> active;
+};
+
+template <class DF>
+HWY_INLINE MaskedCorners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k, hn::Mask<DF> lanes) {
   const hn::RebindToSigned<DF> di;
   const MaskedSample<DF> s(df, t, r, k, lanes);
   const auto zero = hn::Zero(di), one = hn::Set(di, 1);
   const auto nb1 = hn::Sub(s.nb, one), nc1 = hn::Sub(s.nc, one);
   const auto jb0 = hn::Min(hn::Max(s.p.ib, zero), nb1), jb1 = hn::Min(hn::Max(hn::Add(s.p.ib, one), zero), nb1);
   const auto jc0 = hn::Min(hn::Max(s.p.ic, zero), nc1), jc1 = hn::Min(hn::Max(hn::Add(s.p.ic, one), zero), nc1);
-  Corners<DF> out;
-  out.index[0] = s.index(jb0, jc0);
-  out.index[1] = s.index(jb1, jc0);
-  out.index[2] = s.index(jb0, jc1);
-  out.index[3] = s.index(jb1, jc1);
-  bilinear_weights(s.p, out.weight);
-  out.weight[0] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb0, s.vc0)), out.weight[0]);
-  out.weight[1] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb1, s.vc0)), out.weight[1]);
-  out.weight[2] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb0, s.vc1)), out.weight[2]);
-  out.weight[3] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb1, s.vc1)), out.weight[3]);
+  MaskedCorners<DF> out;
+  out.active = s.active;
+  Corners<DF>& c = out.corners;
+  c.index[0] = s.index(jb0, jc0);
+  c.index[1] = s.index(jb1, jc0);
+  c.index[2] = s.index(jb0, jc1);
+  c.index[3] = s.index(jb1, jc1);
+  bilinear_weights(s.p, c.weight);
+  c.weight[0] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb0, s.vc0)), c.weight[0]);
+  c.weight[1] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb1, s.vc0)), c.weight[1]);
+  c.weight[2] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb0, s.vc1)), c.weight[2]);
+  c.weight[3] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb1, s.vc1)), c.weight[3]);
   return out;
 }
 
@@ -170,12 +180,6 @@ HWY_INLINE Corners<DF> corners_at(DF df, const RayTable& t, std::size_t r, int k
 // float weighs corner b. Along c the same. The weights are corners_at's, bit for bit, moved;
 // lanes outside `active` read voxel 0 with weight zero. Half the gathers of corners_at's four
 // on the volume's rim, and no test per corner in the back projection's scatter.
-template <class DF>
-struct PairCorners {
-  Corners<DF> corners;
-  hn::Mask<DF> active;
-};
-
 // Weights of a pair of floats at j = clamp(i, 0, n - 2) along one axis, from the corners'
 // weights w0 (corner i) and w1 (corner i + 1), each already zero where outside.
 template <class DF>
@@ -188,7 +192,7 @@ HWY_INLINE void pair_weights(DF df, hn::Vec<hn::RebindToSigned<DF>> i, hn::Vec<h
 }
 
 template <class DF>
-HWY_INLINE PairCorners<DF> pair_corners_at(DF df, const RayTable& t, std::size_t r, int k, hn::Mask<DF> lanes) {
+HWY_INLINE MaskedCorners<DF> pair_corners_at(DF df, const RayTable& t, std::size_t r, int k, hn::Mask<DF> lanes) {
   const hn::RebindToSigned<DF> di;
   const MaskedSample<DF> s(df, t, r, k, lanes);
   const auto zero = hn::Zero(di), two = hn::Set(di, 2);
@@ -198,7 +202,7 @@ HWY_INLINE PairCorners<DF> pair_corners_at(DF df, const RayTable& t, std::size_t
   hn::Vec<DF> b0, b1, c0, c1;
   pair_weights(df, s.p.ib, nb2, hn::IfThenElseZero(s.vb0, hn::Sub(one, s.p.fb)), hn::IfThenElseZero(s.vb1, s.p.fb), b0, b1);
   pair_weights(df, s.p.ic, nc2, hn::IfThenElseZero(s.vc0, hn::Sub(one, s.p.fc)), hn::IfThenElseZero(s.vc1, s.p.fc), c0, c1);
-  PairCorners<DF> out;
+  MaskedCorners<DF> out;
   out.active = s.active;
   Corners<DF>& c = out.corners;
   c.index[0] = s.index(jb, jc);
@@ -352,25 +356,6 @@ HWY_INLINE hn::Vec<DF> interpolate_pairs(DF df, const float* HWY_RESTRICT volume
 }
 
 
-// volume[index] += weight * value over the four corners of every lane, lane by lane (lanes
-// often share a voxel). A zero weight touches nothing, which also keeps lanes of other axes
-// out of voxels outside the slab. (A gather, add and scatter per corner was tried: 1.7x
-// slower on Zen 5, the next corner's gather waiting for the scatter's stores.)
-template <class DF>
-HWY_INLINE void scatter_add(DF df, const Corners<DF>& c, hn::Vec<DF> value, float* HWY_RESTRICT volume) {
-  const hn::RebindToSigned<DF> di;
-  const int N = static_cast<int>(hn::Lanes(df));
-  HWY_ALIGN std::int32_t index[4][kMaxLanes];
-  HWY_ALIGN float weight[4][kMaxLanes];
-  for (int q = 0; q < 4; ++q) {
-    hn::Store(c.index[q], di, index[q]);
-    hn::Store(hn::Mul(c.weight[q], value), df, weight[q]);
-  }
-  for (int l = 0; l < N; ++l)
-    for (int q = 0; q < 4; ++q)
-      if (weight[q][l] != 0.0f) volume[index[q][l]] += weight[q][l];
-}
-
 // v[0] += w[0] and v[1] += w[1]: a pair of floats, with one load, add and store where the
 // target has 64-bit vectors.
 HWY_INLINE void add_pair(float* HWY_RESTRICT v, const float* HWY_RESTRICT w) {
@@ -426,36 +411,56 @@ HWY_INLINE std::uint32_t lane_bits(DF df, hn::Mask<DF> m) {
   return static_cast<std::uint32_t>(bytes[0]) | static_cast<std::uint32_t>(bytes[1]) << 8;
 }
 
-// The back projection's rim slices [k_lo, k_hi] of a pairs bundle for the lanes in `lanes`:
-// scatter_add for pair_corners_at's samples, two pairs per lane and no test per corner. Two
-// passes, as scatter_add_interior_slices (and for the same reasons): every slice's pairs first,
-// their lines asked for with Rows::fetch_ahead, then the additions lane by lane. Lanes outside
-// a slice's active ones touch nothing there: their voxel 0 may be in another thread's slab.
+// The back projection's masked slices [k_lo, k_hi] of bundle b (on the volume's rim, or with
+// lanes of other axes) for the lanes in `lanes`: volume[index] += weight * value over each
+// sample's corners, lane by lane (lanes often share a voxel). Pairs bundles add
+// pair_corners_at's two pairs, the others corners_at's four corners. Corners outside the volume
+// weigh zero at a voxel of the same slice, so no corner is tested; lanes outside a slice's
+// active ones touch nothing there (their voxel 0 may be in another thread's slab). Two passes,
+// as scatter_add_interior_slices (and for the same reasons): every slice's corners first, their
+// lines asked for with Rows::fetch_ahead, then the additions. Slice by slice, testing each
+// corner's weight, the additions waited for their lines: 15 % of BackRays' time in spherical
+// views on the Zen 4 (session 31). (A gather, add and scatter per corner was tried: 1.7x slower
+// on Zen 5, the next corner's gather waiting for the scatter's stores.)
 template <class DF>
-HWY_INLINE void scatter_add_rim_slices(DF df, const RayTable& t, std::size_t r, int k_lo, int k_hi, hn::Mask<DF> lanes,
+HWY_INLINE void scatter_add_rim_slices(DF df, const RayTable& t, const Bundle& b, int k_lo, int k_hi, hn::Mask<DF> lanes,
                                        hn::Vec<DF> value, float* HWY_RESTRICT volume, Rows fetch) {
   const hn::RebindToSigned<DF> di;
   const int N = static_cast<int>(hn::Lanes(df));
-  HWY_ALIGN std::int32_t row0[kRimBatch][kMaxLanes], row1[kRimBatch][kMaxLanes];
-  HWY_ALIGN float weight0[kRimBatch][2 * kMaxLanes], weight1[kRimBatch][2 * kMaxLanes];  // lane l's pair at 2l
+  HWY_ALIGN std::int32_t index[kRimBatch][4][kMaxLanes];  // pairs: index[i][0] and [i][2] only
+  HWY_ALIGN float weight[kRimBatch][4][kMaxLanes];        // pairs: weight[i][q][2l + (0, 1)], q = 0, 2
   std::uint32_t active[kRimBatch];
   for (int k0 = k_lo; k0 <= k_hi; k0 += kRimBatch) {
     const int count = std::min(kRimBatch, k_hi - k0 + 1);
     for (int i = 0; i < count; ++i) {
-      const PairCorners<DF> c = pair_corners_at(df, t, r, k0 + i, lanes);
-      hn::Store(c.corners.index[0], di, row0[i]);
-      hn::Store(c.corners.index[2], di, row1[i]);
-      const auto weight = [&](int q) { return hn::Mul(c.corners.weight[q], value); };
-      hn::StoreInterleaved2(weight(0), weight(1), df, weight0[i]);
-      hn::StoreInterleaved2(weight(2), weight(3), df, weight1[i]);
-      active[i] = lane_bits(df, c.active);
-      if (fetch == Rows::fetch_ahead) prefetch_pair_rows(volume, row0[i], row1[i], N);
+      const MaskedCorners<DF> m = b.pairs ? pair_corners_at(df, t, b.r, k0 + i, lanes) : corners_at(df, t, b.r, k0 + i, lanes);
+      const Corners<DF>& c = m.corners;
+      active[i] = lane_bits(df, m.active);
+      const auto weighed = [&](int q) { return hn::Mul(c.weight[q], value); };
+      if (b.pairs) {
+        for (int q = 0; q < 4; q += 2) {
+          hn::Store(c.index[q], di, index[i][q]);
+          hn::StoreInterleaved2(weighed(q), weighed(q + 1), df, weight[i][q]);
+        }
+        if (fetch == Rows::fetch_ahead) prefetch_pair_rows(volume, index[i][0], index[i][2], N);
+        continue;
+      }
+      for (int q = 0; q < 4; ++q) {
+        hn::Store(c.index[q], di, index[i][q]);
+        hn::Store(weighed(q), df, weight[i][q]);
+        if (fetch == Rows::fetch_ahead)  // the lanes' corners lie in rows or planes of their own
+          for (int l = 0; l < N; ++l) hwy::Prefetch(volume + index[i][q][l]);
+      }
     }
     for (int l = 0; l < N; ++l)
       for (int i = 0; i < count; ++i) {
         if (!(active[i] >> l & 1u)) continue;
-        add_pair(volume + row0[i][l], weight0[i] + 2 * l);
-        add_pair(volume + row1[i][l], weight1[i] + 2 * l);
+        if (b.pairs) {
+          add_pair(volume + index[i][0][l], weight[i][0] + 2 * l);
+          add_pair(volume + index[i][2][l], weight[i][2] + 2 * l);
+        } else {
+          for (int q = 0; q < 4; ++q) volume[index[i][q][l]] += weight[i][q][l];
+        }
       }
   }
 }
@@ -522,8 +527,8 @@ HWY_INLINE void interior_corners_avx2(const RayTable& t, std::size_t r, int k0, 
 #endif
 
 // The interior slices [k_lo, k_hi] of bundle r, in order, scattered lane by lane like
-// scatter_add but where every lane is on the slab's axis and every corner inside the volume: no
-// test per corner, and corners 1 to 3 are offsets of corner 0. Two passes over up to
+// scatter_add_rim_slices (above) but where every lane is on the slab's axis and every corner
+// inside the volume: no masks, and corners 1 to 3 are offsets of corner 0. Two passes over up to
 // kInteriorBatch slices: every slice's corners first, then the scatters (as the forward
 // projection's add_window_samples; 6-14 % faster on the Zen 3, session 23). The scatters go lane
 // by lane, each lane through every slice: neighbouring lanes share voxels, and a lane's stores
@@ -531,7 +536,7 @@ HWY_INLINE void interior_corners_avx2(const RayTable& t, std::size_t r, int k0, 
 // (1.05-1.06x, session 26). Where b is the contiguous axis (all but rays along x outside tiles),
 // corners b and b + 1 are added as one pair of floats, their weights stored interleaved: half
 // the loads and stores (1.04-1.13x, session 26). A voxel still receives its lanes in order and
-// each its own float addition, so the sums are those of scatter_add. With Rows::fetch_ahead, the
+// each its own float addition, as on the masked path. With Rows::fetch_ahead, the
 // pairs' lines are asked for between the passes (prefetch_span, above).
 inline constexpr int kInteriorBatch = 16;
 template <class DF>
