@@ -171,15 +171,6 @@ HWY_INLINE MaskedCorners<DF> corners_at(DF df, const RayTable& t, std::size_t r,
   return out;
 }
 
-// The sample of corners_at as two pairs of neighbouring floats, for bundles whose b is the
-// contiguous axis (Bundle::pairs): `corners` as an interior sample has them (index[0] the pair in
-// row c, index[2] the pair in row c + 1; corners 1 and 3 one voxel on), with each pair's first
-// voxel clamped so that both pairs are inside the volume. A corner outside the volume then has
-// no place in the pairs, or its neighbour inside takes its place: at b = -1 the pair starts at
-// 0 and its first float weighs corner b + 1; at b = n - 1 it starts at n - 2 and its second
-// float weighs corner b. Along c the same. The weights are corners_at's, bit for bit, moved;
-// lanes outside `active` read voxel 0 with weight zero. Half the gathers of corners_at's four
-// on the volume's rim, and no test per corner in the back projection's scatter.
 // Weights of a pair of floats at j = clamp(i, 0, n - 2) along one axis, from the corners'
 // weights w0 (corner i) and w1 (corner i + 1), each already zero where outside.
 template <class DF>
@@ -191,6 +182,15 @@ HWY_INLINE void pair_weights(DF df, hn::Vec<hn::RebindToSigned<DF>> i, hn::Vec<h
   second = hn::IfThenZeroElse(low, hn::IfThenElse(high, w0, w1));
 }
 
+// The sample of corners_at as two pairs of neighbouring floats, for bundles whose b is the
+// contiguous axis (Bundle::pairs): `corners` as an interior sample has them (index[0] the pair in
+// row c, index[2] the pair in row c + 1; corners 1 and 3 one voxel on), with each pair's first
+// voxel clamped so that both pairs are inside the volume. A corner outside the volume then has
+// no place in the pairs, or its neighbour inside takes its place: at b = -1 the pair starts at
+// 0 and its first float weighs corner b + 1; at b = n - 1 it starts at n - 2 and its second
+// float weighs corner b. Along c the same. The weights are corners_at's, bit for bit, moved;
+// lanes outside `active` read voxel 0 with weight zero. Half the gathers of corners_at's four
+// on the volume's rim, and half the additions back.
 template <class DF>
 HWY_INLINE MaskedCorners<DF> pair_corners_at(DF df, const RayTable& t, std::size_t r, int k, hn::Mask<DF> lanes) {
   const hn::RebindToSigned<DF> di;
