@@ -403,9 +403,10 @@ HWY_INLINE void prefetch_pair_rows(const float* volume, const std::int32_t* row0
 // Slices per pass of the rim paths (scatter_add_rim_slices below, add_rim_samples).
 inline constexpr int kRimBatch = 16;
 
-// The lanes of a mask as bits (lane l at bit l).
+// The lanes of a mask as bits (lane l at bit l): the first two bytes StoreMaskBits writes.
 template <class DF>
 HWY_INLINE std::uint32_t lane_bits(DF df, hn::Mask<DF> m) {
+  static_assert(kMaxLanes <= 16, "lane_bits reads two bytes of mask bits");
   std::uint8_t bytes[8] = {};
   hn::StoreMaskBits(df, m, bytes);
   return static_cast<std::uint32_t>(bytes[0]) | static_cast<std::uint32_t>(bytes[1]) << 8;
