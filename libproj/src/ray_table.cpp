@@ -93,7 +93,6 @@ void RayTable::shape(int view_count, int row_count, int lanes) {
 
 void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int slot, const LanePath& path, int line_begin,
                     int ray_begin, int ray_end) {
-  const auto strides = layout.strides();
   double u[kMaxLanes], v[kMaxLanes];
   PreparedRays p;
   // A run of entries at a time: the rest of a bundle (kMaxLanes lanes of one line) within the range.
@@ -112,28 +111,7 @@ void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int slot, 
       u[l] = pu, v[l] = pv;
     }
     prepare_rays(rays, layout, origin_b, origin_c, u, v, count, p);
-    for (int l = 0; l < count; ++l) {
-      const std::size_t i = first + static_cast<std::size_t>(l);
-      const int a = static_cast<int>(p.axis[l]);
-      const auto [b, c] = other_axes(a);
-      pb_mid[i] = static_cast<float>(p.pb_mid[l]);
-      beta_b[i] = static_cast<float>(p.beta_b[l]);
-      pc_mid[i] = static_cast<float>(p.pc_mid[l]);
-      beta_c[i] = static_cast<float>(p.beta_c[l]);
-      weight[i] = static_cast<float>(p.weight_mm[l]);
-      k_mid[i] = 0.5f * static_cast<float>(layout.size[static_cast<std::size_t>(a)] - 1);
-      k_first[i] = static_cast<std::int32_t>(p.k_first[l]);
-      k_last[i] = static_cast<std::int32_t>(p.k_last[l]);
-      axis[i] = a;
-      stride_a[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(a)]);
-      stride_b[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(b)]);
-      stride_c[i] = static_cast<std::int32_t>(strides[static_cast<std::size_t>(c)]);
-      n_b[i] = layout.size[static_cast<std::size_t>(b)];
-      n_c[i] = layout.size[static_cast<std::size_t>(c)];
-      in_first[i] = static_cast<std::int32_t>(p.in_first[l]);
-      in_last[i] = static_cast<std::int32_t>(p.in_last[l]);
-      if (in_last[i] < in_first[i]) in_first[i] = 0, in_last[i] = -1;
-    }
+    store_rays(p, layout, count, *this, first);
   }
 }
 
@@ -149,14 +127,14 @@ void RayTable::copy_entries(const RayTable& from, std::size_t from_entry, std::s
 }
 
 void RayTable::empty(std::size_t begin, std::size_t end) {
-  for (std::size_t i = begin; i < end; ++i) {
-    pb_mid[i] = beta_b[i] = pc_mid[i] = beta_c[i] = weight[i] = k_mid[i] = value[i] = 0.0f;
-    k_first[i] = in_first[i] = 0;
-    k_last[i] = in_last[i] = -1;
-    axis[i] = -1;
-    stride_a[i] = stride_b[i] = stride_c[i] = 0;
-    n_b[i] = n_c[i] = 1;
-  }
+  // Array by array: one loop over all of them is not vectorised (the float arrays might alias).
+  const auto set = [&](auto& array, auto to) {
+    std::fill(array.begin() + static_cast<std::ptrdiff_t>(begin), array.begin() + static_cast<std::ptrdiff_t>(end), to);
+  };
+  for (auto* v : {&pb_mid, &beta_b, &pc_mid, &beta_c, &weight, &k_mid, &value}) set(*v, 0.0f);
+  for (auto* v : {&k_first, &in_first, &stride_a, &stride_b, &stride_c}) set(*v, 0);
+  for (auto* v : {&k_last, &in_last, &axis}) set(*v, -1);
+  for (auto* v : {&n_b, &n_c}) set(*v, 1);
 }
 
 }  // namespace ctk::detail

@@ -124,6 +124,8 @@ struct PreparedRays {
 /// kMaxLanes), SIMD across rays; origin_b and origin_c are the table's grid origin.
 void prepare_rays(const ViewRays& rays, const VolumeLayout& layout, int origin_b, int origin_c, const double* u,
                   const double* v, int count, PreparedRays& out);
+/// Entries [first, first + count) of `table` from p (count <= kMaxLanes), as fill() stores them.
+void store_rays(const PreparedRays& p, const VolumeLayout& layout, int count, RayTable& table, std::size_t first);
 
 // Kernels (Highway, dispatched to the widest SIMD unit at run time).
 /// out[e] = line integral of the ray at entry e, for every entry in use (out sized like the table).
