@@ -1,6 +1,7 @@
 // ctk bench: throughput of the fast Joseph projector against the naive reference, measured in
 // one run on the standard problem (see ctk/proj/standard_problem.hpp), as a table or JSON;
-// --repeat gives medians of runs in which the two take turns.
+// --repeat gives medians of runs in which the two take turns; --simd runs the fast projector on
+// a narrower SIMD target than the widest.
 // --dump writes what the fast projector computed on the reference's views, so a yardstick outside
 // the project (benchmarks/yardstick.py) can check it with its own arithmetic.
 #include <chrono>
@@ -29,6 +30,7 @@ struct BenchOptions {
   int scale = 1;
   int threads = 0;
   int repeat = 1;
+  std::string simd;  // empty: the widest target
   bool json = false;
   std::filesystem::path dump;  // empty: no dump
 };
@@ -168,10 +170,13 @@ nlohmann::json cpu_identity() {
 
 void run_bench(const BenchOptions& o) {
   std::ostream& log = o.json ? std::cerr : std::cout;
+  JosephProjector::use_simd_target(o.simd);
   const JosephProjector fast({o.threads, 8});
   nlohmann::json result;
   result["threads"] = fast.threads();
-  result["simd"] = {{"target", JosephProjector::simd_target()}, {"float_lanes", JosephProjector::simd_lanes()}};
+  result["simd"] = {{"target", JosephProjector::simd_target()},
+                    {"float_lanes", JosephProjector::simd_lanes()},
+                    {"available", JosephProjector::simd_targets()}};
   result["cpu"] = cpu_identity();
   if (result["cpu"].contains("model_name"))
     log << "cpu: " << result["cpu"]["model_name"].get<std::string>() << " (family " << result["cpu"].value("family", 0)
@@ -223,6 +228,9 @@ void register_bench(CLI::App& app) {
   cmd->add_option("--repeat", options->repeat,
                   "Time fast and reference this many times each, taking turns, and report the medians")
       ->capture_default_str()->check(CLI::Range(1, 100));
+  cmd->add_option("--simd", options->simd,
+                  "Run the fast projector on this SIMD target instead of the widest (to see what each gives)")
+      ->check(CLI::IsMember(JosephProjector::simd_targets()));
   cmd->add_flag("--json", options->json, "Print the result as JSON on stdout (the table goes to stderr)");
   cmd->add_option("--dump", options->dump,
                   "Write the fast projector's results on the reference's views to this folder (for benchmarks/yardstick.py)");

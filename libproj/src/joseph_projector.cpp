@@ -1,8 +1,10 @@
 #include "ctk/proj/joseph_projector.hpp"
 
+#include <hwy/targets.h>
 #include <omp.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 #include <type_traits>
 
@@ -21,6 +23,34 @@ JosephProjector::JosephProjector(ProjectorOptions options) : options_(options) {
 int JosephProjector::threads() const { return options_.threads > 0 ? options_.threads : omp_get_max_threads(); }
 std::string JosephProjector::simd_target() { return detail::simd_target_name(); }
 int JosephProjector::simd_lanes() { return detail::simd_float_lanes(); }
+
+namespace {
+std::int64_t chosen_targets = 0;  // as Highway takes it: 0 for every target the CPU has
+}  // namespace
+
+std::vector<std::string> JosephProjector::simd_targets() {
+  hwy::SetSupportedTargetsForTest(0);  // all of them, whatever use_simd_target chose
+  std::vector<std::string> names;
+  for (const std::int64_t target : hwy::SupportedAndGeneratedTargets()) names.emplace_back(hwy::TargetName(target));
+  hwy::SetSupportedTargetsForTest(chosen_targets);
+  return names;
+}
+
+void JosephProjector::use_simd_target(const std::string& target) {
+  hwy::SetSupportedTargetsForTest(0);
+  std::int64_t chosen = 0;
+  std::string choices;
+  for (const std::int64_t t : hwy::SupportedAndGeneratedTargets()) {
+    if (target == hwy::TargetName(t)) chosen = t;
+    choices += std::string(choices.empty() ? "" : ", ") + hwy::TargetName(t);
+  }
+  if (chosen == 0 && !target.empty()) {
+    hwy::SetSupportedTargetsForTest(chosen_targets);
+    throw std::invalid_argument("SIMD target '" + target + "': this binary on this CPU runs " + choices);
+  }
+  chosen_targets = chosen;
+  hwy::SetSupportedTargetsForTest(chosen_targets);
+}
 
 namespace {
 

@@ -356,6 +356,23 @@ TEST(JosephProjector, ASourceInsideTheVolumeAgreesWithTheReference) {
   testing::on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 51), 1e-5); });
 }
 
+// ctk bench --simd: the projectors run the target they are told to, and the widest by default.
+TEST(JosephProjector, RunsTheSimdTargetItIsToldTo) {
+  const std::vector<std::string> targets = JosephProjector::simd_targets();
+  ASSERT_FALSE(targets.empty());
+  EXPECT_EQ(JosephProjector::simd_target(), targets.front());
+  for (const std::string& target : targets) {
+    JosephProjector::use_simd_target(target);
+    EXPECT_EQ(JosephProjector::simd_target(), target);
+    EXPECT_EQ(JosephProjector::simd_lanes(), target.starts_with("AVX3") ? 16 : target == "AVX2" ? 8 : target == "SCALAR" ? 1 : 4);
+    EXPECT_EQ(JosephProjector::simd_targets(), targets);  // the list does not depend on the choice
+  }
+  EXPECT_THROW(JosephProjector::use_simd_target("NEON"), std::invalid_argument);
+  EXPECT_EQ(JosephProjector::simd_target(), targets.back());  // a bad name leaves the choice
+  JosephProjector::use_simd_target("");
+  EXPECT_EQ(JosephProjector::simd_target(), targets.front());
+}
+
 TEST(JosephProjector, RaysMissingTheVolumeGiveZero) {
   const VolumeLayout layout = VolumeLayout::centred({16, 16, 16}, {1, 1, 1});
   Volume x(layout);

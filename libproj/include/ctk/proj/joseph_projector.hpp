@@ -33,6 +33,12 @@ class JosephProjector {
   /// The SIMD target chosen on this machine ("AVX3", "AVX2", ...) and its float lane count.
   static std::string simd_target();
   static int simd_lanes();
+  /// Every target this binary has kernels for and this CPU runs, widest first.
+  static std::vector<std::string> simd_targets();
+  /// From now on, every projector in the process runs `target` (one of simd_targets()), or the
+  /// widest again for "". For measuring what each target gives; not to be called while a
+  /// projection runs. Throws std::invalid_argument naming the choices for any other name.
+  static void use_simd_target(const std::string& target);
   int threads() const;
 
  private:
