@@ -1,8 +1,8 @@
 // Per SIMD target: preparing the rays of a run of table entries, SIMD across rays in double
-// precision, and storing them in the table. The same arithmetic as march_ray (which the reference projector marches with),
-// operation for operation, so the table holds the same numbers; compiled without contraction into
-// FMAs (CMakeLists.txt), which would round differently. Then the interior range, where the
-// kernels' mask-free paths may run.
+// precision, and storing them in the table. The same arithmetic as march_ray (which the reference
+// projector marches with), operation for operation, so the table holds the same numbers; compiled
+// without contraction into FMAs (CMakeLists.txt), which would round differently. Then the interior
+// range, where the kernels' mask-free paths may run.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "ray_table_fill.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
