@@ -7,6 +7,9 @@
 #include <array>
 #include <limits>
 #include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/proj/joseph_projector.hpp"
@@ -358,6 +361,9 @@ TEST(JosephProjector, ASourceInsideTheVolumeAgreesWithTheReference) {
 
 // ctk bench --simd: the projectors run the target they are told to, and the widest by default.
 TEST(JosephProjector, RunsTheSimdTargetItIsToldTo) {
+  struct WidestAfterwards {
+    ~WidestAfterwards() { JosephProjector::use_simd_target(""); }  // whatever fails here, later tests get the default
+  } restore;
   const std::vector<std::string> targets = JosephProjector::simd_targets();
   ASSERT_FALSE(targets.empty());
   EXPECT_EQ(JosephProjector::simd_target(), targets.front());
