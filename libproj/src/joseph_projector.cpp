@@ -26,26 +26,30 @@ int JosephProjector::simd_lanes() { return detail::simd_float_lanes(); }
 
 namespace {
 std::int64_t chosen_targets = 0;  // as Highway takes it: 0 for every target the CPU has
+
+// What the binary has kernels for and the CPU runs, as Highway numbers them, widest first,
+// whatever use_simd_target chose.
+std::vector<std::int64_t> runnable_targets() {
+  hwy::SetSupportedTargetsForTest(0);
+  std::vector<std::int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  hwy::SetSupportedTargetsForTest(chosen_targets);
+  return targets;
+}
 }  // namespace
 
 std::vector<std::string> JosephProjector::simd_targets() {
-  hwy::SetSupportedTargetsForTest(0);  // all of them, whatever use_simd_target chose
   std::vector<std::string> names;
-  for (const std::int64_t target : hwy::SupportedAndGeneratedTargets()) names.emplace_back(hwy::TargetName(target));
-  hwy::SetSupportedTargetsForTest(chosen_targets);
+  for (const std::int64_t target : runnable_targets()) names.emplace_back(hwy::TargetName(target));
   return names;
 }
 
 void JosephProjector::use_simd_target(const std::string& target) {
-  hwy::SetSupportedTargetsForTest(0);
   std::int64_t chosen = 0;
-  std::string choices;
-  for (const std::int64_t t : hwy::SupportedAndGeneratedTargets()) {
+  for (const std::int64_t t : runnable_targets())
     if (target == hwy::TargetName(t)) chosen = t;
-    choices += std::string(choices.empty() ? "" : ", ") + hwy::TargetName(t);
-  }
   if (chosen == 0 && !target.empty()) {
-    hwy::SetSupportedTargetsForTest(chosen_targets);
+    std::string choices;
+    for (const std::string& name : simd_targets()) choices += (choices.empty() ? "" : ", ") + name;
     throw std::invalid_argument("SIMD target '" + target + "': this binary on this CPU runs " + choices);
   }
   chosen_targets = chosen;
