@@ -152,8 +152,11 @@ inline constexpr int kWindowBatch = 16;
 
 // prefetch_span for a window's rows from `row` (rows sc apart): two, or three when a lane sits
 // a row up.
-HWY_INLINE void prefetch_window(const float* row, std::ptrdiff_t sc, int width, bool row_up) {
-  for (int j = 0; j < (row_up ? 3 : 2); ++j) prefetch_span(row + j * sc, row + j * sc + width - 1);
+template <int kWidth>
+HWY_INLINE void prefetch_window(const float* row, std::ptrdiff_t sc, bool row_up) {
+  prefetch_span<kWidth>(row);
+  prefetch_span<kWidth>(row + sc);
+  if (row_up) prefetch_span<kWidth>(row + 2 * sc);
 }
 
 #if HWY_TARGET == HWY_AVX2
@@ -171,34 +174,41 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
   const BundlePositionAvx2 position(t, r);
   const __m256i one = _mm256_set1_epi32(1), two = _mm256_set1_epi32(2), last_pos = _mm256_set1_epi32(2 * N - 2);
   const __m256 one_f = _mm256_set1_ps(1.0f);
+  const __m256i x_max_v = _mm256_set1_epi32(x_max), last_lane = _mm256_set1_epi32(N - 1);
   HWY_ALIGN std::int32_t pos[kWindowBatch][N], dc[kWindowBatch][N];
   HWY_ALIGN float fb[kWindowBatch][N], fc[kWindowBatch][N];
   std::ptrdiff_t offset[kWindowBatch];
+  int misfit[kWindowBatch];  // nonzero: the slice does not fit the window
   for (int k0 = k_lo; k0 <= k_hi; k0 += kWindowBatch) {
     const int count = std::min(kWindowBatch, k_hi - k0 + 1);
-    unsigned misfits = 0;  // bit i: slice k0 + i does not fit the window
-    for (int i = 0; i < count; ++i) {
-      const int k = k0 + i;
+    __m256 kf = _mm256_set1_ps(static_cast<float>(k0));
+    std::ptrdiff_t slice_offset = static_cast<std::ptrdiff_t>(k0 - origin_a) * slice;
+    for (int i = 0; i < count; ++i, kf = _mm256_add_ps(kf, one_f), slice_offset += slice) {
       __m256i ib, ic;
       __m256 fbi, fci;
-      position.at(k, ib, ic, fbi, fci);
-      const int x0 = std::min(std::max(std::min(_mm256_cvtsi256_si32(ib), _mm256_extract_epi32(ib, N - 1)), 0), x_max);
+      position.at(kf, ib, ic, fbi, fci);
+      // x0 and c0 as window_origin finds them, kept in vectors (no lane extractions and scalar
+      // clamps on the way to the rows: 4-8 % of a view's forward instructions, session 33).
+      const __m256i x0 = _mm256_min_epi32(
+          _mm256_max_epi32(_mm256_min_epi32(_mm256_broadcastd_epi32(_mm256_castsi256_si128(ib)), _mm256_permutevar8x32_epi32(ib, last_lane)),
+                           _mm256_setzero_si256()),
+          x_max_v);
       __m256i c0 = _mm256_min_epi32(ic, _mm256_permute2x128_si256(ic, ic, 1));
       c0 = _mm256_min_epi32(c0, _mm256_shuffle_epi32(c0, _MM_SHUFFLE(1, 0, 3, 2)));
       c0 = _mm256_min_epi32(c0, _mm256_shuffle_epi32(c0, _MM_SHUFFLE(2, 3, 0, 1)));
-      const __m256i p = _mm256_sub_epi32(ib, _mm256_set1_epi32(x0)), d = _mm256_sub_epi32(ic, c0);
+      const __m256i p = _mm256_sub_epi32(ib, x0), d = _mm256_sub_epi32(ic, c0);
       // Outside the window: p < 0, p + 1 > 2N - 1 or d > 2 (d >= 0), each a sign bit.
       const __m256i out = _mm256_or_si256(_mm256_or_si256(p, _mm256_sub_epi32(last_pos, p)), _mm256_sub_epi32(two, d));
-      misfits |= (_mm256_movemask_ps(_mm256_castsi256_ps(out)) != 0 ? 1u : 0u) << i;
+      misfit[i] = _mm256_movemask_ps(_mm256_castsi256_ps(out));
       _mm256_store_si256(reinterpret_cast<__m256i*>(pos[i]), p);
       _mm256_store_si256(reinterpret_cast<__m256i*>(dc[i]), d);
       _mm256_store_ps(fb[i], fbi);
       _mm256_store_ps(fc[i], fci);
-      offset[i] = static_cast<std::ptrdiff_t>(k - origin_a) * slice + static_cast<std::ptrdiff_t>(_mm256_cvtsi256_si32(c0)) * sc + x0;
-      if (fetch == Rows::fetch_ahead) prefetch_window(volume + offset[i], sc, 2 * N, !_mm256_testz_si256(d, d));
+      offset[i] = slice_offset + static_cast<std::ptrdiff_t>(_mm256_cvtsi256_si32(c0)) * sc + _mm256_cvtsi256_si32(x0);
+      if (fetch == Rows::fetch_ahead) prefetch_window<2 * N>(volume + offset[i], sc, !_mm256_testz_si256(d, d));
     }
     for (int i = 0; i < count; ++i) {
-      if (misfits >> i & 1u) {
+      if (misfit[i] != 0) {
         const hn::Full256<float> df;
         sum = _mm256_add_ps(sum, interpolate_pairs(df, volume, interior_corners_at(df, t, r, k0 + i)).raw);
         continue;
@@ -276,7 +286,7 @@ HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float*
       hn::Store(p.fb, df, fb[i]);
       hn::Store(p.fc, df, fc[i]);
       row[i] = volume + static_cast<std::ptrdiff_t>(k0 + i - origin_a) * slice + static_cast<std::ptrdiff_t>(c0) * sc + x0;
-      if (fetch == Rows::fetch_ahead) prefetch_window(row[i], sc, 2 * static_cast<int>(hn::Lanes(df)), !hn::AllFalse(di, hn::Gt(dci, hn::Zero(di))));
+      if (fetch == Rows::fetch_ahead) prefetch_window<2 * static_cast<int>(HWY_LANES(float))>(row[i], sc, !hn::AllFalse(di, hn::Gt(dci, hn::Zero(di))));
     }
     for (int i = 0; i < count; ++i) {
       hn::Vec<DF> sample;

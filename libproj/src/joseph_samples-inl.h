@@ -362,6 +362,11 @@ HWY_INLINE void add_pair(float* HWY_RESTRICT v, const float* HWY_RESTRICT w) {
 #if HWY_TARGET == HWY_SCALAR
   v[0] += w[0];
   v[1] += w[1];
+#elif HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
+  // With VEX encoding, w's load folds into the add as four floats: one instruction fewer per pair
+  // (w[2] and w[3] are read, never used; the weight buffers carry a spare slice for the last
+  // lane's).
+  _mm_storel_pi(reinterpret_cast<__m64*>(v), _mm_add_ps(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(v))), _mm_loadu_ps(w)));
 #else
   const hn::CappedTag<float, 2> d2;
   hn::StoreU(hn::Add(hn::LoadU(d2, v), hn::LoadU(d2, w)), d2, v);
@@ -372,15 +377,18 @@ HWY_INLINE void add_pair(float* HWY_RESTRICT v, const float* HWY_RESTRICT w) {
 // which was just filled, no.
 enum class Rows { fetch_ahead, cached };
 
-// Asks for the cache lines of volume[first .. last] (a few lines) ahead of the loads. The
-// kernels' first pass finds every slice's voxels a whole pass before the second loads them. In
-// spherical views those voxels are mostly outside L2 (each view reads the whole volume, and the
-// next view shares little of it), and without asking, the second pass met the misses about one
-// slice at a time (spherical views 1.05-1.2x faster each way on the Zen 3, circular ones
-// unchanged; benchmarks/README.md, session 29). Not for tiles: they were just filled.
-HWY_INLINE void prefetch_span(const float* first, const float* last) {
-  for (const float* p = first; p < last; p += 16) hwy::Prefetch(p);  // 16 floats: a 64-byte line
-  hwy::Prefetch(last);
+// Asks for the cache lines of first[0 .. kFloats - 1] ahead of the loads. The kernels' first
+// pass finds every slice's voxels a whole pass before the second loads them. In spherical views
+// those voxels are mostly outside L2 (each view reads the whole volume, and the next view shares
+// little of it), and without asking, the second pass met the misses about one slice at a time
+// (spherical views 1.05-1.2x faster each way on the Zen 3, circular ones unchanged;
+// benchmarks/README.md, session 29). Not for tiles: they were just filled. The width is a
+// constant so that this is straight-line code: as a loop over a run-time width it took 5-13 % of
+// a view's forward instructions on AVX2 (session 33).
+template <int kFloats>
+HWY_INLINE void prefetch_span(const float* first) {
+  for (int i = 0; i < kFloats - 1; i += 16) hwy::Prefetch(first + i);  // 16 floats: a 64-byte line
+  hwy::Prefetch(first + kFloats - 1);
 }
 
 // The same for the line of voxel v and of the voxel a row (dc) above it.
@@ -429,7 +437,7 @@ HWY_INLINE void scatter_add_rim_slices(DF df, const RayTable& t, const Bundle& b
   const hn::RebindToSigned<DF> di;
   const int N = static_cast<int>(hn::Lanes(df));
   HWY_ALIGN std::int32_t index[kRimBatch][4][kMaxLanes];  // pairs: index[i][0] and [i][2] only
-  HWY_ALIGN float weight[kRimBatch][4][kMaxLanes];        // pairs: weight[i][q][2l + (0, 1)], q = 0, 2
+  HWY_ALIGN float weight[kRimBatch + 1][4][kMaxLanes];   // pairs: weight[i][q][2l + (0, 1)], q = 0, 2; + 1: add_pair
   std::uint32_t active[kRimBatch];
   for (int k0 = k_lo; k0 <= k_hi; k0 += kRimBatch) {
     const int count = std::min(kRimBatch, k_hi - k0 + 1);
@@ -484,7 +492,11 @@ struct BundlePositionAvx2 {
         origin_c(_mm256_set1_epi32(t.origin_c)) {}
   // Lower corner (ib, ic) relative to the grid's origin and the fractions (fb, fc) at slice k.
   HWY_INLINE void at(int k, __m256i& ib, __m256i& ic, __m256& fb, __m256& fc) const {
-    const __m256 dk = _mm256_sub_ps(_mm256_set1_ps(static_cast<float>(k)), k_mid);
+    at(_mm256_set1_ps(static_cast<float>(k)), ib, ic, fb, fc);
+  }
+  // The same with k given as a float in every lane.
+  HWY_INLINE void at(__m256 k, __m256i& ib, __m256i& ic, __m256& fb, __m256& fc) const {
+    const __m256 dk = _mm256_sub_ps(k, k_mid);
     const __m256 pb = _mm256_fmadd_ps(dk, beta_b, pb_mid), pc = _mm256_fmadd_ps(dk, beta_c, pc_mid);
     const __m256 fb0 = _mm256_floor_ps(pb), fc0 = _mm256_floor_ps(pc);
     ib = _mm256_sub_epi32(_mm256_cvttps_epi32(fb0), origin_b);
@@ -503,12 +515,12 @@ HWY_INLINE void interior_corners_avx2(const RayTable& t, std::size_t r, int k0, 
   const __m256i sb = _mm256_set1_epi32(t.stride_b[r]), sc = _mm256_set1_epi32(t.stride_c[r]);
   const int origin_a = t.origin_a, sa = t.stride_a[r];  // read once: the stores below may alias t
   const __m256 one = _mm256_set1_ps(1.0f);
-  for (int i = 0; i < count; ++i) {
-    const int k = k0 + i;
+  __m256 kf = _mm256_set1_ps(static_cast<float>(k0));
+  for (int i = 0; i < count; ++i, kf = _mm256_add_ps(kf, one)) {
     __m256i ib, ic;
     __m256 fb, fc;
-    position.at(k, ib, ic, fb, fc);
-    const __m256i base = _mm256_set1_epi32((k - origin_a) * sa);
+    position.at(kf, ib, ic, fb, fc);
+    const __m256i base = _mm256_set1_epi32((k0 + i - origin_a) * sa);
     const __m256i i00 = _mm256_add_epi32(base, _mm256_add_epi32(_mm256_mullo_epi32(ib, sb), _mm256_mullo_epi32(ic, sc)));
     _mm256_store_si256(reinterpret_cast<__m256i*>(index[i]), i00);
     const __m256 gb = _mm256_sub_ps(one, fb), gc = _mm256_sub_ps(one, fc);
@@ -545,7 +557,7 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
                                             float* HWY_RESTRICT volume, Rows fetch) {
   const int N = static_cast<int>(hn::Lanes(df));
   HWY_ALIGN std::int32_t index[kInteriorBatch][kMaxLanes];
-  HWY_ALIGN float weight[kInteriorBatch][4][kMaxLanes];  // weight[i][q][l], or paired: weight[i][q][2l + (0, 1)]
+  HWY_ALIGN float weight[kInteriorBatch + 1][4][kMaxLanes];  // [i][q][l], or paired [i][q][2l + (0, 1)]; + 1: add_pair
   const std::int32_t db = t.stride_b[r], dc = t.stride_c[r];  // corner offsets, as in interior_corners_at
   const bool pairs = HWY_TARGET != HWY_SCALAR && db == 1;
 #if HWY_TARGET != HWY_AVX2
