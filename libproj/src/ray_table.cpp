@@ -115,17 +115,6 @@ void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int slot, 
   }
 }
 
-void RayTable::copy_entries(const RayTable& from, std::size_t from_entry, std::size_t to_entry, std::size_t n) {
-  const auto copy = [&](const auto& src, auto& dst) {
-    std::copy_n(src.begin() + static_cast<std::ptrdiff_t>(from_entry), n, dst.begin() + static_cast<std::ptrdiff_t>(to_entry));
-  };
-  copy(from.pb_mid, pb_mid), copy(from.beta_b, beta_b), copy(from.pc_mid, pc_mid), copy(from.beta_c, beta_c);
-  copy(from.weight, weight), copy(from.k_mid, k_mid), copy(from.value, value);
-  copy(from.k_first, k_first), copy(from.k_last, k_last), copy(from.axis, axis);
-  copy(from.stride_a, stride_a), copy(from.stride_b, stride_b), copy(from.stride_c, stride_c);
-  copy(from.n_b, n_b), copy(from.n_c, n_c), copy(from.in_first, in_first), copy(from.in_last, in_last);
-}
-
 void RayTable::empty(std::size_t begin, std::size_t end) {
   // Array by array: one loop over all of them is not vectorised (the float arrays might alias).
   const auto set = [&](auto& array, auto to) {

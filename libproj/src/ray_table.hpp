@@ -109,8 +109,6 @@ struct RayTable {
             int ray_begin, int ray_end);
   /// Marks entries [begin, end) empty: they touch nothing and project to zero.
   void empty(std::size_t begin, std::size_t end);
-  /// Copies `n` entries of `from`, starting at `from_entry`, to this table at `to_entry`.
-  void copy_entries(const RayTable& from, std::size_t from_entry, std::size_t to_entry, std::size_t n);
 };
 
 /// Up to kMaxLanes rays as march_ray prepares them, with the interior range (in_first, in_last:
