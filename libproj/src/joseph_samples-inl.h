@@ -42,20 +42,33 @@ struct SamplePosition {
   hn::Vec<DF> fb, fc;  // fractions along b and c
 };
 
+// Whole floats below 2^22 in magnitude as integers, minus an origin, in two instructions: adding
+// 1.5 * 2^23 places such a float exactly in the low mantissa bits, so the sum's bits minus the
+// constant's bits are the integer. A lane in its ray's range samples inside the grid (give or
+// take a voxel), far below 2^22; other lanes' indices are never used (masked paths give them
+// voxel 0 and weight zero). It replaces ConvertTo, whose fix-up for overflow cost four more
+// instructions per vector on AVX-512, twice per sample: forward 1.04-1.08x, back 1.01-1.02x on
+// the Zen 5, indices bit for bit the same (session 34).
+struct WholeToInt {
+  static constexpr float kMagic = 12582912.0f;  // 1.5 * 2^23
+  static constexpr std::int32_t kMagicBits = 0x4B400000;
+};
+
 // The rays of bundle r, loaded once for the samples of several slices (a loop that stores
 // would otherwise reload them: vector stores may alias the table).
 template <class DF>
 struct BundlePosition {
+  using VI = hn::Vec<hn::RebindToSigned<DF>>;
   hn::Vec<DF> k_mid, beta_b, pb_mid, beta_c, pc_mid;
-  int origin_b, origin_c;
+  VI shift_b, shift_c;  // the grid's origin along b and c plus WholeToInt::kMagicBits
   BundlePosition(DF df, const RayTable& t, std::size_t r)
       : k_mid(hn::LoadU(df, t.k_mid.data() + r)),
         beta_b(hn::LoadU(df, t.beta_b.data() + r)),
         pb_mid(hn::LoadU(df, t.pb_mid.data() + r)),
         beta_c(hn::LoadU(df, t.beta_c.data() + r)),
         pc_mid(hn::LoadU(df, t.pc_mid.data() + r)),
-        origin_b(t.origin_b),
-        origin_c(t.origin_c) {}
+        shift_b(hn::Set(hn::RebindToSigned<DF>(), WholeToInt::kMagicBits + t.origin_b)),
+        shift_c(hn::Set(hn::RebindToSigned<DF>(), WholeToInt::kMagicBits + t.origin_c)) {}
   // Lane l at slice k[l]; indices relative to the grid's origin (RayTable::origin_b, origin_c).
   SamplePosition<DF> at(DF df, hn::Vec<DF> k) const {
     const hn::RebindToSigned<DF> di;
@@ -63,9 +76,10 @@ struct BundlePosition {
     const auto pb = hn::MulAdd(dk, beta_b, pb_mid);
     const auto pc = hn::MulAdd(dk, beta_c, pc_mid);
     const auto fb0 = hn::Floor(pb), fc0 = hn::Floor(pc);
+    const auto magic = hn::Set(df, WholeToInt::kMagic);
     SamplePosition<DF> s;
-    s.ib = hn::Sub(hn::ConvertTo(di, fb0), hn::Set(di, origin_b));
-    s.ic = hn::Sub(hn::ConvertTo(di, fc0), hn::Set(di, origin_c));
+    s.ib = hn::Sub(hn::BitCast(di, hn::Add(fb0, magic)), shift_b);
+    s.ic = hn::Sub(hn::BitCast(di, hn::Add(fc0, magic)), shift_c);
     s.fb = hn::Sub(pb, fb0);
     s.fc = hn::Sub(pc, fc0);
     return s;
