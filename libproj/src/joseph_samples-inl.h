@@ -387,6 +387,24 @@ HWY_INLINE void add_pair(float* HWY_RESTRICT v, const float* HWY_RESTRICT w) {
 #endif
 }
 
+// a[0], b[0], a[1], b[1], ... at `out` (aligned), as StoreInterleaved2 stores them: the weights of
+// corners b and b + 1 side by side for the scatters' pairs. On AVX-512 two permutes across the
+// whole vector, where Highway 1.0 takes six shuffles (unpacks within 128-bit blocks, then the
+// blocks reordered): back projection 1.01-1.03x on the Zen 5 (session 34).
+template <class DF>
+HWY_INLINE void store_interleaved(DF df, hn::Vec<DF> a, hn::Vec<DF> b, float* HWY_RESTRICT out) {
+#if HWY_TARGET <= HWY_AVX3
+  static_assert(hn::MaxLanes(DF()) == 16, "the kernels take whole AVX-512 vectors");
+  (void)df;
+  const __m512i lower = _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23);
+  const __m512i upper = _mm512_setr_epi32(8, 24, 9, 25, 10, 26, 11, 27, 12, 28, 13, 29, 14, 30, 15, 31);
+  _mm512_store_ps(out, _mm512_permutex2var_ps(a.raw, lower, b.raw));
+  _mm512_store_ps(out + 16, _mm512_permutex2var_ps(a.raw, upper, b.raw));
+#else
+  hn::StoreInterleaved2(a, b, df, out);
+#endif
+}
+
 // Whether a kernel asks for its rows ahead (prefetch_span, below): in the volume, yes; in a tile,
 // which was just filled, no.
 enum class Rows { fetch_ahead, cached };
@@ -463,7 +481,7 @@ HWY_INLINE void scatter_add_rim_slices(DF df, const RayTable& t, const Bundle& b
       if (b.pairs) {
         for (int q = 0; q < 4; q += 2) {
           hn::Store(c.index[q], di, index[i][q]);
-          hn::StoreInterleaved2(weighed(q), weighed(q + 1), df, weight[i][q]);
+          store_interleaved(df, weighed(q), weighed(q + 1), weight[i][q]);
         }
         if (fetch == Rows::fetch_ahead) prefetch_pair_rows(volume, index[i][0], index[i][2], N);
         continue;
@@ -590,7 +608,7 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
       if (!pairs)
         for (int q = 0; q < 4; ++q) hn::Store(w[q], df, weight[i][q]);
       else
-        for (int q = 0; q < 4; q += 2) hn::StoreInterleaved2(w[q], w[q + 1], df, weight[i][q]);
+        for (int q = 0; q < 4; q += 2) store_interleaved(df, w[q], w[q + 1], weight[i][q]);
     }
 #endif
     if (pairs && fetch == Rows::fetch_ahead)  // both rows under every 8th lane's pair and the last's (8 lanes span a line or two)
