@@ -1,0 +1,126 @@
+#!/usr/bin/env python3
+"""Two builds of `ctk` compared on the projector benchmark: do they compute the same, and is
+the new one faster? Python's standard library only.
+
+On a shared machine whole runs drift by 15-25 % within minutes (benchmarks/README.md, session
+34), more than most single changes gain, so comparing one run of each build says little. Here
+the builds take turns run by run, in the order old, new, new, old, old, new, ... (a drift that
+is steady over a few runs then favours neither), and each round gives a paired ratio
+old seconds / new seconds per case. The median of those ratios is the verdict; the spread
+shows how much to trust it.
+
+Before timing, each build writes `ctk bench --dump` on the same problem; their forward (A x)
+and back (A' y) arrays are compared byte for byte, and where they differ the largest
+|new - old| / max|old| is printed.
+
+Usage: benchmarks/paired.py --old OLD/ctk --new NEW/ctk [--rounds 6] [--views 120] [--scale 1]
+                            [--old-simd TARGET] [--new-simd TARGET] [--json]
+(One binary twice with two SIMD targets compares the targets.)
+Exits 1 when an array differs (the builds do not compute the same), 0 otherwise.
+"""
+import argparse
+import array
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+CASES = [("circular", "forward"), ("circular", "back"), ("spherical", "forward"), ("spherical", "back")]
+
+
+def bench(ctk, simd, args, extra):
+    command = [ctk, "bench", "--json", "--scale", str(args.scale), "--views", str(args.views), "--reference-views", "1"]
+    if simd:
+        command += ["--simd", simd]
+    out = subprocess.run(command + extra, check=True, capture_output=True, text=True).stdout
+    return json.loads(out)
+
+
+def fast_seconds(report):
+    sections = {"circular": report, "spherical": report["spherical"]}
+    return {f"{t} {d}": sections[t][d]["fast_seconds"] for t, d in CASES}
+
+
+def read_floats(path):
+    values = array.array("f")
+    with open(path, "rb") as f:
+        values.frombytes(f.read())
+    return values
+
+
+def compare_dumps(old_dir, new_dir):
+    """{'circular forward': None (bitwise the same) or the largest relative difference, ...}"""
+    result = {}
+    for trajectory, direction in CASES:
+        name = f"{trajectory} {direction}"
+        old_path = os.path.join(old_dir, trajectory, f"{direction}.raw")
+        new_path = os.path.join(new_dir, trajectory, f"{direction}.raw")
+        with open(old_path, "rb") as a, open(new_path, "rb") as b:
+            if a.read() == b.read():
+                result[name] = None
+                continue
+        old, new = read_floats(old_path), read_floats(new_path)
+        if len(old) != len(new):
+            result[name] = float("inf")
+            continue
+        scale = max((abs(v) for v in old), default=0.0) or 1.0
+        result[name] = max(abs(p - q) for p, q in zip(new, old)) / scale
+    return result
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--old", required=True, help="the ctk binary to compare against")
+    parser.add_argument("--new", required=True, help="the ctk binary under test")
+    parser.add_argument("--rounds", type=int, default=6, help="runs of each build")
+    parser.add_argument("--views", type=int, default=120, help="views per run (short runs pair more closely)")
+    parser.add_argument("--scale", type=int, default=1, help="divides the standard problem's sizes")
+    parser.add_argument("--old-simd", default="", help="the old build's SIMD target (ctk bench --simd); widest by default")
+    parser.add_argument("--new-simd", default="", help="the new build's SIMD target")
+    parser.add_argument("--json", action="store_true", help="print the verdict as JSON")
+    args = parser.parse_args()
+    if args.rounds < 1:
+        parser.error("--rounds must be at least 1")
+
+    with tempfile.TemporaryDirectory() as tmp:
+        dumps = {}
+        for label in ("old", "new"):
+            dumps[label] = os.path.join(tmp, label)
+            bench(getattr(args, label), getattr(args, f"{label}_simd"), args, ["--dump", dumps[label]])
+        differences = compare_dumps(dumps["old"], dumps["new"])
+
+    seconds = {"old": [], "new": []}
+    for r in range(args.rounds):
+        order = ("old", "new") if r % 2 == 0 else ("new", "old")
+        for label in order:
+            seconds[label].append(fast_seconds(bench(getattr(args, label), getattr(args, f"{label}_simd"), args, [])))
+            print(f"round {r + 1}/{args.rounds}: {label} done", file=sys.stderr, flush=True)
+
+    verdict = {"rounds": args.rounds, "views": args.views, "scale": args.scale, "cases": {}}
+    for trajectory, direction in CASES:
+        name = f"{trajectory} {direction}"
+        old = [run[name] for run in seconds["old"]]
+        new = [run[name] for run in seconds["new"]]
+        ratios = [o / n for o, n in zip(old, new)]
+        verdict["cases"][name] = {
+            "old_seconds": old, "new_seconds": new,
+            "ratio_median": statistics.median(ratios), "ratio_min": min(ratios), "ratio_max": max(ratios),
+            "rounds_new_faster": sum(ratio > 1 for ratio in ratios),
+            "bitwise_same": differences[name] is None,
+            "max_relative_difference": differences[name] or 0.0,
+        }
+    if args.json:
+        print(json.dumps(verdict, indent=1))
+    else:
+        print(f"old / new fast seconds, {args.rounds} rounds of {args.views} views (scale {args.scale}):")
+        for name, c in verdict["cases"].items():
+            same = "bitwise same" if c["bitwise_same"] else f"DIFFERENT (max {c['max_relative_difference']:.2e})"
+            print(f"  {name:18s} median {c['ratio_median']:.3f} [{c['ratio_min']:.3f} .. {c['ratio_max']:.3f}], "
+                  f"new faster in {c['rounds_new_faster']}/{args.rounds}; results {same}")
+    return 0 if all(c["bitwise_same"] for c in verdict["cases"].values()) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
