@@ -90,16 +90,16 @@ struct XStrip {
 };
 
 // The rays at entry r of `t` copied to entry `to` of `local`: what a march through a tile reads
-// of them, their positions and slice ranges (address_tile sets the grid; weights and values are
-// read from `t`). In a tile every corner of a lane in its range is there, so a lane's interior
-// range is its range. One vector per array: copying all seventeen arrays with std::copy_n, once
-// per slab task, was 5 % of a circular back projection in memmove calls on the Zen 5 (session 34).
-template <class DF>
-HWY_INLINE void copy_rays(DF df, const RayTable& t, std::size_t r, RayTable& local, std::size_t to) {
+// of them, their positions and their slice ranges [first, last] (loaded from `t` by the caller,
+// which needs them too; address_tile sets the grid; weights and values are read from `t`). In a
+// tile every corner of a lane in its range is there, so a lane's interior range is its range. One
+// vector per array: copying all seventeen arrays with std::copy_n, once per slab task, was 5 % of
+// a circular back projection in memmove calls on the Zen 5 (session 34).
+template <class DF, class VI = hn::Vec<hn::RebindToSigned<DF>>>
+HWY_INLINE void copy_rays(DF df, const RayTable& t, std::size_t r, VI first, VI last, RayTable& local, std::size_t to) {
   const hn::RebindToSigned<DF> di;
   for (auto ray : {&RayTable::pb_mid, &RayTable::beta_b, &RayTable::pc_mid, &RayTable::beta_c, &RayTable::k_mid})
     hn::StoreU(hn::LoadU(df, (t.*ray).data() + r), df, (local.*ray).data() + to);
-  const auto first = hn::LoadU(di, t.k_first.data() + r), last = hn::LoadU(di, t.k_last.data() + r);
   hn::StoreU(first, di, local.k_first.data() + to);
   hn::StoreU(first, di, local.in_first.data() + to);
   hn::StoreU(last, di, local.k_last.data() + to);
@@ -117,8 +117,8 @@ HWY_INLINE void prepare_strip(DF df, const RayTable& t, XStrip& s, RayTable& loc
     const std::size_t r = s.entries[i];
     Bundle& b = s.tile[i];
     b.r = local.entry(0, i, 0);
-    copy_rays(df, t, r, local, b.r);
     const auto first = hn::LoadU(di, t.k_first.data() + r), last = hn::LoadU(di, t.k_last.data() + r);
+    copy_rays(df, t, r, first, last, local, b.r);
     // In a tile the fast path needs only that every lane be in its range: max and min over lanes.
     b.in_lo = hn::GetLane(hn::MaxOfLanes(di, first));
     b.in_hi = hn::GetLane(hn::MinOfLanes(di, last));
