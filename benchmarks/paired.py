@@ -19,52 +19,36 @@ Usage: benchmarks/paired.py --old OLD/ctk --new NEW/ctk [--rounds 6] [--views 12
 Exits 1 when an array differs (the builds do not compute the same), 0 otherwise.
 """
 import argparse
-import array
 import json
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 
-CASES = [("circular", "forward"), ("circular", "back"), ("spherical", "forward"), ("spherical", "back")]
+from yardstick import load, measurements, run_bench  # the same script folder
 
 
 def bench(ctk, simd, args, extra):
-    command = [ctk, "bench", "--json", "--scale", str(args.scale), "--views", str(args.views), "--reference-views", "1"]
-    if simd:
-        command += ["--simd", simd]
-    out = subprocess.run(command + extra, check=True, capture_output=True, text=True).stdout
-    return json.loads(out)
+    """The report of one `ctk bench` run (its reference on one view: only the fast times count)."""
+    return run_bench(ctk, args, 1, ["--views", str(args.views)] + (["--simd", simd] if simd else []) + extra)[1]
 
 
 def fast_seconds(report):
-    sections = {"circular": report, "spherical": report["spherical"]}
-    return {f"{t} {d}": sections[t][d]["fast_seconds"] for t, d in CASES}
+    return {f"{t} {d}": s["fast_seconds"] for t, d, s in measurements(report)}
 
 
-def read_floats(path):
-    values = array.array("f")
-    with open(path, "rb") as f:
-        values.frombytes(f.read())
-    return values
-
-
-def compare_dumps(old_dir, new_dir):
+def compare_dumps(old_dir, new_dir, cases):
     """{'circular forward': None (bitwise the same) or the largest relative difference, ...}"""
     result = {}
-    for trajectory, direction in CASES:
-        name = f"{trajectory} {direction}"
-        old_path = os.path.join(old_dir, trajectory, f"{direction}.raw")
-        new_path = os.path.join(new_dir, trajectory, f"{direction}.raw")
-        with open(old_path, "rb") as a, open(new_path, "rb") as b:
+    for name in cases:
+        trajectory, direction = name.split()
+        file = os.path.join(trajectory, f"{direction}.raw")
+        with open(os.path.join(old_dir, file), "rb") as a, open(os.path.join(new_dir, file), "rb") as b:
             if a.read() == b.read():
                 result[name] = None
                 continue
-        old, new = read_floats(old_path), read_floats(new_path)
-        if len(old) != len(new):
-            result[name] = float("inf")
-            continue
+        count = os.path.getsize(os.path.join(old_dir, file)) // 4
+        old, new = load(old_dir, file, count), load(new_dir, file, count)
         scale = max((abs(v) for v in old), default=0.0) or 1.0
         result[name] = max(abs(p - q) for p, q in zip(new, old)) / scale
     return result
@@ -85,11 +69,11 @@ def main():
         parser.error("--rounds must be at least 1")
 
     with tempfile.TemporaryDirectory() as tmp:
-        dumps = {}
-        for label in ("old", "new"):
-            dumps[label] = os.path.join(tmp, label)
-            bench(getattr(args, label), getattr(args, f"{label}_simd"), args, ["--dump", dumps[label]])
-        differences = compare_dumps(dumps["old"], dumps["new"])
+        dumps = {label: os.path.join(tmp, label) for label in ("old", "new")}
+        bench(args.old, args.old_simd, args, ["--dump", dumps["old"]])
+        report = bench(args.new, args.new_simd, args, ["--dump", dumps["new"]])
+        cases = list(fast_seconds(report))
+        differences = compare_dumps(dumps["old"], dumps["new"], cases)
 
     seconds = {"old": [], "new": []}
     for r in range(args.rounds):
@@ -99,8 +83,7 @@ def main():
             print(f"round {r + 1}/{args.rounds}: {label} done", file=sys.stderr, flush=True)
 
     verdict = {"rounds": args.rounds, "views": args.views, "scale": args.scale, "cases": {}}
-    for trajectory, direction in CASES:
-        name = f"{trajectory} {direction}"
+    for name in cases:
         old = [run[name] for run in seconds["old"]]
         new = [run[name] for run in seconds["new"]]
         ratios = [o / n for o, n in zip(old, new)]
