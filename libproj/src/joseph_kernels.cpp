@@ -239,8 +239,9 @@ HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRIC
   HWY_ALIGN float chunk_sums[XStrip::kMaxBundles * kMaxLanes];
   for_each_chunk(s.k_lo, s.k_hi, 0, 1 << 30, [&](int k0, int k1) {
     for (int i = 0; i < s.count; ++i) hn::Store(hn::Zero(df), df, chunk_sums + i * kMaxLanes);
+    const int next_k = k1 < s.k_hi ? k1 + 1 : -1;  // the next chunk's first slice
     for_each_tile(df, t, -1, k0, k1, w, tile, [&](int k_lo, int k_hi, TileFit fit, const Bundle* in_volume) {
-      if (fit == TileFit::fits) fill_tile(volume, g, tile);
+      if (fit == TileFit::fits) fill_tile(volume, g, tile, next_k);
       for (int i = 0; i < s.count; ++i) {
         const Bundle& b = in_volume ? in_volume[i] : s.tile[i];
         float* part = chunk_sums + i * kMaxLanes;
