@@ -125,7 +125,7 @@ HWY_INLINE void for_each_block8(const Tile& tile, F&& f) {
 // after it. `next_k` is that chunk's first slice (negative: none). Asking for the next line as
 // each line is read gives it a whole chunk's march to arrive: in spherical views, which read the
 // whole volume, these reads waited on memory (in `perf`, the first load of each 16 x 16 block
-// held 12 % of a strip's samples). Forward 1.09-1.11x spherical, 1.03-1.04x circular (Zen 5,
+// held 12 % of a strip's samples). Forward 1.09-1.12x spherical, 0.98-1.04x circular (Zen 5,
 // session 35). Asking for the next chunk's whole box at once, at its start, gained nothing: a
 // burst of a thousand requests the current loads queued behind. The back projection's add_tile
 // given the same (within its slab) measured 0.98-1.03: not done. `at` is the line's (y, z)
