@@ -273,6 +273,9 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
   Tile tile;
   tile.data = w.tile_data.data();
   for_each_chunk(s.k_lo, s.k_hi, k_begin, k_end, [&](int k0, int k1) {
+    // The next chunk's first slice, where the strip goes on within this slab (the next slab's
+    // lines are another thread's to write).
+    const int next_k = k1 < s.k_hi && k1 + kTileSlices < k_end ? k1 + 1 : -1;
     for_each_tile(df, t, 0, k0, k1, w, tile, [&](int k_lo, int k_hi, TileFit fit, const Bundle* in_volume) {
       if (fit == TileFit::fits) std::fill_n(tile.data, tile.row(tile.slices, 0), 0.0f);
       for (int i = 0; i < s.count; ++i) {
@@ -288,7 +291,7 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
           march_back(df, t, b, value, on_axis, std::max(k_lo, b.k_lo), std::min(k_hi, b.k_hi), volume, Rows::fetch_ahead);
         }
       }
-      if (fit == TileFit::fits) add_tile(tile, g, volume);
+      if (fit == TileFit::fits) add_tile(tile, g, volume, next_k);
     });
   });
 }
