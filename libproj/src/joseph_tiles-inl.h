@@ -120,16 +120,16 @@ HWY_INLINE void for_each_block8(const Tile& tile, F&& f) {
 }
 #endif
 
-// A tile is filled (forward) or added back (back projection), at each (y, z) of its box, through
-// the volume's line of 16 floats along x that holds its slices (chunks are aligned to
+// A tile is filled (forward) or added back (back projection), at each (y, z) of its box,
+// through the volume's line of 16 floats along x that holds its slices (chunks are aligned to
 // kTileSlices); the strip's next chunk takes the line after it. `next_k` is that chunk's first
 // slice, negative where there is none or (back projection) where it lies in the next slab,
-// whose lines another thread writes (asking there measured 0.93 circular). Asking for the next line
-// as each line is read gives it a whole chunk's march to arrive: in spherical views, which read
-// the whole volume, the fill's loads waited on memory (in `perf`, the first load of each 16 x 16
-// block held 12 % of a strip's samples). Forward 1.09-1.12x spherical, 0.98-1.04x circular;
-// back, with add_tile's unmasked whole lines, 1.04-1.05x on AVX-512 and 1.00-1.01x on AVX2
-// (Zen 5, session 35). Asking for the next chunk's whole box at once, at its start, gained
+// whose lines another thread writes (asking there measured 0.93 circular). Asking for the next
+// line as each line is read gives it a whole chunk's march to arrive: in spherical views, which
+// read the whole volume, the fill's loads waited on memory (in `perf`, the first load of each
+// 16 x 16 block held 12 % of a strip's samples). Forward 1.09-1.12x spherical, 0.98-1.04x
+// circular; back, with add_tile's unmasked whole lines, 1.04-1.05x on AVX-512 and 1.00-1.01x on
+// AVX2 (Zen 5, session 35). Asking for the next chunk's whole box at once, at its start, gained
 // nothing: a burst of a thousand requests the current loads queued behind. `at` is the line's
 // (y, z) offset, y * stride_y + z * stride_z.
 HWY_INLINE void ask_for_next_line(const float* volume, std::ptrdiff_t at, int next_k) {
