@@ -239,7 +239,7 @@ HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRIC
   HWY_ALIGN float chunk_sums[XStrip::kMaxBundles * kMaxLanes];
   for_each_chunk(s.k_lo, s.k_hi, 0, 1 << 30, [&](int k0, int k1) {
     for (int i = 0; i < s.count; ++i) hn::Store(hn::Zero(df), df, chunk_sums + i * kMaxLanes);
-    const int next_k = k1 < s.k_hi ? k1 + 1 : -1;  // the next chunk's first slice
+    const int next_k = next_chunk(k1, s.k_hi, 1 << 30);
     for_each_tile(df, t, -1, k0, k1, w, tile, [&](int k_lo, int k_hi, TileFit fit, const Bundle* in_volume) {
       if (fit == TileFit::fits) fill_tile(volume, g, tile, next_k);
       for (int i = 0; i < s.count; ++i) {
@@ -273,9 +273,7 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
   Tile tile;
   tile.data = w.tile_data.data();
   for_each_chunk(s.k_lo, s.k_hi, k_begin, k_end, [&](int k0, int k1) {
-    // The next chunk's first slice, where the strip goes on within this slab (the next slab's
-    // lines are another thread's to write).
-    const int next_k = k1 < s.k_hi && k1 + kTileSlices < k_end ? k1 + 1 : -1;
+    const int next_k = next_chunk(k1, s.k_hi, k_end);  // the next slab's lines are another thread's
     for_each_tile(df, t, 0, k0, k1, w, tile, [&](int k_lo, int k_hi, TileFit fit, const Bundle* in_volume) {
       if (fit == TileFit::fits) std::fill_n(tile.data, tile.row(tile.slices, 0), 0.0f);
       for (int i = 0; i < s.count; ++i) {

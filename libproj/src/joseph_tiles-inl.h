@@ -145,6 +145,10 @@ HWY_INLINE void ask_for_next_lines(const float* volume, const XGrid& g, const Ti
   }
 }
 
+// `next_k` for a chunk ending at slice k1 of a strip whose slices end at k_hi, within slices
+// [.., k_end) (the slab, back projection; unbounded, forward).
+HWY_INLINE int next_chunk(int k1, int k_hi, int k_end) { return k1 < k_hi && k1 + kTileSlices < k_end ? k1 + 1 : -1; }
+
 // tile = the volume in the tile's box (zero outside the volume), the lines of the strip's next
 // chunk asked for (ask_for_next_line). The tile and grid are taken by value: vector stores may
 // alias anything, so fields read through a reference were reloaded after every store.
