@@ -584,11 +584,13 @@ HWY_INLINE void interior_corners_avx2(const RayTable& t, std::size_t r, int k0, 
 // projection's add_window_samples; 6-14 % faster on the Zen 3, session 23). The scatters go lane
 // by lane, each lane through every slice: neighbouring lanes share voxels, and a lane's stores
 // to them are then slices of work ahead of the next lane's loads instead of just before them
-// (1.05-1.06x, session 26). Where b is the contiguous axis (all but rays along x outside tiles),
-// corners b and b + 1 are added as one pair of floats, their weights stored interleaved: half
-// the loads and stores (1.04-1.13x, session 26). A voxel still receives its lanes in order and
-// each its own float addition, as on the masked path. With Rows::fetch_ahead, the
-// pairs' lines are asked for between the passes (prefetch_span, above).
+// (1.05-1.06x, session 26); on AVX-512 pairs go slice by slice, even lanes before odd ones
+// (below). Where b is the contiguous axis (all but rays along x outside tiles), corners b and
+// b + 1 are added as one pair of floats, their weights stored interleaved: half the loads and
+// stores (1.04-1.13x, session 26). A voxel receives each lane by its own float addition, as on
+// the masked path (in lane order, except AVX-512's pairs: an odd lane after the even lane
+// above it). With Rows::fetch_ahead, the pairs' lines are asked for between the passes
+// (prefetch_span, above).
 inline constexpr int kInteriorBatch = 16;
 template <class DF>
 HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_t r, int k_lo, int k_hi, hn::Vec<DF> value,
@@ -623,12 +625,25 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
         prefetch_corner_rows(volume + index[i][N - 1] + 1, dc);
       }
     if (pairs) {
+#if HWY_TARGET <= HWY_AVX3
+      // Slice by slice, lanes 0, 2, .., 14 and then 1, 3, .., 15: lanes that share a voxel are
+      // still 8 lanes' work apart, and a slice's 16 lanes are one unrolled run (1.01-1.04x over
+      // lane by lane on the Zen 5; 0.95-0.98x on its AVX2 target, which keeps lane by lane).
+      for (int i = 0; i < count; ++i)
+        for (int j = 0; j < N; ++j) {
+          const int l = j < N / 2 ? 2 * j : 2 * (j - N / 2) + 1;
+          float* v = volume + index[i][l];
+          add_pair(v, weight[i][0] + 2 * l);
+          add_pair(v + dc, weight[i][2] + 2 * l);
+        }
+#else
       for (int l = 0; l < N; ++l)
         for (int i = 0; i < count; ++i) {
           float* v = volume + index[i][l];
           add_pair(v, weight[i][0] + 2 * l);
           add_pair(v + dc, weight[i][2] + 2 * l);
         }
+#endif
       continue;
     }
     for (int l = 0; l < N; ++l)
