@@ -122,37 +122,65 @@ HWY_INLINE void for_each_block8(const Tile& tile, F&& f) {
 
 // A tile is filled (forward) or added back (back projection), at each (y, z) of its box,
 // through the volume's line of 16 floats along x that holds its slices (chunks are aligned to
-// kTileSlices); the strip's next chunk takes the line after it. `next_k` is that chunk's first
-// slice, negative where there is none or (back projection) where it lies in the next slab,
-// whose lines another thread writes (asking there measured 0.93 circular). Asking for the next
-// line as each line is read gives it a whole chunk's march to arrive: in spherical views, which
-// read the whole volume, the fill's loads waited on memory (in `perf`, the first load of each
-// 16 x 16 block held 12 % of a strip's samples). Forward 1.09-1.12x spherical, 0.98-1.04x
-// circular; back, with add_tile's unmasked whole lines, 1.04-1.05x on AVX-512 and 1.00-1.01x on
-// AVX2 (Zen 5, session 35). Asking for the next chunk's whole box at once, at its start, gained
-// nothing: a burst of a thousand requests the current loads queued behind. `at` is the line's
-// (y, z) offset, y * stride_y + z * stride_z.
-HWY_INLINE void ask_for_next_line(const float* volume, std::ptrdiff_t at, int next_k) {
-  if (next_k >= 0) hwy::Prefetch(volume + next_k + at);
-}
+// kTileSlices); the strip's next chunk takes the line after it. Asking for that line as each line
+// is read gives it a whole chunk's march to arrive: in spherical views, which read the whole
+// volume, the fill's loads waited on memory (in `perf`, the first load of each 16 x 16 block held
+// 12 % of a strip's samples). Forward 1.09-1.12x spherical, 0.98-1.04x circular; back, with
+// add_tile's unmasked whole lines, 1.04-1.05x on AVX-512 and 1.00-1.01x on AVX2 (Zen 5, session
+// 35). Asking for the next chunk's whole box at once, at its start, gained nothing: a burst of a
+// thousand requests the current loads queued behind. The rays are straight, so the next chunk's
+// box lies about as far on (in y and z) from this chunk's as this one's from the last: the line
+// asked for is (y, z) moved by that much, not (y, z) itself (oblique spherical views drift by
+// several rows a chunk; forward 1.03-1.06x spherical, 1.00-1.03x circular, back unchanged;
+// session 36). Asking for the next box's own lines, found by tile_box and dealt out a share per
+// row of this one, measured the same as (y, z) itself.
+struct NextChunk {
+  int k = -1;          // its first slice; negative where there is none, or (back projection) where
+                       // it lies in the next slab, whose lines another thread writes (0.93 circular)
+  int dy = 0, dz = 0;  // its box's expected offset from this chunk's
+  // Asks for the next chunk's line for this chunk's line at (y, z).
+  HWY_INLINE void ask(const float* volume, const XGrid& g, int y, int z) const {
+    const int y_next = y + dy, z_next = z + dz;
+    if (k >= 0 && y_next >= 0 && y_next < g.ny && z_next >= 0 && z_next < g.nz)
+      hwy::Prefetch(volume + k + y_next * g.stride_y + z_next * g.stride_z);
+  }
+};
+
+// How a strip's tiles move from chunk to chunk, for NextChunk.
+class TileDrift {
+ public:
+  // The next chunk (first slice next_k) of `tile`, whose box is now known.
+  NextChunk next(int next_k, const Tile& tile) {
+    NextChunk n;
+    n.k = next_k;
+    if (seen_ && tile.k0 > k0_) {  // scaled to a whole chunk: tiles of 8 or 4 slices move less
+      n.dy = (tile.y0 - y0_) * kTileSlices / (tile.k0 - k0_);
+      n.dz = (tile.z0 - z0_) * kTileSlices / (tile.k0 - k0_);
+    }
+    seen_ = true;
+    k0_ = tile.k0, y0_ = tile.y0, z0_ = tile.z0;
+    return n;
+  }
+
+ private:
+  bool seen_ = false;
+  int k0_ = 0, y0_ = 0, z0_ = 0;
+};
 
 // The same for every line of the tile's row z inside the volume (for the scalar copies below,
 // which visit a line once per slice).
-HWY_INLINE void ask_for_next_lines(const float* volume, const XGrid& g, const Tile& tile, int z, int next_k) {
-  for (int yy = 0; yy < tile.width; ++yy) {
-    const int y = tile.y0 + yy;
-    if (y >= 0 && y < g.ny) ask_for_next_line(volume, y * g.stride_y + z * g.stride_z, next_k);
-  }
+HWY_INLINE void ask_for_next_lines(const float* volume, const XGrid& g, const Tile& tile, int z, const NextChunk& next) {
+  for (int yy = 0; yy < tile.width; ++yy) next.ask(volume, g, tile.y0 + yy, z);
 }
 
-// `next_k` for a chunk ending at slice k1 of a strip whose slices end at k_hi, within slices
-// [.., k_end) (the slab, back projection; unbounded, forward).
+// The first slice of the next chunk after one ending at slice k1 of a strip whose slices end at
+// k_hi, within slices [.., k_end) (the slab, back projection; unbounded, forward); -1 for none.
 HWY_INLINE int next_chunk(int k1, int k_hi, int k_end) { return k1 < k_hi && k1 + kTileSlices < k_end ? k1 + 1 : -1; }
 
 // tile = the volume in the tile's box (zero outside the volume), the lines of the strip's next
-// chunk asked for (ask_for_next_line). The tile and grid are taken by value: vector stores may
+// chunk asked for (NextChunk). The tile and grid are taken by value: vector stores may
 // alias anything, so fields read through a reference were reloaded after every store.
-HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const Tile tile, int next_k) {
+HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const Tile tile, const NextChunk next) {
   for (int zz = 0; zz < tile.height; ++zz) {
     const int z = tile.z0 + zz;
     const bool z_in = z >= 0 && z < g.nz;
@@ -168,7 +196,7 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const
         }
         const std::ptrdiff_t at = y * g.stride_y + z * g.stride_z;
         r[j] = _mm512_maskz_loadu_ps(slices, volume + tile.k0 + at);
-        ask_for_next_line(volume, at, next_k);
+        next.ask(volume, g, y, z);
       }
       transpose16(r);
       for (int kk = 0; kk < tile.slices; ++kk) _mm512_storeu_ps(tile.data + tile.row(kk, zz) + yb, r[kk]);
@@ -183,7 +211,7 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const
       if (z_in && n == 8 && y >= 0 && y + 8 <= g.ny) {  // the usual block: whole and inside
         for (int j = 0; j < 8; ++j) {
           r[j] = _mm256_loadu_ps(volume + at + j * g.stride_y);
-          if (k8 == 0) ask_for_next_line(volume, at - tile.k0 + j * g.stride_y, next_k);
+          if (k8 == 0) next.ask(volume, g, y + j, z);
         }
       } else {
         for (int j = 0; j < 8; ++j) {
@@ -196,7 +224,7 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const
       for (int kk = 0; kk < n; ++kk) _mm256_storeu_ps(tile.data + tile.row(k8 + kk, zz) + yb, r[kk]);
     });
 #else
-    if (z_in) ask_for_next_lines(volume, g, tile, z, next_k);
+    if (z_in) ask_for_next_lines(volume, g, tile, z, next);
     for (int kk = 0; kk < tile.slices; ++kk)
       for (int yy = 0; yy < tile.width; ++yy) {
         const int y = tile.y0 + yy;
@@ -208,8 +236,8 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const
 }
 
 // volume += tile, inside the volume, the lines of the strip's next chunk asked for
-// (ask_for_next_line; by value, as fill_tile).
-HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT volume, int next_k) {
+// (NextChunk; by value, as fill_tile).
+HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT volume, const NextChunk next) {
   for (int zz = 0; zz < tile.height; ++zz) {
     const int z = tile.z0 + zz;
     if (z < 0 || z >= g.nz) continue;
@@ -229,7 +257,7 @@ HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT vol
           _mm512_storeu_ps(v, _mm512_add_ps(_mm512_loadu_ps(v), r[j]));
         else
           _mm512_mask_storeu_ps(v, slices, _mm512_add_ps(_mm512_maskz_loadu_ps(slices, v), r[j]));
-        ask_for_next_line(volume, at, next_k);
+        next.ask(volume, g, y, z);
       }
     }
 #elif HWY_TARGET == HWY_AVX2
@@ -244,7 +272,7 @@ HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT vol
         for (int j = 0; j < 8; ++j) {
           float* v = volume + at + j * g.stride_y;
           _mm256_storeu_ps(v, _mm256_add_ps(_mm256_loadu_ps(v), r[j]));
-          if (k8 == 0) ask_for_next_line(volume, at - tile.k0 + j * g.stride_y, next_k);
+          if (k8 == 0) next.ask(volume, g, y + j, z);
         }
         return;
       }
@@ -264,7 +292,7 @@ HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT vol
         if (y >= 0 && y < g.ny)
           volume[tile.k0 + kk + y * g.stride_y + z * g.stride_z] += tile.data[tile.row(kk, zz) + static_cast<std::size_t>(yy)];
       }
-    ask_for_next_lines(volume, g, tile, z, next_k);
+    ask_for_next_lines(volume, g, tile, z, next);
 #endif
   }
 }
