@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 
 #include "joseph_samples-inl.h"
 #include "ray_table.hpp"
@@ -131,18 +132,27 @@ HWY_INLINE void for_each_block8(const Tile& tile, F&& f) {
 // thousand requests the current loads queued behind. The rays are straight, so the next chunk's
 // box lies about as far on (in y and z) from this chunk's as this one's from the last: the line
 // asked for is (y, z) moved by that much, not (y, z) itself (oblique spherical views drift by
-// several rows a chunk; forward 1.03-1.06x spherical, 1.00-1.03x circular, back unchanged;
-// session 36). Asking for the next box's own lines, found by tile_box and dealt out a share per
-// row of this one, measured the same as (y, z) itself.
+// several rows a chunk; forward 1.06x spherical, 1.01x circular, session 36). The back
+// projection keeps (y, z) itself: its drift measured 0.98-1.00. Asking for the next box's own
+// lines, found by tile_box and dealt out a share per row of this one, measured no better.
 struct NextChunk {
   int k = -1;          // its first slice; negative where there is none, or (back projection) where
                        // it lies in the next slab, whose lines another thread writes (0.93 circular)
   int dy = 0, dz = 0;  // its box's expected offset from this chunk's
-  // Asks for the next chunk's line for this chunk's line at (y, z).
-  HWY_INLINE void ask(const float* volume, const XGrid& g, int y, int z) const {
-    const int y_next = y + dy, z_next = z + dz;
-    if (k >= 0 && y_next >= 0 && y_next < g.ny && z_next >= 0 && z_next < g.nz)
-      hwy::Prefetch(volume + k + y_next * g.stride_y + z_next * g.stride_z);
+  // Where the next chunk's lines for this chunk's row z start (the line for y is at
+  // + y * stride_y); null where there are none.
+  HWY_INLINE const float* row(const float* volume, const XGrid& g, int z) const {
+    const int z_next = z + dz;
+    return k >= 0 && z_next >= 0 && z_next < g.nz ? volume + k + dy * g.stride_y + z_next * g.stride_z : nullptr;
+  }
+  // Asks for the next chunk's line for this chunk's line at y of a row (next_row: row()). y + dy
+  // is not tested: a line past the row is the next row's, and past the volume's first or last
+  // plane a request that finds nothing (a prefetch never faults; the address is formed as an
+  // integer, as it may lie outside the array). Testing it cost as much as the drift gained.
+  HWY_INLINE void ask(const float* next_row, const XGrid& g, int y) const {
+    if (next_row)
+      hwy::Prefetch(reinterpret_cast<const float*>(reinterpret_cast<std::uintptr_t>(next_row) +
+                                                   static_cast<std::uintptr_t>(static_cast<std::ptrdiff_t>(y) * g.stride_y * 4)));
   }
 };
 
@@ -170,7 +180,8 @@ class TileDrift {
 // The same for every line of the tile's row z inside the volume (for the scalar copies below,
 // which visit a line once per slice).
 HWY_INLINE void ask_for_next_lines(const float* volume, const XGrid& g, const Tile& tile, int z, const NextChunk& next) {
-  for (int yy = 0; yy < tile.width; ++yy) next.ask(volume, g, tile.y0 + yy, z);
+  const float* next_row = next.row(volume, g, z);
+  for (int yy = 0; yy < tile.width; ++yy) next.ask(next_row, g, tile.y0 + yy);
 }
 
 // The first slice of the next chunk after one ending at slice k1 of a strip whose slices end at
@@ -184,6 +195,7 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const
   for (int zz = 0; zz < tile.height; ++zz) {
     const int z = tile.z0 + zz;
     const bool z_in = z >= 0 && z < g.nz;
+    const float* next_row = next.row(volume, g, z);
 #if HWY_TARGET <= HWY_AVX3
     const auto slices = static_cast<__mmask16>((1u << tile.slices) - 1u);
     for (int yb = 0; yb < tile.width; yb += 16) {
@@ -196,7 +208,7 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const
         }
         const std::ptrdiff_t at = y * g.stride_y + z * g.stride_z;
         r[j] = _mm512_maskz_loadu_ps(slices, volume + tile.k0 + at);
-        next.ask(volume, g, y, z);
+        next.ask(next_row, g, y);
       }
       transpose16(r);
       for (int kk = 0; kk < tile.slices; ++kk) _mm512_storeu_ps(tile.data + tile.row(kk, zz) + yb, r[kk]);
@@ -211,7 +223,7 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const
       if (z_in && n == 8 && y >= 0 && y + 8 <= g.ny) {  // the usual block: whole and inside
         for (int j = 0; j < 8; ++j) {
           r[j] = _mm256_loadu_ps(volume + at + j * g.stride_y);
-          if (k8 == 0) next.ask(volume, g, y + j, z);
+          if (k8 == 0) next.ask(next_row, g, y + j);
         }
       } else {
         for (int j = 0; j < 8; ++j) {
@@ -241,6 +253,7 @@ HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT vol
   for (int zz = 0; zz < tile.height; ++zz) {
     const int z = tile.z0 + zz;
     if (z < 0 || z >= g.nz) continue;
+    const float* next_row = next.row(volume, g, z);
 #if HWY_TARGET <= HWY_AVX3
     const auto slices = static_cast<__mmask16>((1u << tile.slices) - 1u);
     for (int yb = 0; yb < tile.width; yb += 16) {
@@ -257,7 +270,7 @@ HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT vol
           _mm512_storeu_ps(v, _mm512_add_ps(_mm512_loadu_ps(v), r[j]));
         else
           _mm512_mask_storeu_ps(v, slices, _mm512_add_ps(_mm512_maskz_loadu_ps(slices, v), r[j]));
-        next.ask(volume, g, y, z);
+        next.ask(next_row, g, y);
       }
     }
 #elif HWY_TARGET == HWY_AVX2
@@ -272,7 +285,7 @@ HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT vol
         for (int j = 0; j < 8; ++j) {
           float* v = volume + at + j * g.stride_y;
           _mm256_storeu_ps(v, _mm256_add_ps(_mm256_loadu_ps(v), r[j]));
-          if (k8 == 0) next.ask(volume, g, y + j, z);
+          if (k8 == 0) next.ask(next_row, g, y + j);
         }
         return;
       }
