@@ -139,20 +139,23 @@ struct NextChunk {
   int k = -1;          // its first slice; negative where there is none, or (back projection) where
                        // it lies in the next slab, whose lines another thread writes (0.93 circular)
   int dy = 0, dz = 0;  // its box's expected offset from this chunk's
-  // Where the next chunk's lines for this chunk's row z start (the line for y is at
-  // + y * stride_y); null where there are none.
-  HWY_INLINE const float* row(const float* volume, const XGrid& g, int z) const {
+  // The address where the next chunk's lines for this chunk's row z start (the line for y is
+  // y * stride_y floats on), or 0 where there are none. An integer: with the drift, it and the
+  // lines from it may lie outside the array (below).
+  HWY_INLINE std::uintptr_t row(const float* volume, const XGrid& g, int z) const {
     const int z_next = z + dz;
-    return k >= 0 && z_next >= 0 && z_next < g.nz ? volume + k + dy * g.stride_y + z_next * g.stride_z : nullptr;
+    if (k < 0 || z_next < 0 || z_next >= g.nz) return 0;
+    const std::ptrdiff_t floats = k + dy * g.stride_y + z_next * g.stride_z;
+    return reinterpret_cast<std::uintptr_t>(volume) + static_cast<std::uintptr_t>(floats * static_cast<std::ptrdiff_t>(sizeof(float)));
   }
   // Asks for the next chunk's line for this chunk's line at y of a row (next_row: row()). y + dy
   // is not tested: a line past the row is the next row's, and past the volume's first or last
-  // plane a request that finds nothing (a prefetch never faults; the address is formed as an
-  // integer, as it may lie outside the array). Testing it cost as much as the drift gained.
-  HWY_INLINE void ask(const float* next_row, const XGrid& g, int y) const {
-    if (next_row)
-      hwy::Prefetch(reinterpret_cast<const float*>(reinterpret_cast<std::uintptr_t>(next_row) +
-                                                   static_cast<std::uintptr_t>(static_cast<std::ptrdiff_t>(y) * g.stride_y * 4)));
+  // plane a request that finds nothing (a prefetch never faults). Testing it cost as much as
+  // the drift gained.
+  HWY_INLINE void ask(std::uintptr_t next_row, const XGrid& g, int y) const {
+    if (next_row == 0) return;
+    const std::ptrdiff_t floats = static_cast<std::ptrdiff_t>(y) * g.stride_y;
+    hwy::Prefetch(reinterpret_cast<const float*>(next_row + static_cast<std::uintptr_t>(floats * static_cast<std::ptrdiff_t>(sizeof(float)))));
   }
 };
 
@@ -180,7 +183,7 @@ class TileDrift {
 // The same for every line of the tile's row z inside the volume (for the scalar copies below,
 // which visit a line once per slice).
 HWY_INLINE void ask_for_next_lines(const float* volume, const XGrid& g, const Tile& tile, int z, const NextChunk& next) {
-  const float* next_row = next.row(volume, g, z);
+  const std::uintptr_t next_row = next.row(volume, g, z);
   for (int yy = 0; yy < tile.width; ++yy) next.ask(next_row, g, tile.y0 + yy);
 }
 
@@ -195,7 +198,7 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const
   for (int zz = 0; zz < tile.height; ++zz) {
     const int z = tile.z0 + zz;
     const bool z_in = z >= 0 && z < g.nz;
-    const float* next_row = next.row(volume, g, z);
+    const std::uintptr_t next_row = next.row(volume, g, z);
 #if HWY_TARGET <= HWY_AVX3
     const auto slices = static_cast<__mmask16>((1u << tile.slices) - 1u);
     for (int yb = 0; yb < tile.width; yb += 16) {
@@ -253,7 +256,7 @@ HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT vol
   for (int zz = 0; zz < tile.height; ++zz) {
     const int z = tile.z0 + zz;
     if (z < 0 || z >= g.nz) continue;
-    const float* next_row = next.row(volume, g, z);
+    const std::uintptr_t next_row = next.row(volume, g, z);
 #if HWY_TARGET <= HWY_AVX3
     const auto slices = static_cast<__mmask16>((1u << tile.slices) - 1u);
     for (int yb = 0; yb < tile.width; yb += 16) {
