@@ -625,24 +625,20 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
         prefetch_corner_rows(volume + index[i][N - 1] + 1, dc);
       }
     if (pairs) {
+      const auto add_lane = [&](int i, int l) {  // lane l's pairs of slice k0 + i
+        float* v = volume + index[i][l];
+        add_pair(v, weight[i][0] + 2 * l);
+        add_pair(v + dc, weight[i][2] + 2 * l);
+      };
 #if HWY_TARGET <= HWY_AVX3
       // Slice by slice, lanes 0, 2, .., 14 and then 1, 3, .., 15: lanes that share a voxel are
-      // still 8 lanes' work apart, and a slice's 16 lanes are one unrolled run (1.01-1.04x over
-      // lane by lane on the Zen 5; 0.95-0.98x on its AVX2 target, which keeps lane by lane).
+      // still 7 or 8 lanes' work apart, and a slice's 16 lanes are one unrolled run (1.01-1.04x
+      // over lane by lane on the Zen 5; 0.95-0.98x on its AVX2 target, which keeps lane by lane).
       for (int i = 0; i < count; ++i)
-        for (int j = 0; j < N; ++j) {
-          const int l = j < N / 2 ? 2 * j : 2 * (j - N / 2) + 1;
-          float* v = volume + index[i][l];
-          add_pair(v, weight[i][0] + 2 * l);
-          add_pair(v + dc, weight[i][2] + 2 * l);
-        }
+        for (int j = 0; j < N; ++j) add_lane(i, j < N / 2 ? 2 * j : 2 * (j - N / 2) + 1);
 #else
       for (int l = 0; l < N; ++l)
-        for (int i = 0; i < count; ++i) {
-          float* v = volume + index[i][l];
-          add_pair(v, weight[i][0] + 2 * l);
-          add_pair(v + dc, weight[i][2] + 2 * l);
-        }
+        for (int i = 0; i < count; ++i) add_lane(i, l);
 #endif
       continue;
     }
