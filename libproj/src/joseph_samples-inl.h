@@ -631,11 +631,17 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
         add_pair(v + dc, weight[i][2] + 2 * l);
       };
 #if HWY_TARGET <= HWY_AVX3
-      // Slice by slice, lanes 0, 2, .., 14 and then 1, 3, .., 15: lanes that share a voxel are
-      // still 7 or 8 lanes' work apart, and a slice's 16 lanes are one unrolled run (1.01-1.04x
-      // over lane by lane on the Zen 5; 0.95-0.98x on its AVX2 target, which keeps lane by lane).
-      for (int i = 0; i < count; ++i)
-        for (int j = 0; j < N; ++j) add_lane(i, j < N / 2 ? 2 * j : 2 * (j - N / 2) + 1);
+      // Slice by slice, lanes 0, 2, .., 14 of slice i and then 1, 3, .., 15 of slice i - 1:
+      // lanes that share a voxel (2m + 1 with 2m and 2m + 2 of its slice) are 15 or 16 lanes'
+      // work apart, and each run of 8 lanes is unrolled. Slice by slice with even lanes first
+      // measured 1.01-1.04x over lane by lane on the Zen 5 (0.95-0.98x on its AVX2 target, which
+      // keeps lane by lane); a slice's odd lanes after the next slice's even ones 1.03-1.05x more.
+      for (int i = 0; i <= count; ++i) {
+        if (i < count)
+          for (int m = 0; m < N / 2; ++m) add_lane(i, 2 * m);
+        if (i > 0)
+          for (int m = 0; m < N / 2; ++m) add_lane(i - 1, 2 * m + 1);
+      }
 #else
       for (int l = 0; l < N; ++l)
         for (int i = 0; i < count; ++i) add_lane(i, l);
