@@ -302,9 +302,9 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
 // the groups, so fewer voxels are copied into tiles (views mostly along x 1.1x faster); walking
 // the other bundles in groups that wide made views along y and z 6 % slower (session 26).
 constexpr int kGroupColumns = 4;
-template <class One, class Strip>
-HWY_INLINE void for_each_bundle(const RayTable& t, int lanes, bool tiles, StripWorkspace& w, One&& one, Strip&& strip) {
-  const auto n = static_cast<std::size_t>(lanes);
+template <class DF, class One, class Strip>
+HWY_INLINE void for_each_bundle(DF df, const RayTable& t, bool tiles, StripWorkspace& w, One&& one, Strip&& strip) {
+  const int lanes = static_cast<int>(hn::Lanes(df));
   for (int slot = 0; slot < t.views; ++slot) {
     const int rows = t.rows_in(slot);
     // f(r) for the entries of `columns` bundles from column col0, row by row.
@@ -314,13 +314,13 @@ HWY_INLINE void for_each_bundle(const RayTable& t, int lanes, bool tiles, StripW
     };
     for (int col0 = 0; col0 < t.row_stride; col0 += kGroupColumns * lanes)
       group(col0, kGroupColumns, [&](std::size_t r) {
-        if (!tiles || !along_x(t, r, n)) one(r);
+        if (!tiles || !along_x(df, t, r)) one(r);
       });
     if (!tiles) continue;
     for (int col0 = 0; col0 < t.row_stride; col0 += kStripColumns * lanes) {
       w.strip.count = 0;
       group(col0, kStripColumns, [&](std::size_t r) {
-        if (!along_x(t, r, n)) return;
+        if (!along_x(df, t, r)) return;
         if (w.strip.count < XStrip::kMaxBundles)
           w.strip.entries[w.strip.count++] = r;
         else
@@ -366,7 +366,7 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
                  out + in_volume[i].r);
   };
   for_each_bundle(
-      t, N, true, w,
+      df, t, true, w,
       [&](std::size_t r) {
         const Bundle b = bundle_at(t, r, static_cast<std::size_t>(N), -1);
         if (b.axis == 1 || b.axis == 2) {
@@ -389,7 +389,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
   std::vector<Bundle> in_volume;  // bundles along y or z, every lane on the axis
   // Bundles along x have lanes on axis 0 only, so only axis 0's slabs take strips.
   for_each_bundle(
-      t, N, axis == 0, w,
+      df, t, axis == 0, w,
       [&](std::size_t r) {
         const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(di, t.axis.data() + r), hn::Set(di, axis)));
         if (hn::AllFalse(df, on_axis)) return;

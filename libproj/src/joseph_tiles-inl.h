@@ -313,15 +313,15 @@ HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT vol
   }
 }
 
-// A bundle whose rays (those that meet the volume, at least one) all run along x.
-HWY_INLINE bool along_x(const RayTable& t, std::size_t r, std::size_t n) {
-  bool any = false;
-  for (std::size_t l = 0; l < n; ++l) {
-    if (t.k_last[r + l] < t.k_first[r + l]) continue;
-    if (t.axis[r + l] != 0) return false;
-    any = true;
-  }
-  return any;
+// A bundle whose rays (those that meet the volume, at least one) all run along x. (As a loop
+// over lanes this was 1.8 % of a circular back projection: every slab task asks it of every
+// bundle, twice.)
+template <class DF>
+HWY_INLINE bool along_x(DF, const RayTable& t, std::size_t r) {
+  const hn::RebindToSigned<DF> di;
+  const auto meets = hn::Not(hn::Lt(hn::LoadU(di, t.k_last.data() + r), hn::LoadU(di, t.k_first.data() + r)));
+  const auto other_axis = hn::Not(hn::Eq(hn::LoadU(di, t.axis.data() + r), hn::Zero(di)));
+  return !hn::AllFalse(di, meets) && hn::AllFalse(di, hn::And(meets, other_axis));
 }
 
 enum class TileFit { nothing, fits, too_large };
