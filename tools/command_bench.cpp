@@ -89,7 +89,7 @@ double relative_difference(const FloatBuffer& a, const FloatBuffer& b) {
 // One direction (forward or back) of one trajectory: fast on every view, reference on a subset,
 // its time scaled per view to the full set (stated in the output).
 nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool forward, std::ostream& log) {
-  const JosephProjector fast({o.threads, 8});
+  const JosephProjector fast({o.threads});
   const int n_views = static_cast<int>(p.views.size());
   const int n_ref = std::min(o.reference_views, n_views);
   const std::vector<ProjectionMatrix> ref_views = reference_subset(p, n_ref);
@@ -171,7 +171,7 @@ nlohmann::json cpu_identity() {
 void run_bench(const BenchOptions& o) {
   std::ostream& log = o.json ? std::cerr : std::cout;
   JosephProjector::use_simd_target(o.simd);
-  const JosephProjector fast({o.threads, 8});
+  const JosephProjector fast({o.threads});
   nlohmann::json result;
   result["threads"] = fast.threads();
   result["simd"] = {{"target", JosephProjector::simd_target()},

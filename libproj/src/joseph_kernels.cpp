@@ -79,7 +79,9 @@ HWY_INLINE void march_back(DF df, const RayTable& t, const Bundle& b, hn::Vec<DF
 // and how each is marched through a tile or (where the tile would be too large) through the
 // volume.
 struct XStrip {
-  static constexpr int kMaxBundles = 128;
+  // Room for the bundles of a strip of kLinesAcrossRows lines (96 on AVX-512, 192 on AVX2, 384
+  // on SSE4) and no fewer than 128; bundles beyond that march in the volume.
+  static constexpr int kMaxBundles = std::clamp(kStripColumns * kLinesAcrossRows, 128, 384);
   int count = 0;
   std::size_t entries[kMaxBundles];  // in the table
   Bundle tile[kMaxBundles];          // the same bundles in `local`, addressing the tile
@@ -228,7 +230,8 @@ HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRIC
   XStrip& s = w.strip;
   RayTable& local = w.local;
   prepare_strip(df, t, s, local);
-  HWY_ALIGN float sums[XStrip::kMaxBundles * kMaxLanes] = {};
+  HWY_ALIGN float sums[XStrip::kMaxBundles * kMaxLanes];
+  for (int i = 0; i < s.count; ++i) hn::Store(hn::Zero(df), df, sums + i * kMaxLanes);
   const XGrid g = x_grid(t, s, hn::Lanes(df));
   Tile tile;
   tile.data = w.tile_data.data();

@@ -27,7 +27,7 @@ namespace hn = hwy::HWY_NAMESPACE;
 // strip of a table (one per detector row) are marched through a tile instead: the slices of 16
 // steps, copied with y contiguous (a transposition), where the row-window paths apply as they
 // do to rays along y and z. Voxels outside the volume are zeros in the tile, as the masked
-// paths make them. A tile is at most kTileSlices x kTileMaxHeight x kTileMaxWidth floats (192 kB).
+// paths make them. A tile is at most kTileSlices x kTileMaxHeight x kTileMaxWidth floats (384 kB).
 constexpr int kTileSlices = 16;
 // Bundles of this many neighbouring columns (and every row of the table) share a tile: 64
 // pixels of a line, whatever the lanes. Wider tiles copy each voxel fewer times (a tile's width
@@ -37,7 +37,9 @@ constexpr int kTileSlices = 16;
 // along x to the gathers (until session 30; 64 pixels made the Zen 4's circular forward 1.4x
 // and back 1.28x faster, 96 pixels or 256-voxel tiles less so).
 constexpr int kStripColumns = 64 / static_cast<int>(HWY_LANES(float));
-constexpr int kTileMaxWidth = 128, kTileMaxHeight = 24;
+// Tables of 24 lines (JosephProjector::default_rows_per_block, spherical views) span about 26
+// rows along z plus the drift of oblique rays: 48 rather than 24 (session 37).
+constexpr int kTileMaxWidth = 128, kTileMaxHeight = 48;
 
 struct Tile {
   int k0 = 0, slices = 0;  // x range k0 .. k0 + slices - 1

@@ -14,6 +14,9 @@
 namespace ctk::detail {
 
 inline constexpr int kMaxLanes = 16;  // widest float vector (AVX-512); rows are padded to it
+// Lines per table for views whose rays cross the rows of their slices
+// (JosephProjector::default_rows_per_block); the kernels' strips hold that many rows.
+inline constexpr int kLinesAcrossRows = 24;
 
 // What a kernel needs to know about one bundle of N neighbouring rays before marching it.
 struct Bundle {

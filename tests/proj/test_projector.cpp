@@ -213,16 +213,55 @@ TEST(JosephProjector, RaysAlongXThroughTilesAgreeWithTheReferenceAndAreAdjoint) 
   });
 }
 
-// A table of many lines on a wide detector: a strip of bundles along x (8 bundles' columns of
-// every line) then holds more than a strip takes (XStrip::kMaxBundles, 128) on every SIMD
-// width, and the bundles past it march through the volume instead of a tile.
+// A table of many lines on a wide detector: a strip of bundles along x (64 pixels of each of
+// 40 lines: 160 bundles of 16 lanes, 320 of 8, 640 of 4) then holds more than a strip takes
+// (XStrip::kMaxBundles: 128, 192, 384) on every SIMD width, and the bundles past it march
+// through the volume instead of a tile.
 TEST(JosephProjector, StripsOverTheirBundleLimitAgreeWithTheReference) {
-  const Problem p = problem_with_views(VolumeLayout::centred({30, 70, 40}, {1.0, 1.0, 1.0}), 24, 130, 250, 400,
+  const Problem p = problem_with_views(VolumeLayout::centred({30, 70, 40}, {1.0, 1.0, 1.0}), 40, 130, 250, 400,
                                        {{Eigen::Vector3d(1, 0, 0), 0.8}, {Eigen::Vector3d(-1, 0.3, 0.2), 0.8}},
                                        {0.02, -0.03}, {0.2, 0.1}, Eigen::Vector3d(0.3, 1.0, -0.2));
   ProjectorOptions options;
-  options.rows_per_block = 24;
+  options.rows_per_block = 40;
   testing::on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 61, options), 1e-5); });
+}
+
+// ProjectorOptions::rows_per_block 0 takes 8 lines per table where the median view's central
+// ray crosses fewer than 0.2 rows of its slices per slice (counted in voxels), 24 where more.
+TEST(JosephProjector, DefaultTablesAreTallerWhereRaysCrossTheRowsOfTheirSlices) {
+  const VolumeLayout cube = VolumeLayout::centred({40, 36, 30}, {1.0, 1.0, 1.0});
+  const auto views = [](const std::vector<Eigen::Vector3d>& directions) {
+    std::vector<ProjectionMatrix> out;
+    for (const Eigen::Vector3d& d : directions)
+      out.push_back(view_from(d.normalized(), 300, 450, 48, 40, 1.5, 0, 0, {0, 0}, Eigen::Vector3d::Zero()));
+    return out;
+  };
+  // Along y, x and z; the rows of a slice run along x (along y for rays along x), so z (y for
+  // rays along z) is across them.
+  EXPECT_EQ(JosephProjector::default_rows_per_block(views({{0, 1, 0}, {1, 0, 0.1}, {0.15, 0, 1}}), cube), 8);
+  EXPECT_EQ(JosephProjector::default_rows_per_block(views({{0, 1, 0.3}, {1, 0.1, 0.4}, {0, 0.3, 1}}), cube), 24);
+  // Along rows only (x for rays along y; y for rays along x) is not across.
+  EXPECT_EQ(JosephProjector::default_rows_per_block(views({{0.5, 1, 0}, {1, 0.6, 0}, {0.1, 1, 0.1}}), cube), 8);
+  // The median decides: two of three views within 0.2.
+  EXPECT_EQ(JosephProjector::default_rows_per_block(views({{0, 1, 0.5}, {0, 1, 0.1}, {1, 0, 0}}), cube), 8);
+  // Counted in voxels: 0.3 mm across per mm along is 0.15 voxel with voxels twice as tall.
+  const VolumeLayout tall = VolumeLayout::centred({40, 36, 30}, {1.0, 1.0, 2.0});
+  EXPECT_EQ(JosephProjector::default_rows_per_block(views({{0, 1, 0.3}}), cube), 24);
+  EXPECT_EQ(JosephProjector::default_rows_per_block(views({{0, 1, 0.3}}), tall), 8);
+  EXPECT_EQ(JosephProjector::default_rows_per_block({}, cube), 8);
+  EXPECT_THROW(JosephProjector({0, -1}), std::invalid_argument);
+}
+
+// Oblique views with the default tables (24 lines of a 40-row detector: a full table and a
+// short one per view) against the reference, adjoint, on every SIMD target.
+TEST(JosephProjector, DefaultTablesForObliqueViewsAgreeWithTheReference) {
+  const Problem p = problem_with_views(VolumeLayout::centred({40, 36, 30}, {1.0, 1.0, 1.0}), 40, 48, 300, 450,
+                                       {{Eigen::Vector3d(0, 1, 0.5), 1.2},
+                                        {Eigen::Vector3d(1, -0.4, 0.6), 1.2, 25},
+                                        {Eigen::Vector3d(0.3, -0.5, 1), 1.2, 70}},
+                                       {0.02, -0.03}, {0.3, -0.2}, Eigen::Vector3d(0.5, -0.4, 0.3));
+  ASSERT_EQ(JosephProjector::default_rows_per_block(p.views, p.layout), 24);
+  testing::on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 71), 1e-5); });
 }
 
 // Detectors turned about the beam: the fast projector deals each view's pixels to SIMD lanes

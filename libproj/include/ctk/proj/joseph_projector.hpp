@@ -18,7 +18,8 @@ namespace ctk {
 
 struct ProjectorOptions {
   int threads = 0;         // 0: all OpenMP threads
-  int rows_per_block = 8;  // detector lines per ray table (rows, or staircases across the detector)
+  int rows_per_block = 0;  // detector lines per ray table (rows, or staircases across the
+                           // detector); 0: JosephProjector::default_rows_per_block of the views
 };
 
 class JosephProjector {
@@ -29,6 +30,11 @@ class JosephProjector {
   void forward(const Volume& x, const std::vector<ProjectionMatrix>& views, ProjectionStack& y) const;
   /// x = A' y; x's layout is kept, its values overwritten.
   void back(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views, Volume& x) const;
+
+  /// Detector lines per ray table for these views when ProjectorOptions::rows_per_block is 0:
+  /// 8, or 24 where the views' rays typically cross the rows of their slices (the median view's
+  /// central ray runs more than 0.2 voxel across rows per slice, as in spherical trajectories).
+  static int default_rows_per_block(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout);
 
   /// The SIMD target chosen on this machine ("AVX3", "AVX2", ...) and its float lane count.
   static std::string simd_target();
@@ -42,6 +48,7 @@ class JosephProjector {
   int threads() const;
 
  private:
+  int rows_per_block(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout) const;
   ProjectorOptions options_;
 };
 
