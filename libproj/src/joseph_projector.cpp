@@ -17,14 +17,15 @@ constexpr int kBackTableRays = 32768;  // rays per shared back-projection table 
 }  // namespace
 
 JosephProjector::JosephProjector(ProjectorOptions options) : options_(options) {
-  if (options_.rows_per_block < 0) throw std::invalid_argument("ProjectorOptions: rows_per_block must not be negative (0: the default for the views)");
+  if (options_.rows_per_block < 0)
+    throw std::invalid_argument("ProjectorOptions: rows_per_block must not be negative (0: the default for the views)");
 }
 
 // A chunk of slices (16 along x through tiles, 8 or 16 elsewhere) of a table's lines touches the
 // rows of the lines plus the rows its rays drift across. Where the rays run within 0.2 voxel
 // per slice of the rows (circular trajectories about an axis of the volume), 8 lines are best;
 // where they cross rows faster (spherical trajectories), a taller table touches fewer rows per
-// sample. The standard problem on the Zen 5 (session 37): 24 lines made spherical views 1.08-1.16x
+// sample. The standard problem on the Zen 5 (session 37): 24 lines made spherical views 1.06-1.16x
 // faster each way and circular ones 0.94-0.99x forward (benchmarks/README.md).
 int JosephProjector::default_rows_per_block(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout) {
   constexpr int kLinesAlongRows = 8;
