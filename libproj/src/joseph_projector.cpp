@@ -44,7 +44,7 @@ int JosephProjector::default_rows_per_block(const std::vector<ProjectionMatrix>&
   return *middle > kAcrossSlope ? detail::kLinesAcrossRows : kLinesAlongRows;
 }
 
-int JosephProjector::rows_per_block(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout) const {
+int JosephProjector::lines_per_table(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout) const {
   return options_.rows_per_block > 0 ? options_.rows_per_block : default_rows_per_block(views, layout);
 }
 
@@ -118,7 +118,7 @@ Value* pixel_of(Stack& y, int v, const detail::LanePath& path, int line, int lan
 
 void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatrix>& views, ProjectionStack& y) const {
   check_stack_matches_views(y, views.size());
-  const int rows_per_block = this->rows_per_block(views, x.layout);
+  const int rows_per_block = lines_per_table(views, x.layout);
   const ViewPaths paths(views, x.layout, y.cols, y.rows, rows_per_block);
   const int items = y.views * paths.most_blocks;
 #pragma omp parallel num_threads(threads())
@@ -153,7 +153,7 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
   check_stack_matches_views(y, views.size());
   std::fill(x.data.begin(), x.data.end(), 0.0f);
   if (y.views == 0) return;
-  const int rows_per_block = this->rows_per_block(views, x.layout);
+  const int rows_per_block = lines_per_table(views, x.layout);
   const ViewPaths paths(views, x.layout, y.cols, y.rows, rows_per_block);
   if (paths.most_blocks == 0) return;  // no view's footprint meets its detector
   const int n_threads = threads();

@@ -48,7 +48,8 @@ class JosephProjector {
   int threads() const;
 
  private:
-  int rows_per_block(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout) const;
+  // ProjectorOptions::rows_per_block, or its default for these views.
+  int lines_per_table(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout) const;
   ProjectorOptions options_;
 };
 
