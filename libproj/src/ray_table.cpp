@@ -105,11 +105,7 @@ void RayTable::fill(const ViewRays& rays, const VolumeLayout& layout, int slot, 
       empty(first, first + static_cast<std::size_t>(count));
       continue;
     }
-    for (int l = 0; l < kMaxLanes; ++l) {
-      int pu, pv;
-      path.pixel(line_begin + row, lane + std::min(l, count - 1), pu, pv);
-      u[l] = pu, v[l] = pv;
-    }
+    lane_pixels(path, line_begin + row, lane, count, u, v);
     prepare_rays(rays, layout, origin_b, origin_c, u, v, count, p);
     store_rays(p, layout, count, *this, first);
   }

@@ -125,6 +125,9 @@ struct PreparedRays {
 /// kMaxLanes), SIMD across rays; origin_b and origin_c are the table's grid origin.
 void prepare_rays(const ViewRays& rays, const VolumeLayout& layout, int origin_b, int origin_c, const double* u,
                   const double* v, int count, PreparedRays& out);
+/// The pixels (u[l], v[l]) of lanes lane + min(l, count - 1), l < kMaxLanes, of a line (as
+/// LanePath::pixel finds them), for prepare_rays.
+void lane_pixels(const LanePath& path, int line, int lane, int count, double* u, double* v);
 /// Entries [first, first + count) of `table` from p (count <= kMaxLanes), as fill() stores them.
 void store_rays(const PreparedRays& p, const VolumeLayout& layout, int count, RayTable& table, std::size_t first);
 

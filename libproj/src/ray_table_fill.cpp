@@ -122,6 +122,25 @@ void PrepareRays(const ViewRays& rays, const VolumeLayout& layout, int grid_orig
   }
 }
 
+// LanePath::pixel of lanes lane + min(l, count - 1), l < kMaxLanes, in doubles, with the same
+// operations (so the same values), stored as PrepareRays loads them. Found one lane at a time in
+// RayTable::fill, the compiler's pairs of scalar results were reloaded as vectors before their
+// stores had left, and that stall was most of the fill (3 % of a circular back projection, session
+// 38); a vector store that the same vector load reads back is forwarded.
+void LanePixels(const LanePath& path, int line, int lane, int count, double* u, double* v) {
+  const hn::ScalableTag<double> d;
+  const hn::Rebind<std::int32_t, decltype(d)> di;
+  const int N = static_cast<int>(hn::Lanes(d));
+  const auto line0 = hn::Set(d, path.line_first + line), slope = hn::Set(d, path.slope), half = hn::Set(d, 0.5);
+  const auto last = hn::Set(di, count - 1), first = hn::Set(di, path.major_first + lane);
+  for (int i = 0; i < kMaxLanes; i += N) {
+    const auto major = hn::PromoteTo(d, hn::Add(first, hn::Min(hn::Iota(di, i), last)));
+    const auto minor = hn::Add(line0, hn::Floor(hn::Add(hn::Mul(major, slope), half)));
+    hn::StoreU(path.along_u ? major : minor, d, u + i);
+    hn::StoreU(path.along_u ? minor : major, d, v + i);
+  }
+}
+
 // Entries [first, first + count) of t from p, SIMD across rays: floats rounded from the doubles
 // as static_cast rounds them, the integers exact, each axis's strides and sizes picked per lane.
 // (One entry at a time, with its axis looked up, this took most of RayTable::fill: 4 % of a
@@ -178,11 +197,15 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace ctk::detail {
+HWY_EXPORT(LanePixels);
 HWY_EXPORT(PrepareRays);
 HWY_EXPORT(StoreRays);
 void prepare_rays(const ViewRays& rays, const VolumeLayout& layout, int origin_b, int origin_c, const double* u,
                   const double* v, int count, PreparedRays& out) {
   HWY_DYNAMIC_DISPATCH(PrepareRays)(rays, layout, origin_b, origin_c, u, v, count, out);
+}
+void lane_pixels(const LanePath& path, int line, int lane, int count, double* u, double* v) {
+  HWY_DYNAMIC_DISPATCH(LanePixels)(path, line, lane, count, u, v);
 }
 void store_rays(const PreparedRays& p, const VolumeLayout& layout, int count, RayTable& t, std::size_t first) {
   HWY_DYNAMIC_DISPATCH(StoreRays)(p, layout, count, t, first);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -78,6 +79,30 @@ TEST(RayPreparation, MatchesMarchRayExactlyOnEverySimdTarget) {
         EXPECT_NEAR(p.weight_mm[l], m.weight_mm, 1e-14 * m.weight_mm);  // Eigen may sum the squares in another order
         EXPECT_EQ(p.k_first[l], m.k_first);
         EXPECT_EQ(p.k_last[l], m.k_last);
+      }
+    });
+  }
+}
+
+TEST(RayPreparation, LanePixelsAreThePathsPixelsOnEverySimdTarget) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int trial = 0; trial < 200; ++trial) {
+    detail::LanePath path;
+    path.along_u = u(rng) < 0.5;
+    path.slope = trial % 10 == 0 ? 0.5 : 2 * u(rng) - 1;  // halves: rounding exactly between two pixels
+    path.major_first = static_cast<int>(300 * u(rng)) - 100;
+    path.line_first = static_cast<int>(300 * u(rng)) - 100;
+    const int line = static_cast<int>(50 * u(rng)), lane = 16 * static_cast<int>(20 * u(rng));
+    const int count = 1 + static_cast<int>(detail::kMaxLanes * u(rng));
+    testing::on_every_simd_target([&] {
+      double pu[detail::kMaxLanes], pv[detail::kMaxLanes];
+      detail::lane_pixels(path, line, lane, count, pu, pv);
+      for (int l = 0; l < detail::kMaxLanes; ++l) {
+        int expected_u, expected_v;
+        path.pixel(line, lane + std::min(l, count - 1), expected_u, expected_v);
+        EXPECT_EQ(pu[l], expected_u) << "trial " << trial << " lane " << l;
+        EXPECT_EQ(pv[l], expected_v) << "trial " << trial << " lane " << l;
       }
     });
   }
