@@ -423,11 +423,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
 // Rows past a slot's rows in use (RayTable::slot_rows) hold stale rays and are left alone.
 void PrepareBundles(RayTable& t, std::size_t begin, std::size_t end) {
   const std::size_t n = hn::Lanes(hn::ScalableTag<float>());
-  const auto view_stride = static_cast<std::size_t>(t.view_stride), row_stride = static_cast<std::size_t>(t.row_stride);
-  for (std::size_t i = begin; i < end; ++i) {
-    const std::size_t r = i * n, slot = r / view_stride;
-    if (r % view_stride / row_stride < static_cast<std::size_t>(t.rows_in(static_cast<int>(slot)))) t.bundles[i] = bundle_at(t, r, n, -1);
-  }
+  for (std::size_t i = begin; i < end; ++i) t.bundles[i] = bundle_at(t, i * n, n, -1);
 }
 
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }

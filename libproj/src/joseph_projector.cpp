@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <stdexcept>
 #include <type_traits>
@@ -149,6 +150,22 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
   }
 }
 
+namespace {
+
+// One table's worth of the back projection: `views` views from v0, lines from line_begin.
+struct BackBatch {
+  int line_begin = 0, v0 = 0, views = 0;
+};
+
+// Samples (lane-slices) per dominant axis that one thread's fill tasks put in a table; summed
+// over threads, they say which axes' slab tasks a table needs and in what order. Apart on their
+// own cache lines: each thread adds to its own while the others add to theirs.
+struct alignas(64) AxisSamples {
+  std::array<std::int64_t, 3> of_table[2] = {};
+};
+
+}  // namespace
+
 void JosephProjector::back(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views, Volume& x) const {
   check_stack_matches_views(y, views.size());
   std::fill(x.data.begin(), x.data.end(), 0.0f);
@@ -161,50 +178,80 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
   // once per view (barriers dominate small problems, and cost dearly when cores are shared).
   const int per_view = rows_per_block * ((paths.most_lanes + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes);
   const int batch = std::clamp(kBackTableRays / per_view, 1, y.views);
-  detail::RayTable table;  // shared: filled together, then read by every slab task
-  table.shape(batch, rows_per_block, paths.most_lanes);
-  table.bundles.resize(detail::bundle_count(table));
+  // Views innermost, as in forward(): a band of the volume stays in cache across views.
+  std::vector<BackBatch> batches;
+  for (int block = 0; block < paths.most_blocks; ++block)
+    for (int v0 = 0; v0 < y.views; v0 += batch) batches.push_back({block * rows_per_block, v0, std::min(batch, y.views - v0)});
+  // Two tables, shared by the threads: while the slab tasks read one, threads with no slab left
+  // fill the other for the next batch instead of waiting at the barrier.
+  std::array<detail::RayTable, 2> tables;
+  for (detail::RayTable& table : tables) {
+    table.shape(batch, rows_per_block, paths.most_lanes);
+    table.bundles.resize(detail::bundle_count(table));
+  }
+  std::vector<AxisSamples> samples(static_cast<std::size_t>(n_threads));
+  const int lanes = detail::simd_float_lanes();
+  const int count = rows_per_block * tables[0].row_stride;  // entries per view
+  // A view's entries are filled in n_threads parts of whole bundles, each prepared by its filler.
+  const int part_size = ((count + n_threads - 1) / n_threads + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes;
+  // Fill task `task` (of b.views * n_threads) of batch b into tables[buffer]: its part of one
+  // view's rays, their projection values, their bundles, and their samples per axis.
+  const auto fill = [&](const BackBatch& b, int buffer, int task) {
+    detail::RayTable& table = tables[static_cast<std::size_t>(buffer)];
+    const int slot = task / n_threads, part = task % n_threads, v = b.v0 + slot;
+    const auto& path = paths.path[static_cast<std::size_t>(v)];
+    // Lines past this view's last: rows of the shared table the kernels skip (slot_rows).
+    const int rows = std::clamp(path.lines - b.line_begin, 0, rows_per_block);
+    const int begin = std::min(count, part * part_size), filled = std::min(begin + part_size, rows * table.row_stride);
+    const std::size_t first = table.entry(slot, 0, 0);
+    table.fill(paths.rays[static_cast<std::size_t>(v)], x.layout, slot, path, b.line_begin, begin, std::max(begin, filled));
+    if (part == 0) table.slot_rows[static_cast<std::size_t>(slot)] = rows;
+    if (task == 0) table.views = b.views;
+    auto& on_axis = samples[static_cast<std::size_t>(omp_get_thread_num())].of_table[buffer];
+    for (int r = begin; r < filled; ++r) {
+      const int row = r / table.row_stride, lane = r % table.row_stride;
+      const float* pixel = pixel_of(y, v, path, b.line_begin + row, lane);
+      const std::size_t e = first + static_cast<std::size_t>(r);
+      table.value[e] = pixel ? *pixel : 0.0f;
+      if (table.k_last[e] >= table.k_first[e]) on_axis[static_cast<std::size_t>(table.axis[e])] += table.k_last[e] - table.k_first[e] + 1;
+    }
+    if (begin < filled)
+      detail::prepare_bundles(table, (first + static_cast<std::size_t>(begin)) / static_cast<std::size_t>(lanes),
+                              (first + static_cast<std::size_t>(filled)) / static_cast<std::size_t>(lanes));
+  };
 #pragma omp parallel num_threads(n_threads)
   {
-    // Views innermost, as in forward(): a band of the volume stays in cache across views.
-    for (int block = 0; block < paths.most_blocks; ++block) {
-      const int line_begin = block * rows_per_block;
-      const int count = rows_per_block * table.row_stride;
-      const int chunk = (count + n_threads - 1) / n_threads;
-      for (int v0 = 0; v0 < y.views; v0 += batch) {
-        const int in_batch = std::min(batch, y.views - v0);
 #pragma omp for schedule(static)
-        for (int task = 0; task < in_batch * n_threads; ++task) {
-          const int slot = task / n_threads, part = task % n_threads, v = v0 + slot;
-          const auto& path = paths.path[static_cast<std::size_t>(v)];
-          // Lines past this view's last: rows of the shared table the kernels skip (slot_rows).
-          const int rows = std::clamp(path.lines - line_begin, 0, rows_per_block);
-          const int begin = std::min(count, part * chunk), end = std::min(count, begin + chunk);
-          const std::size_t first = table.entry(slot, 0, 0);
-          const int filled = std::min(end, rows * table.row_stride);
-          table.fill(paths.rays[static_cast<std::size_t>(v)], x.layout, slot, path, line_begin, begin,
-                     std::max(begin, filled));
-          if (part == 0) table.slot_rows[static_cast<std::size_t>(slot)] = rows;
-          for (int r = begin; r < filled; ++r) {
-            const int row = r / table.row_stride, lane = r % table.row_stride;
-            const float* pixel = pixel_of(y, v, path, line_begin + row, lane);
-            table.value[first + static_cast<std::size_t>(r)] = pixel ? *pixel : 0.0f;
-          }
-          if (task == 0) table.views = in_batch;
-        }
-        // Each bundle once for every slab task that marches it.
-        const auto bundles_in_use = static_cast<std::size_t>(in_batch) * table.bundles.size() / static_cast<std::size_t>(batch);
-#pragma omp for schedule(static)
-        for (int part = 0; part < n_threads; ++part)
-          detail::prepare_bundles(table, bundles_in_use * static_cast<std::size_t>(part) / static_cast<std::size_t>(n_threads),
-                                  bundles_in_use * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(n_threads));
+    for (int task = 0; task < batches[0].views * n_threads; ++task) fill(batches[0], 0, task);
+    for (std::size_t i = 0; i < batches.size(); ++i) {
+      const int buffer = static_cast<int>(i % 2);
+      const detail::RayTable& table = tables[static_cast<std::size_t>(buffer)];
+      // This table's axes, fewest samples first; the last one's slab tasks share a loop with the
+      // next table's fill tasks, which then take up the threads that would wait for the last slab.
+      std::array<std::int64_t, 3> on_axis{};
+      for (const AxisSamples& s : samples)
+        for (int a = 0; a < 3; ++a) on_axis[static_cast<std::size_t>(a)] += s.of_table[buffer][static_cast<std::size_t>(a)];
+      std::array<int, 3> order{0, 1, 2};
+      std::stable_sort(order.begin(), order.end(), [&](int p, int q) {
+        return on_axis[static_cast<std::size_t>(p)] < on_axis[static_cast<std::size_t>(q)];
+      });
+      const bool next = i + 1 < batches.size();
+      const int fills = next ? batches[i + 1].views * n_threads : 0;
+      auto& mine = samples[static_cast<std::size_t>(omp_get_thread_num())].of_table[1 - buffer];
+      mine = {};  // read last for batch i - 1, before the barrier that ended it
+      for (int o = 0; o < 3; ++o) {
+        const int axis = order[static_cast<std::size_t>(o)];
+        const bool last = o == 2;
+        if (on_axis[static_cast<std::size_t>(axis)] == 0 && !last) continue;
+        const int n = x.layout.size[static_cast<std::size_t>(axis)];
         // A sample at slice k writes only slice k of its dominant axis: slabs are disjoint.
-        for (int axis = 0; axis < 3; ++axis) {
-          const int n = x.layout.size[static_cast<std::size_t>(axis)];
-          const int slabs = std::min(n, 4 * n_threads);
+        const int slabs = on_axis[static_cast<std::size_t>(axis)] == 0 ? 0 : std::min(n, 4 * n_threads);
 #pragma omp for schedule(dynamic, 1)
-          for (int s = 0; s < slabs; ++s)
-            detail::back_rays(table, axis, s * n / slabs, (s + 1) * n / slabs, x.data.data());
+        for (int task = 0; task < slabs + (last ? fills : 0); ++task) {
+          if (task < slabs)
+            detail::back_rays(table, axis, task * n / slabs, (task + 1) * n / slabs, x.data.data());
+          else
+            fill(batches[i + 1], 1 - buffer, task - slabs);
         }
       }
     }

@@ -137,7 +137,8 @@ void forward_rays(const RayTable& table, const float* volume, float* out);
 /// volume += A' y for the rays of dominant `axis`, slices [k_begin, k_end) only; y is
 /// table.value (each ray's projection value).
 void back_rays(const RayTable& table, int axis, int k_begin, int k_end, float* volume);
-/// Fills table.bundles for bundles [begin, end) (count: bundle_count()).
+/// Fills table.bundles for bundles [begin, end) (count: bundle_count()), from their filled
+/// entries (bundles in rows a slot does not use are left as they are).
 void prepare_bundles(RayTable& table, std::size_t begin, std::size_t end);
 std::size_t bundle_count(const RayTable& table);
 const char* simd_target_name();
