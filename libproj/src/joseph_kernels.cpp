@@ -420,7 +420,8 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
 }
 
 // Every lane on one axis (the usual case): the bundle restricted to that axis is the bundle.
-// Rows past a slot's rows in use (RayTable::slot_rows) hold stale rays and are left alone.
+// Only bundles of rows in use: rows past a slot's (RayTable::slot_rows) hold stale rays, and the
+// callers (the fillers of their rays) pass none of them.
 void PrepareBundles(RayTable& t, std::size_t begin, std::size_t end) {
   const std::size_t n = hn::Lanes(hn::ScalableTag<float>());
   for (std::size_t i = begin; i < end; ++i) t.bundles[i] = bundle_at(t, i * n, n, -1);

@@ -164,6 +164,18 @@ struct alignas(64) AxisSamples {
   std::array<std::int64_t, 3> of_table[2] = {};
 };
 
+// The axes of table `buffer`, fewest samples first, and their samples over every thread.
+std::array<int, 3> axes_fewest_first(const std::vector<AxisSamples>& samples, int buffer, std::array<std::int64_t, 3>& on_axis) {
+  on_axis = {};
+  for (const AxisSamples& s : samples)
+    for (std::size_t a = 0; a < 3; ++a) on_axis[a] += s.of_table[buffer][a];
+  std::array<int, 3> order{0, 1, 2};
+  std::stable_sort(order.begin(), order.end(), [&](int p, int q) {
+    return on_axis[static_cast<std::size_t>(p)] < on_axis[static_cast<std::size_t>(q)];
+  });
+  return order;
+}
+
 }  // namespace
 
 void JosephProjector::back(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views, Volume& x) const {
@@ -228,13 +240,8 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
       const detail::RayTable& table = tables[static_cast<std::size_t>(buffer)];
       // This table's axes, fewest samples first; the last one's slab tasks share a loop with the
       // next table's fill tasks, which then take up the threads that would wait for the last slab.
-      std::array<std::int64_t, 3> on_axis{};
-      for (const AxisSamples& s : samples)
-        for (int a = 0; a < 3; ++a) on_axis[static_cast<std::size_t>(a)] += s.of_table[buffer][static_cast<std::size_t>(a)];
-      std::array<int, 3> order{0, 1, 2};
-      std::stable_sort(order.begin(), order.end(), [&](int p, int q) {
-        return on_axis[static_cast<std::size_t>(p)] < on_axis[static_cast<std::size_t>(q)];
-      });
+      std::array<std::int64_t, 3> on_axis;
+      const std::array<int, 3> order = axes_fewest_first(samples, buffer, on_axis);
       const bool next = i + 1 < batches.size();
       const int fills = next ? batches[i + 1].views * n_threads : 0;
       auto& mine = samples[static_cast<std::size_t>(omp_get_thread_num())].of_table[1 - buffer];
