@@ -408,15 +408,36 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
       },
       [&] { back_strip(df, t, k_begin, k_end, w, volume); });
   const auto all = hn::FirstN(df, hn::Lanes(df));
+  // A bundle's interior chunk is added only after the next bundle's corners are found and its
+  // rows asked for: those rows then have a bundle's additions to arrive instead of none (the
+  // first rows of a chunk had been asked for right before their loads). Each voxel still
+  // receives the bundles in order. Spherical 1.033x, circular 1.007x (session 38); asking two or
+  // three bundles ahead gained nothing more.
+  InteriorScatter<decltype(df)> scatter[2];
+  int pending = -1;  // the scatter found and not yet added, if any
+  const auto add_pending = [&] {
+    if (pending >= 0) scatter[pending].add(df, volume);
+    pending = -1;
+  };
   for (int k0 = k_begin; k0 < k_end; k0 += kBackChunkSlices) {
     const int k1 = std::min(k_end - 1, k0 + kBackChunkSlices - 1);
     for (const Bundle& b : in_volume) {
       const int first = std::max(k0, b.k_lo), last = std::min(k1, b.k_hi);
       if (first > last) continue;
       const auto value = hn::Mul(hn::LoadU(df, t.value.data() + b.r), hn::LoadU(df, t.weight.data() + b.r));
-      march_back(df, t, b, value, all, first, last, volume, Rows::fetch_ahead);
+      if (first < b.in_lo || last > b.in_hi) {  // masked slices: march_back, in order
+        add_pending();
+        march_back(df, t, b, value, all, first, last, volume, Rows::fetch_ahead);
+        continue;
+      }
+      static_assert(kBackChunkSlices <= kInteriorBatch, "a bundle's chunk is one batch");
+      const int next = pending == 0 ? 1 : 0;
+      scatter[next].corners(df, t, b.r, first, last - first + 1, value, volume, Rows::fetch_ahead);
+      add_pending();
+      pending = next;
     }
   }
+  add_pending();
 }
 
 // Every lane on one axis (the usual case): the bundle restricted to that axis is the bundle.

@@ -592,22 +592,30 @@ HWY_INLINE void interior_corners_avx2(const RayTable& t, std::size_t r, int k0, 
 // above it). With Rows::fetch_ahead, the pairs' lines are asked for between the passes
 // (prefetch_span, above).
 inline constexpr int kInteriorBatch = 16;
+// One batch of those slices of one bundle: corners() is the first pass (and asks for the rows),
+// add() the second. Apart so that BackRays can find the next bundle's corners, and ask for its
+// rows, before adding this one's.
 template <class DF>
-HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_t r, int k_lo, int k_hi, hn::Vec<DF> value,
-                                            float* HWY_RESTRICT volume, Rows fetch) {
-  const int N = static_cast<int>(hn::Lanes(df));
+struct InteriorScatter {
   HWY_ALIGN std::int32_t index[kInteriorBatch][kMaxLanes];
   HWY_ALIGN float weight[kInteriorBatch + 1][4][kMaxLanes];  // [i][q][l], or paired [i][q][2l + (0, 1)]; + 1: add_pair
-  const std::int32_t db = t.stride_b[r], dc = t.stride_c[r];  // corner offsets, as in interior_corners_at
-  const bool pairs = HWY_TARGET != HWY_SCALAR && db == 1;
-#if HWY_TARGET != HWY_AVX2
-  const InteriorBundle<DF> bundle(df, t, r);
-#endif
-  for (int k0 = k_lo; k0 <= k_hi; k0 += kInteriorBatch) {
-    const int count = std::min(kInteriorBatch, k_hi - k0 + 1);
+  int count = 0;                                             // slices found
+  std::int32_t db = 0, dc = 0;                               // corner offsets, as in interior_corners_at
+  bool pairs = false;
+
+  // Slices [k0, k0 + count) of bundle r (count <= kInteriorBatch).
+  HWY_INLINE void corners(DF df, const RayTable& t, std::size_t r, int k0, int slices, hn::Vec<DF> value, const float* volume,
+                          Rows fetch) {
+    const int N = static_cast<int>(hn::Lanes(df));
+    count = slices;
+    db = t.stride_b[r];
+    dc = t.stride_c[r];
+    pairs = HWY_TARGET != HWY_SCALAR && db == 1;
 #if HWY_TARGET == HWY_AVX2
+    (void)df;
     interior_corners_avx2(t, r, k0, count, value.raw, pairs, index, weight);
 #else
+    const InteriorBundle<DF> bundle(df, t, r);
     for (int i = 0; i < count; ++i) {
       const Corners<DF> c = bundle.at(df, k0 + i);
       hn::Store(c.index[0], hn::RebindToSigned<DF>(), index[i]);
@@ -624,8 +632,12 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
         for (int l = 0; l < N; l += 8) prefetch_corner_rows(volume + index[i][l], dc);
         prefetch_corner_rows(volume + index[i][N - 1] + 1, dc);
       }
+  }
+
+  HWY_INLINE void add(DF df, float* HWY_RESTRICT volume) const {
+    const int N = static_cast<int>(hn::Lanes(df));
     if (pairs) {
-      const auto add_lane = [&](int i, int l) {  // lane l's pairs of slice k0 + i
+      const auto add_lane = [&](int i, int l) {  // lane l's pairs of slice i
         float* v = volume + index[i][l];
         add_pair(v, weight[i][0] + 2 * l);
         add_pair(v + dc, weight[i][2] + 2 * l);
@@ -646,7 +658,7 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
       for (int l = 0; l < N; ++l)
         for (int i = 0; i < count; ++i) add_lane(i, l);
 #endif
-      continue;
+      return;
     }
     for (int l = 0; l < N; ++l)
       for (int i = 0; i < count; ++i) {
@@ -656,6 +668,16 @@ HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_
         v[dc] += weight[i][2][l];
         v[db + dc] += weight[i][3][l];
       }
+  }
+};
+
+template <class DF>
+HWY_INLINE void scatter_add_interior_slices(DF df, const RayTable& t, std::size_t r, int k_lo, int k_hi, hn::Vec<DF> value,
+                                            float* HWY_RESTRICT volume, Rows fetch) {
+  InteriorScatter<DF> batch;
+  for (int k0 = k_lo; k0 <= k_hi; k0 += kInteriorBatch) {
+    batch.corners(df, t, r, k0, std::min(kInteriorBatch, k_hi - k0 + 1), value, volume, fetch);
+    batch.add(df, volume);
   }
 }
 
