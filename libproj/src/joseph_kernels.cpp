@@ -413,7 +413,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
   // first rows of a chunk had been asked for right before their loads). Each voxel still
   // receives the bundles in order. Spherical 1.033x, circular 1.007x (session 38); asking two or
   // three bundles ahead gained nothing more.
-  InteriorScatter<decltype(df)> scatter[2];
+  InteriorScatter<hn::ScalableTag<float>> scatter[2];
   int pending = -1;  // the scatter found and not yet added, if any
   const auto add_pending = [&] {
     if (pending >= 0) scatter[pending].add(df, volume);

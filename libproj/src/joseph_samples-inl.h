@@ -603,7 +603,8 @@ struct InteriorScatter {
   std::int32_t db = 0, dc = 0;                               // corner offsets, as in interior_corners_at
   bool pairs = false;
 
-  // Slices [k0, k0 + count) of bundle r (count <= kInteriorBatch).
+  // Slices [k0, k0 + slices) of bundle r (slices <= kInteriorBatch), `value` already times the
+  // path length.
   HWY_INLINE void corners(DF df, const RayTable& t, std::size_t r, int k0, int slices, hn::Vec<DF> value, const float* volume,
                           Rows fetch) {
     const int N = static_cast<int>(hn::Lanes(df));
@@ -612,7 +613,6 @@ struct InteriorScatter {
     dc = t.stride_c[r];
     pairs = HWY_TARGET != HWY_SCALAR && db == 1;
 #if HWY_TARGET == HWY_AVX2
-    (void)df;
     interior_corners_avx2(t, r, k0, count, value.raw, pairs, index, weight);
 #else
     const InteriorBundle<DF> bundle(df, t, r);
