@@ -411,8 +411,8 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
   // A bundle's interior chunk is added only after the next bundle's corners are found and its
   // rows asked for: those rows then have a bundle's additions to arrive instead of none (the
   // first rows of a chunk had been asked for right before their loads). Each voxel still
-  // receives the bundles in order. Spherical 1.033x, circular 1.007x (session 38); asking two or
-  // three bundles ahead gained nothing more.
+  // receives the bundles in order. Spherical 1.02-1.035x, circular 0.97-1.01x (session 38);
+  // asking two or three bundles ahead gained nothing more.
   InteriorScatter<hn::ScalableTag<float>> scatter[2];
   int pending = -1;  // the scatter found and not yet added, if any
   const auto add_pending = [&] {
