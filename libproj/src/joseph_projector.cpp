@@ -164,6 +164,19 @@ struct alignas(64) AxisSamples {
   std::array<std::int64_t, 3> of_table[2] = {};
 };
 
+// The first slice of slab s of `slabs` along `axis` (n slices). Along x, where slabs are at least
+// a tile chunk wide, on multiples of kTileSlices, where the tiles' chunks start: an edge inside a
+// chunk left two partial tiles, one per thread. Back projection with the edges moved, in-process
+// (session 38): 200^3 voxels (8 slabs of 25) 1.10x circular and 1.05x spherical, 300^3 1.07x and
+// 1.04x; 256^3 had them there already. Narrower slabs keep their even edges: at 80^3, rounded
+// edges left 5 slabs of 16 for 2 threads (0.96x).
+int slab_edge(int s, int slabs, int n, int axis) {
+  if (s >= slabs) return n;
+  const int even = s * n / slabs;
+  if (axis != 0 || n < slabs * detail::kTileSlices) return even;
+  return std::min(n, (even + detail::kTileSlices / 2) / detail::kTileSlices * detail::kTileSlices);
+}
+
 // The axes of table `buffer`, fewest samples first, and their samples over every thread.
 std::array<int, 3> axes_fewest_first(const std::vector<AxisSamples>& samples, int buffer, std::array<std::int64_t, 3>& on_axis) {
   on_axis = {};
@@ -256,7 +269,7 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
 #pragma omp for schedule(dynamic, 1)
         for (int task = 0; task < slabs + (last ? fills : 0); ++task) {
           if (task < slabs)
-            detail::back_rays(table, axis, task * n / slabs, (task + 1) * n / slabs, x.data.data());
+            detail::back_rays(table, axis, slab_edge(task, slabs, n, axis), slab_edge(task + 1, slabs, n, axis), x.data.data());
           else
             fill(batches[i + 1], 1 - buffer, task - slabs);
         }

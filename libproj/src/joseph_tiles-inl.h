@@ -27,8 +27,8 @@ namespace hn = hwy::HWY_NAMESPACE;
 // strip of a table (one per detector row) are marched through a tile instead: the slices of 16
 // steps, copied with y contiguous (a transposition), where the row-window paths apply as they
 // do to rays along y and z. Voxels outside the volume are zeros in the tile, as the masked
-// paths make them. A tile is at most kTileSlices x kTileMaxHeight x kTileMaxWidth floats (384 kB).
-constexpr int kTileSlices = 16;
+// paths make them. A tile is at most kTileSlices (ray_table.hpp) x kTileMaxHeight x
+// kTileMaxWidth floats (384 kB).
 // Bundles of this many neighbouring columns (and every row of the table) share a tile: 64
 // pixels of a line, whatever the lanes. Wider tiles copy each voxel fewer times (a tile's width
 // is its lanes' span plus the rays' drift): 64 pixels rather than 32 on AVX2 since session 26

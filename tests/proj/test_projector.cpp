@@ -213,6 +213,20 @@ TEST(JosephProjector, RaysAlongXThroughTilesAgreeWithTheReferenceAndAreAdjoint) 
   });
 }
 
+// A volume long in x seen along x: the back projection's slabs along x (8 for 2 threads) are
+// wide enough to start on the tiles' chunks of 16 slices, so their edges move off even shares
+// (slab_edge); on one thread (4 slabs) too; on three (12) they stay even.
+TEST(JosephProjector, SlabsAlongXOnTileChunksAgreeWithTheReference) {
+  const Problem p = problem_with_views(VolumeLayout::centred({150, 20, 16}, {1.0, 1.0, 1.0}), 16, 24, 250, 400,
+                                       {{Eigen::Vector3d(1, 0, 0), 1.6}, {Eigen::Vector3d(-1, 0.3, 0.1), 1.4}},
+                                       {0.03, -0.02}, {0.2, -0.1}, Eigen::Vector3d(0.5, 0.2, -0.3));
+  for (int threads : {1, 2, 3}) {
+    ProjectorOptions options;
+    options.threads = threads;
+    EXPECT_LT(expect_fast_matches_reference(p, 71, options), 1e-5) << threads << " threads";
+  }
+}
+
 // A table of many lines on a wide detector: a strip of bundles along x (64 pixels of each of
 // 40 lines: 160 bundles of 16 lanes, 320 of 8, 640 of 4) then holds more than a strip takes
 // (XStrip::kMaxBundles: 128, 192, 384) on every SIMD width, and the bundles past it march
