@@ -17,8 +17,9 @@ inline constexpr int kMaxLanes = 16;  // widest float vector (AVX-512); rows are
 // Lines per table for views whose rays cross the rows of their slices
 // (JosephProjector::default_rows_per_block); the kernels' strips hold that many rows.
 inline constexpr int kLinesAcrossRows = 24;
-// Slices of x per tile chunk for rays along x (joseph_tiles-inl.h): one 64-byte line of the
-// volume. Chunks start at multiples of it, and so do the back projection's slabs along x.
+// Slices of x per tile chunk for rays along x (joseph_tiles-inl.h): 16 floats, a 64-byte line
+// where the volume's rows start on one. Chunks start at multiples of it, and so do the back
+// projection's slabs along x where they are that wide (slab_edge).
 inline constexpr int kTileSlices = 16;
 
 // What a kernel needs to know about one bundle of N neighbouring rays before marching it.
