@@ -413,6 +413,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
   // first rows of a chunk had been asked for right before their loads). Each voxel still
   // receives the bundles in order. Spherical 1.02-1.035x, circular 0.97-1.01x (session 38);
   // asking two or three bundles ahead gained nothing more.
+  static_assert(kBackChunkSlices <= kInteriorBatch, "a bundle's chunk is one batch");
   InteriorScatter<hn::ScalableTag<float>> scatter[2];
   int pending = -1;  // the scatter found and not yet added, if any
   const auto add_pending = [&] {
@@ -430,7 +431,6 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
         march_back(df, t, b, value, all, first, last, volume, Rows::fetch_ahead);
         continue;
       }
-      static_assert(kBackChunkSlices <= kInteriorBatch, "a bundle's chunk is one batch");
       const int next = pending == 0 ? 1 : 0;
       scatter[next].corners(df, t, b.r, first, last - first + 1, value, volume, Rows::fetch_ahead);
       add_pending();

@@ -177,16 +177,19 @@ int slab_edge(int s, int slabs, int n, int axis) {
   return std::min(n, (even + detail::kTileSlices / 2) / detail::kTileSlices * detail::kTileSlices);
 }
 
-// The axes of table `buffer`, fewest samples first, and their samples over every thread.
-std::array<int, 3> axes_fewest_first(const std::vector<AxisSamples>& samples, int buffer, std::array<std::int64_t, 3>& on_axis) {
-  on_axis = {};
-  for (const AxisSamples& s : samples)
-    for (std::size_t a = 0; a < 3; ++a) on_axis[a] += s.of_table[buffer][a];
+// Table `buffer`'s samples per axis over every thread, and its axes fewest samples first.
+struct TableAxes {
+  std::array<std::int64_t, 3> samples{};
   std::array<int, 3> order{0, 1, 2};
-  std::stable_sort(order.begin(), order.end(), [&](int p, int q) {
-    return on_axis[static_cast<std::size_t>(p)] < on_axis[static_cast<std::size_t>(q)];
+};
+TableAxes axes_fewest_first(const std::vector<AxisSamples>& samples, int buffer) {
+  TableAxes t;
+  for (const AxisSamples& s : samples)
+    for (std::size_t a = 0; a < 3; ++a) t.samples[a] += s.of_table[buffer][a];
+  std::stable_sort(t.order.begin(), t.order.end(), [&](int p, int q) {
+    return t.samples[static_cast<std::size_t>(p)] < t.samples[static_cast<std::size_t>(q)];
   });
-  return order;
+  return t;
 }
 
 }  // namespace
@@ -253,19 +256,18 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
       const detail::RayTable& table = tables[static_cast<std::size_t>(buffer)];
       // This table's axes, fewest samples first; the last one's slab tasks share a loop with the
       // next table's fill tasks, which then take up the threads that would wait for the last slab.
-      std::array<std::int64_t, 3> on_axis;
-      const std::array<int, 3> order = axes_fewest_first(samples, buffer, on_axis);
+      const TableAxes axes = axes_fewest_first(samples, buffer);
       const bool next = i + 1 < batches.size();
       const int fills = next ? batches[i + 1].views * n_threads : 0;
       auto& mine = samples[static_cast<std::size_t>(omp_get_thread_num())].of_table[1 - buffer];
       mine = {};  // read last for batch i - 1, before the barrier that ended it
       for (int o = 0; o < 3; ++o) {
-        const int axis = order[static_cast<std::size_t>(o)];
-        const bool last = o == 2;
-        if (on_axis[static_cast<std::size_t>(axis)] == 0 && !last) continue;
+        const int axis = axes.order[static_cast<std::size_t>(o)];
+        const bool last = o == 2, busy = axes.samples[static_cast<std::size_t>(axis)] > 0;
+        if (!busy && !last) continue;
         const int n = x.layout.size[static_cast<std::size_t>(axis)];
         // A sample at slice k writes only slice k of its dominant axis: slabs are disjoint.
-        const int slabs = on_axis[static_cast<std::size_t>(axis)] == 0 ? 0 : std::min(n, 4 * n_threads);
+        const int slabs = busy ? std::min(n, 4 * n_threads) : 0;
 #pragma omp for schedule(dynamic, 1)
         for (int task = 0; task < slabs + (last ? fills : 0); ++task) {
           if (task < slabs)
