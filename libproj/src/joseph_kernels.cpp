@@ -2,8 +2,8 @@
 // at run time. Lanes are neighbouring rays; each lane carries its own axis, strides and range.
 // Here bundles of lanes are marched slice by slice; where one sample falls and how it reads and
 // writes its corners is in joseph_samples-inl.h, the forward projection's gather-free row window
-// in joseph_row_window-inl.h, and the tiles that rays along x march through in
-// joseph_tiles-inl.h.
+// in joseph_row_window-inl.h, the tiles that rays along x march through in joseph_tiles-inl.h,
+// and the bands the back projection adds through in joseph_bands-inl.h.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "joseph_kernels.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "joseph_bands-inl.h"
 #include "joseph_row_window-inl.h"
 #include "joseph_samples-inl.h"
 #include "joseph_tiles-inl.h"
@@ -141,8 +142,12 @@ struct StripWorkspace {
   XStrip strip;
   RayTable local;
   std::vector<float> tile_data;
+  // Kept from call to call (each thread's own, thread_local below): shaping the copies and
+  // sizing the tile (value-initialising 384 kB) on every call cost 1-2 % of each projection
+  // (session 39).
   void reserve(int rows, int lanes) {
-    local.shape(1, std::min(rows * kStripColumns, XStrip::kMaxBundles), lanes);
+    const int bundles = std::min(rows * kStripColumns, XStrip::kMaxBundles);
+    if (local.rows != bundles || local.row_stride != (lanes + kMaxLanes - 1) / kMaxLanes * kMaxLanes) local.shape(1, bundles, lanes);
     tile_data.resize(static_cast<std::size_t>(kTileSlices * kTileMaxHeight * kTileMaxWidth));
   }
 };
@@ -156,13 +161,14 @@ HWY_INLINE const Bundle* volume_bundles(const RayTable& t, std::size_t lanes, in
 
 // The volume's grid as the strip's rays along x see it, from a lane that runs along x: lanes
 // that miss the volume may carry another axis (or none), and along_x admits them.
-HWY_INLINE XGrid x_grid(const RayTable& t, const XStrip& s, std::size_t lanes) {
+HWY_INLINE XGrid x_grid(const RayTable& t, std::size_t bundle, std::size_t lanes) {
   for (std::size_t l = 0; l < lanes; ++l) {
-    const std::size_t r = s.entries[0] + l;
+    const std::size_t r = bundle + l;
     if (t.axis[r] == 0 && t.k_first[r] <= t.k_last[r]) return {t.stride_b[r], t.stride_c[r], t.n_b[r], t.n_c[r]};
   }
   return {};  // unreachable: along_x requires such a lane
 }
+HWY_INLINE XGrid x_grid(const RayTable& t, const XStrip& s, std::size_t lanes) { return x_grid(t, s.entries[0], lanes); }
 
 // Slices [k_begin, k_end) in chunks of up to kTileSlices, aligned so that each tile row is one
 // cache line where the slab allows.
@@ -339,7 +345,7 @@ HWY_INLINE void for_each_bundle(DF df, const RayTable& t, bool tiles, StripWorks
 void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY_RESTRICT out) {
   const hn::ScalableTag<float> df;
   const int N = static_cast<int>(hn::Lanes(df));
-  StripWorkspace w;
+  static thread_local StripWorkspace w;
   w.reserve(t.rows, N);
   std::vector<Bundle> in_volume;
   std::vector<float> sums;
@@ -383,16 +389,89 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
   march_chunks();
 }
 
+// What BackRays keeps from call to call, each thread its own.
+struct BackWorkspace {
+  StripWorkspace strips;
+  std::vector<Bundle> in_volume;  // bundles along y or z, every lane on the axis
+  std::vector<Bundle> along_x;    // the strips' bundles, in the table's order (kBands)
+  std::vector<Bundle> group;      // those of one column group
+  std::vector<bool> in_strips;    // per column group: whether it goes strip by strip
+  std::vector<QuadBand> chunks;   // one group's bands, chunk by chunk
+  std::vector<float> band_floats;
+};
+
+// Whether this target has bands (joseph_bands-inl.h): a quad is a 128-bit vector.
+constexpr bool kBands = HWY_TARGET != HWY_SCALAR;
+
+#if HWY_TARGET != HWY_SCALAR
+// Bundles along x of the slab [k_begin, k_end), through bands: strips of the same columns in every
+// view of the table (neighbouring views see about the same voxels through them, so a band
+// gathers many samples per voxel) chunk by chunk of kTileSlices slices, each band added back
+// through add_tile's transposition. Groups whose bands would not pay in some chunk (BandFit::no:
+// spherical views, whose neighbouring views look elsewhere) go strip by strip as before, and in
+// the same order: view by view (taken group by group, spherical views lost 4 %).
+template <class DF>
+HWY_INLINE void back_along_x_in_bands(DF df, const RayTable& t, int k_begin, int k_end, BackWorkspace& w,
+                                      float* HWY_RESTRICT volume) {
+  const std::size_t N = hn::Lanes(df);
+  const std::vector<Bundle>& bundles = w.along_x;
+  const std::size_t view_stride = static_cast<std::size_t>(t.view_stride), row_stride = static_cast<std::size_t>(t.row_stride);
+  const auto column_group = [&](std::size_t i) { return bundles[i].r % view_stride % row_stride / (kStripColumns * N); };
+  const std::size_t groups = row_stride / (kStripColumns * N) + 1;
+  w.in_strips.assign(groups, false);
+  for (std::size_t group = 0; group < groups; ++group) {
+    std::vector<Bundle>& members = w.group;
+    members.clear();
+    int k_lo = 1 << 30, k_hi = -(1 << 30);
+    for (std::size_t i = 0; i < bundles.size(); ++i)
+      if (column_group(i) == group) {
+        members.push_back(bundles[i]);
+        k_lo = std::min(k_lo, bundles[i].k_lo);
+        k_hi = std::max(k_hi, bundles[i].k_hi);
+      }
+    if (members.empty()) continue;
+    w.chunks.clear();
+    bool pays = true;
+    for_each_chunk(k_lo, k_hi, k_begin, k_end, [&](int k0, int k1) {
+      QuadBand band;
+      const BandFit fit = pays ? band_box(df, t, members.data(), members.size(), k0, k1, band) : BandFit::no;
+      pays = pays && fit != BandFit::no;
+      if (fit == BandFit::fits) w.chunks.push_back(band);
+    });
+    if (!pays) {
+      w.in_strips[group] = true;
+      continue;
+    }
+    const XGrid g = x_grid(t, members.front().r, N);
+    for (QuadBand& band : w.chunks) {
+      scatter_into_band(df, t, members.data(), members.size(), band, w.band_floats);
+      add_tile(BandAlongX(band), g, volume, NextChunk{next_chunk(band.k0 + band.slices - 1, k_hi, k_end)});
+    }
+  }
+  // The others, strip by strip (a view's bundles of one column group) in the table's order.
+  for (std::size_t i = 0; i < bundles.size();) {
+    const std::size_t group = column_group(i), view = bundles[i].r / view_stride;
+    XStrip& s = w.strips.strip;
+    s.count = 0;
+    for (; i < bundles.size() && column_group(i) == group && bundles[i].r / view_stride == view && s.count < XStrip::kMaxBundles; ++i)
+      s.entries[s.count++] = bundles[i].r;
+    if (w.in_strips[group]) back_strip(df, t, k_begin, k_end, w.strips, volume);
+  }
+}
+#endif
+
 void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RESTRICT volume) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
   const int N = static_cast<int>(hn::Lanes(df));
-  StripWorkspace w;
-  if (axis == 0) w.reserve(t.rows, N);
-  std::vector<Bundle> in_volume;  // bundles along y or z, every lane on the axis
+  static thread_local BackWorkspace w;
+  if (axis == 0) w.strips.reserve(t.rows, N);
+  w.in_volume.clear();
+  w.along_x.clear();
+  std::vector<Bundle>& in_volume = w.in_volume;
   // Bundles along x have lanes on axis 0 only, so only axis 0's slabs take strips.
   for_each_bundle(
-      df, t, axis == 0, w,
+      df, t, axis == 0, w.strips,
       [&](std::size_t r) {
         const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(di, t.axis.data() + r), hn::Set(di, axis)));
         if (hn::AllFalse(df, on_axis)) return;
@@ -406,7 +485,22 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
         const auto value = hn::Mul(hn::LoadU(df, t.value.data() + r), hn::LoadU(df, t.weight.data() + r));
         march_back(df, t, b, value, on_axis, std::max(b.k_lo, k_begin), std::min(b.k_hi, k_end - 1), volume, Rows::fetch_ahead);
       },
-      [&] { back_strip(df, t, k_begin, k_end, w, volume); });
+      [&] {
+        if (!kBands) {
+          back_strip(df, t, k_begin, k_end, w.strips, volume);
+          return;
+        }
+        // Kept for back_along_x_in_bands.
+        const XStrip& s = w.strips.strip;
+        for (int i = 0; i < s.count; ++i) {
+          const std::size_t r = s.entries[i], bundle = r / static_cast<std::size_t>(N);
+          const Bundle b = bundle < t.bundles.size() ? t.bundles[bundle] : bundle_at(t, r, static_cast<std::size_t>(N), -1);
+          if (std::max(b.k_lo, k_begin) <= std::min(b.k_hi, k_end - 1)) w.along_x.push_back(b);
+        }
+      });
+#if HWY_TARGET != HWY_SCALAR
+  if (axis == 0) back_along_x_in_bands(df, t, k_begin, k_end, w, volume);
+#endif
   const auto all = hn::FirstN(df, hn::Lanes(df));
   // A bundle's interior chunk is added only after the next bundle's corners are found and its
   // rows asked for: those rows then have a bundle's additions to arrive instead of none (the
@@ -422,6 +516,21 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
   };
   for (int k0 = k_begin; k0 < k_end; k0 += kBackChunkSlices) {
     const int k1 = std::min(k_end - 1, k0 + kBackChunkSlices - 1);
+#if HWY_TARGET != HWY_SCALAR
+    // Every bundle of the chunk through one band where it pays: in circular views the table's
+    // views (16 in the standard problem) share their band of rows, and it gathers about ten
+    // samples per voxel. Elsewhere (spherical views) the bundles scatter into the volume.
+    QuadBand band;
+    const BandFit fit = in_volume.empty() ? BandFit::nothing : band_box(df, t, in_volume.data(), in_volume.size(), k0, k1, band);
+    if (fit == BandFit::nothing) continue;
+    if (fit == BandFit::fits) {
+      add_pending();
+      const std::size_t r = in_volume.front().r;
+      scatter_into_band(df, t, in_volume.data(), in_volume.size(), band, w.band_floats);
+      add_band(df, band, t.stride_a[r], t.stride_c[r], t.n_b[r], t.n_c[r], volume);
+      continue;
+    }
+#endif
     for (const Bundle& b : in_volume) {
       const int first = std::max(k0, b.k_lo), last = std::min(k1, b.k_hi);
       if (first > last) continue;

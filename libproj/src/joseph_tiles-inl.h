@@ -50,6 +50,13 @@ struct Tile {
     return (static_cast<std::size_t>(kk) * static_cast<std::size_t>(height) + static_cast<std::size_t>(zz)) *
            static_cast<std::size_t>(width);
   }
+  // Voxels yy .. yy + Lanes(d) - 1 of row zz of slice kk (tile coordinates), and one voxel, as
+  // add_tile reads them (so that it reads a band the same way, joseph_bands-inl.h).
+  template <class D>
+  HWY_INLINE hn::Vec<D> load(D d, int kk, int zz, int yy) const {
+    return hn::LoadU(d, data + row(kk, zz) + yy);
+  }
+  float at(int kk, int zz, int yy) const { return data[row(kk, zz) + static_cast<std::size_t>(yy)]; }
 };
 
 // Where the volume's voxels are for rays along x (their b is y, their c is z).
@@ -113,8 +120,8 @@ HWY_INLINE void transpose8(__m256 (&r)[8]) {
 
 // f(k8, n, lanes, yb) for each block of a tile row of 8 slices (k8 .. k8 + n - 1, n <= 8, and
 // `lanes` the first n, the mask of AVX2's masked loads and stores) by 8 voxels along y (from yb).
-template <class F>
-HWY_INLINE void for_each_block8(const Tile& tile, F&& f) {
+template <class TileLike, class F>
+HWY_INLINE void for_each_block8(const TileLike& tile, F&& f) {
   for (int k8 = 0; k8 < tile.slices; k8 += 8) {
     const int n = std::min(8, tile.slices - k8);
     const __m256i lanes = _mm256_cmpgt_epi32(_mm256_set1_epi32(n), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
@@ -184,7 +191,8 @@ class TileDrift {
 
 // The same for every line of the tile's row z inside the volume (for the scalar copies below,
 // which visit a line once per slice).
-HWY_INLINE void ask_for_next_lines(const float* volume, const XGrid& g, const Tile& tile, int z, const NextChunk& next) {
+template <class TileLike>
+HWY_INLINE void ask_for_next_lines(const float* volume, const XGrid& g, const TileLike& tile, int z, const NextChunk& next) {
   const std::uintptr_t next_row = next.row(volume, g, z);
   for (int yy = 0; yy < tile.width; ++yy) next.ask(next_row, g, tile.y0 + yy);
 }
@@ -253,8 +261,10 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const
 }
 
 // volume += tile, inside the volume, the lines of the strip's next chunk asked for
-// (NextChunk; by value, as fill_tile).
-HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT volume, const NextChunk next) {
+// (NextChunk; by value, as fill_tile). TileLike: a Tile, or anything with its box (k0, slices,
+// y0, width, z0, height) and its load() and at().
+template <class TileLike>
+HWY_INLINE void add_tile(const TileLike tile, const XGrid g, float* HWY_RESTRICT volume, const NextChunk next) {
   for (int zz = 0; zz < tile.height; ++zz) {
     const int z = tile.z0 + zz;
     if (z < 0 || z >= g.nz) continue;
@@ -264,7 +274,7 @@ HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT vol
     for (int yb = 0; yb < tile.width; yb += 16) {
       __m512 r[16];
       for (int kk = 0; kk < 16; ++kk)
-        r[kk] = kk < tile.slices ? _mm512_loadu_ps(tile.data + tile.row(kk, zz) + yb) : _mm512_setzero_ps();
+        r[kk] = kk < tile.slices ? tile.load(hn::Full512<float>(), kk, zz, yb).raw : _mm512_setzero_ps();
       transpose16(r);
       for (int j = 0; j < 16; ++j) {
         const int y = tile.y0 + yb + j;
@@ -282,7 +292,7 @@ HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT vol
     for_each_block8(tile, [&](int k8, int n, __m256i lanes, int yb) {
       __m256 r[8];
       for (int kk = 0; kk < 8; ++kk)
-        r[kk] = kk < n ? _mm256_loadu_ps(tile.data + tile.row(k8 + kk, zz) + yb) : _mm256_setzero_ps();
+        r[kk] = kk < n ? tile.load(hn::Full256<float>(), k8 + kk, zz, yb).raw : _mm256_setzero_ps();
       transpose8(r);
       const int y = tile.y0 + yb;
       const std::ptrdiff_t at = tile.k0 + k8 + y * g.stride_y + z * g.stride_z;  // row j at + j stride_y, if inside
@@ -308,7 +318,7 @@ HWY_INLINE void add_tile(const Tile tile, const XGrid g, float* HWY_RESTRICT vol
       for (int yy = 0; yy < tile.width; ++yy) {
         const int y = tile.y0 + yy;
         if (y >= 0 && y < g.ny)
-          volume[tile.k0 + kk + y * g.stride_y + z * g.stride_z] += tile.data[tile.row(kk, zz) + static_cast<std::size_t>(yy)];
+          volume[tile.k0 + kk + y * g.stride_y + z * g.stride_z] += tile.at(kk, zz, yy);
       }
     ask_for_next_lines(volume, g, tile, z, next);
 #endif

@@ -227,6 +227,29 @@ TEST(JosephProjector, SlabsAlongXOnTileChunksAgreeWithTheReference) {
   }
 }
 
+// Neighbouring views of a circular scan, about the volume's z axis, 2.5 degrees apart: one table
+// holds them all, and the back projection adds each chunk of slices of their bundles along y
+// (and each column group's bundles along x) through one band (joseph_bands-inl.h), the samples
+// of all those views in it. Two arcs, around x and around y; on 1 and 3 threads the slabs cut
+// the bands short.
+TEST(JosephProjector, NeighbouringCircularViewsThroughBandsAgreeWithTheReferenceAndAreAdjoint) {
+  std::vector<ViewSpec> specs;
+  for (const double centre : {0.0, 90.0})
+    for (double a = centre - 20; a <= centre + 20; a += 2.5) {
+      const double r = a * M_PI / 180;
+      specs.push_back({Eigen::Vector3d(std::cos(r), std::sin(r), 0.02), 1.6});
+    }
+  const Problem p = problem_with_views(VolumeLayout::centred({41, 38, 23}, {1.0, 1.0, 1.0}), 20, 48, 250, 400, specs,
+                                       {0.02, -0.01}, {0.3, -0.2}, Eigen::Vector3d(0.4, -0.3, 0.2));
+  testing::on_every_simd_target([&] {
+    for (int threads : {1, 3}) {
+      ProjectorOptions options;
+      options.threads = threads;
+      EXPECT_LT(expect_fast_matches_reference(p, 81, options), 1e-5) << threads << " threads";
+    }
+  });
+}
+
 // A table of many lines on a wide detector: a strip of bundles along x (64 pixels of each of
 // 40 lines: 160 bundles of 16 lanes, 320 of 8, 640 of 4) then holds more than a strip takes
 // (XStrip::kMaxBundles: 128, 192, 384) on every SIMD width, and the bundles past it march

@@ -1,0 +1,279 @@
+// Per SIMD target: the back projection's bands. A band is a private copy of the part of a few
+// slices that a group of bundles writes, laid out so that each sample's four corners are four
+// neighbouring floats: one 128-bit addition per sample instead of two pairs. The band is then
+// added to the volume once.
+#if defined(CTK_PROJ_JOSEPH_BANDS_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef CTK_PROJ_JOSEPH_BANDS_INL_H_
+#undef CTK_PROJ_JOSEPH_BANDS_INL_H_
+#else
+#define CTK_PROJ_JOSEPH_BANDS_INL_H_
+#endif
+
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "joseph_samples-inl.h"
+#include "joseph_tiles-inl.h"
+#include "ray_table.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace ctk::detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+// The scatter into the volume adds two pairs of floats per sample (rows c and c + 1), and on the
+// Zen 5 each 8-byte store costs about a cycle (session 36): the stores bound it. A band stores
+// every row pair (c, c + 1) of its box interleaved, float by float, so that a sample's corners
+// (b, c), (b, c + 1), (b + 1, c), (b + 1, c + 1) are four consecutive floats. As c may be even
+// or odd, it holds two such copies: parity 0 interleaves rows (2j, 2j + 1), parity 1 rows
+// (2j - 1, 2j) (its row 0 is half outside the box and stays zero). A voxel is in both, once in
+// each, and add_band sums them. In a scratch loop over cached data (session 39) the quads' pass
+// took 1.25-1.6 cycles per sample, the pairs' 2.3-2.9.
+struct QuadBand {
+  int k0 = 0, slices = 0;  // slices k0 .. k0 + slices - 1 of the bundles' axis
+  int b0 = 0, width = 0;   // voxels b0 .. b0 + width - 1 along b (the slice's rows)
+  int c0 = 0, height = 0;  // rows c0 .. c0 + height - 1
+  std::size_t row_floats = 0, parity_floats = 0, slice_floats = 0;
+  float* data = nullptr;
+
+  // The layout for the box, with `lanes` floats of spare at each row's end (add_band reads
+  // whole vectors); the floats it takes.
+  std::size_t lay_out(int lanes) {
+    row_floats = 2 * static_cast<std::size_t>((width + lanes - 1) / lanes * lanes + lanes);
+    parity_floats = static_cast<std::size_t>(height / 2 + 1) * row_floats;
+    slice_floats = 2 * parity_floats;
+    return slice_floats * static_cast<std::size_t>(slices);
+  }
+  // Where the quad of the sample with lower corner (bb, cc) of slice kk (box coordinates) starts.
+  std::size_t quad(int kk, int cc, int bb) const {
+    return static_cast<std::size_t>(kk) * slice_floats + static_cast<std::size_t>(cc & 1) * parity_floats +
+           static_cast<std::size_t>((cc + 1) >> 1) * row_floats + 2 * static_cast<std::size_t>(bb);
+  }
+  // Row cc of slice kk (box coordinates), floats from bb: its voxels as they sit in the two copies
+  // (first float of each pair in one, second in the other).
+  const float* first_of_pairs(int kk, int cc, int bb) const { return data + quad(kk, cc, bb); }
+  const float* second_of_pairs(int kk, int cc, int bb) const {
+    return data + static_cast<std::size_t>(kk) * slice_floats + static_cast<std::size_t>(1 - (cc & 1)) * parity_floats +
+           static_cast<std::size_t>(cc >> 1) * row_floats + 2 * static_cast<std::size_t>(bb) + 1;
+  }
+#if HWY_TARGET != HWY_SCALAR
+  // Voxels bb .. bb + Lanes(d) - 1 of row cc of slice kk.
+  template <class D>
+  HWY_INLINE hn::Vec<D> load(D d, int kk, int cc, int bb) const {
+    const std::size_t n = hn::Lanes(d);
+    const float* p = first_of_pairs(kk, cc, bb);
+    const float* q = second_of_pairs(kk, cc, bb) - 1;
+    return hn::Add(hn::ConcatEven(d, hn::LoadU(d, p + n), hn::LoadU(d, p)), hn::ConcatOdd(d, hn::LoadU(d, q + n), hn::LoadU(d, q)));
+  }
+#endif
+  float at(int kk, int cc, int bb) const { return *first_of_pairs(kk, cc, bb) + *second_of_pairs(kk, cc, bb); }
+};
+
+// Bands larger than this many floats (640 kB, each thread's own) are not used; their bundles
+// scatter as before. In circular views some bands along x are 20-32 rows of z tall (16 slices,
+// up to about 150 k floats): with 96 k, 164 of 512 groups of a half-scale run went strip by strip,
+// and the standard problem's back projection gained 1.10x instead of 1.24x (session 39).
+inline constexpr std::size_t kMaxBandFloats = 160 * 1024;
+// Nor bands with fewer samples than voxels: zeroing a band and adding it back cost about what a
+// voxel's samples save. Without this limit spherical views lost 5 %; with 0.5, 1 or 2 samples per
+// voxel, in-process: circular 1.30, 1.31, 1.24x, spherical 0.97, 0.98, 0.98x (session 39).
+inline constexpr double kMinSamplesPerVoxel = 1.0;
+
+enum class BandFit { nothing, fits, no };
+
+#if HWY_TARGET != HWY_SCALAR  // a quad is a 128-bit vector
+
+// The box that bundles[from, to) touch in slices [k0, k1] (their lanes in range, corners
+// included), in `band`; whether a band there pays (kMaxBandFloats, kMinSamplesPerVoxel).
+template <class DF>
+HWY_INLINE BandFit band_box(DF df, const RayTable& t, const Bundle* bundles, std::size_t count, int k0, int k1, QuadBand& band) {
+  const hn::RebindToSigned<DF> di;
+  constexpr int kFar = 1 << 30;
+  auto lo_b = hn::Set(di, kFar), hi_b = hn::Set(di, -kFar), lo_c = lo_b, hi_c = hi_b;
+  std::int64_t bundle_slices = 0;
+  // The box only grows: once it takes more than kMaxBandFloats, the rest need not be seen
+  // (spherical views' tables, whose views look at different parts of the volume, mostly stop
+  // here; measuring every bundle's box was 3-6 % of their slab tasks).
+  const auto too_large = [&] {
+    const int width = hn::GetLane(hn::MaxOfLanes(di, hi_b)) + 2 - hn::GetLane(hn::MinOfLanes(di, lo_b));
+    const int height = hn::GetLane(hn::MaxOfLanes(di, hi_c)) + 2 - hn::GetLane(hn::MinOfLanes(di, lo_c));
+    return 2.0 * width * (height / 2 + 1) * 2 * (k1 - k0 + 1) > static_cast<double>(kMaxBandFloats);
+  };
+  for (std::size_t i = 0; i < count; ++i) {
+    if (i % 32 == 31 && bundle_slices > 0 && too_large()) return BandFit::no;
+    const Bundle& b = bundles[i];
+    const int first = std::max(k0, b.k_lo), last = std::min(k1, b.k_hi);
+    if (first > last) continue;
+    bundle_slices += last - first + 1;
+    const std::size_t r = b.r;
+    const auto ka = hn::Max(hn::LoadU(di, t.k_first.data() + r), hn::Set(di, k0));
+    const auto kb = hn::Min(hn::LoadU(di, t.k_last.data() + r), hn::Set(di, k1));
+    const auto valid = hn::Lt(ka, hn::Add(kb, hn::Set(di, 1)));
+    // The sample moves linearly with k: its ends bound it (as tile_box).
+    const BundlePosition<DF> position(df, t, r);
+    const auto pa = position.at(df, hn::ConvertTo(df, ka)), pb = position.at(df, hn::ConvertTo(df, kb));
+    lo_b = hn::IfThenElse(valid, hn::Min(lo_b, hn::Min(pa.ib, pb.ib)), lo_b);
+    hi_b = hn::IfThenElse(valid, hn::Max(hi_b, hn::Max(pa.ib, pb.ib)), hi_b);
+    lo_c = hn::IfThenElse(valid, hn::Min(lo_c, hn::Min(pa.ic, pb.ic)), lo_c);
+    hi_c = hn::IfThenElse(valid, hn::Max(hi_c, hn::Max(pa.ic, pb.ic)), hi_c);
+  }
+  const int b_lo = hn::GetLane(hn::MinOfLanes(di, lo_b)), b_hi = hn::GetLane(hn::MaxOfLanes(di, hi_b));
+  if (bundle_slices == 0 || b_hi < b_lo) return BandFit::nothing;
+  band.k0 = k0;
+  band.slices = k1 - k0 + 1;
+  band.b0 = b_lo;
+  band.width = b_hi + 2 - b_lo;
+  band.c0 = hn::GetLane(hn::MinOfLanes(di, lo_c));
+  band.height = hn::GetLane(hn::MaxOfLanes(di, hi_c)) + 2 - band.c0;
+  const std::size_t floats = band.lay_out(static_cast<int>(hn::Lanes(df)));
+  const double samples = static_cast<double>(bundle_slices) * static_cast<double>(hn::Lanes(df));
+  const double voxels = static_cast<double>(band.width) * band.height * band.slices;
+  return floats <= kMaxBandFloats && samples >= kMinSamplesPerVoxel * voxels ? BandFit::fits : BandFit::no;
+}
+
+// The samples of up to kInteriorBatch slices of one bundle into a band, in two passes as
+// InteriorScatter: quads() finds each sample's quad and its four weights (times `value`), add()
+// adds them. Interior slices (every lane in range, every corner in the volume) take the plain
+// arithmetic; the others masked_sample's, whose corners outside the volume weigh zero and whose
+// lanes out of range add zero to the band's first quad. A lane's corners are always inside the
+// band (band_box), also those outside the volume, which add_band leaves out.
+template <class DF>
+struct QuadScatter {
+  HWY_ALIGN std::int32_t index[kInteriorBatch][kMaxLanes];
+  HWY_ALIGN float weight[kInteriorBatch][4 * kMaxLanes];  // lane l's quad at (l % 4) N + 4 (l / 4)
+  int count = 0;
+
+  HWY_INLINE void quads(DF df, const RayTable& t, const Bundle& bundle, int k0, int slices, hn::Vec<DF> value,
+                        const QuadBand& band) {
+    const hn::RebindToSigned<DF> di;
+    const hn::Repartition<double, DF> dd;
+    const std::size_t N = hn::Lanes(df);
+    count = slices;
+    const BundlePosition<DF> position(df, t, bundle.r);
+    const auto b0 = hn::Set(di, band.b0), c0 = hn::Set(di, band.c0), one = hn::Set(di, 1);
+    const auto parity_floats = hn::Set(di, static_cast<std::int32_t>(band.parity_floats));
+    const auto row_floats = hn::Set(di, static_cast<std::int32_t>(band.row_floats));
+    const auto all = hn::FirstN(df, N);
+    for (int i = 0; i < count; ++i) {
+      const int k = k0 + i;
+      SamplePosition<DF> p;
+      hn::Vec<DF> w[4];
+      auto active = all;
+      if (k >= bundle.in_lo && k <= bundle.in_hi) {
+        p = position.at(df, k);
+        bilinear_weights(p, w);
+      } else {
+        const MaskedSample<DF> m(df, t, bundle.r, k, all);
+        p = m.p;
+        active = m.active;
+        bilinear_weights(p, w);
+        w[0] = hn::IfThenElseZero(hn::And(active, hn::And(m.vb0, m.vc0)), w[0]);
+        w[1] = hn::IfThenElseZero(hn::And(active, hn::And(m.vb1, m.vc0)), w[1]);
+        w[2] = hn::IfThenElseZero(hn::And(active, hn::And(m.vb0, m.vc1)), w[2]);
+        w[3] = hn::IfThenElseZero(hn::And(active, hn::And(m.vb1, m.vc1)), w[3]);
+      }
+      // QuadBand::quad in SIMD.
+      const auto bb = hn::Sub(p.ib, b0), cc = hn::Sub(p.ic, c0);
+      const auto at = hn::Add(hn::Set(di, static_cast<std::int32_t>(static_cast<std::size_t>(k - band.k0) * band.slice_floats)),
+                              hn::Add(hn::Mul(hn::And(cc, one), parity_floats),
+                                      hn::Add(hn::Mul(hn::ShiftRight<1>(hn::Add(cc, one)), row_floats), hn::Add(bb, bb))));
+      hn::Store(hn::IfThenElseZero(hn::RebindMask(di, active), at), di, index[i]);
+      for (auto& wq : w) wq = hn::Mul(wq, value);
+      // The quads (w0, w2, w1, w3) of lanes 4m .. 4m + 3 of each 128-bit block.
+      const auto lo = hn::BitCast(dd, hn::InterleaveLower(df, w[0], w[2])), hi = hn::BitCast(dd, hn::InterleaveUpper(df, w[0], w[2]));
+      const auto lo1 = hn::BitCast(dd, hn::InterleaveLower(df, w[1], w[3])), hi1 = hn::BitCast(dd, hn::InterleaveUpper(df, w[1], w[3]));
+      float* out = weight[i];
+      hn::Store(hn::BitCast(df, hn::InterleaveLower(dd, lo, lo1)), df, out);
+      hn::Store(hn::BitCast(df, hn::InterleaveUpper(dd, lo, lo1)), df, out + N);
+      hn::Store(hn::BitCast(df, hn::InterleaveLower(dd, hi, hi1)), df, out + 2 * N);
+      hn::Store(hn::BitCast(df, hn::InterleaveUpper(dd, hi, hi1)), df, out + 3 * N);
+    }
+  }
+
+  // Slice by slice, even lanes of slice i and then odd lanes of slice i - 1, as the pairs on
+  // AVX-512 (InteriorScatter::add): lanes sharing floats are far apart.
+  HWY_INLINE void add(DF df, float* HWY_RESTRICT band) const {
+    const int N = static_cast<int>(hn::Lanes(df));
+    const hn::Full128<float> d4;
+    const auto lane = [&](int i, int l) {
+      float* v = band + index[i][l];
+      hn::StoreU(hn::Add(hn::LoadU(d4, v), hn::LoadU(d4, weight[i] + (l % 4) * N + 4 * (l / 4))), d4, v);
+    };
+    for (int i = 0; i <= count; ++i) {
+      if (i < count)
+        for (int m = 0; m < N / 2; ++m) lane(i, 2 * m);
+      if (i > 0)
+        for (int m = 0; m < N / 2; ++m) lane(i - 1, 2 * m + 1);
+    }
+  }
+};
+
+// The band (its box from band_box) zeroed in `storage`, then bundles[0, count)'s samples in its
+// slices added to it, each bundle's projection value times its path length.
+template <class DF>
+HWY_INLINE void scatter_into_band(DF df, const RayTable& t, const Bundle* bundles, std::size_t count, QuadBand& band,
+                                  std::vector<float>& storage) {
+  const std::size_t floats = band.slice_floats * static_cast<std::size_t>(band.slices);
+  if (storage.size() < floats) storage.resize(floats);
+  band.data = storage.data();
+  std::fill_n(band.data, floats, 0.0f);
+  QuadScatter<DF> scatter;
+  const int k1 = band.k0 + band.slices - 1;
+  for (std::size_t i = 0; i < count; ++i) {
+    const Bundle& b = bundles[i];
+    const int first = std::max(band.k0, b.k_lo), last = std::min(k1, b.k_hi);
+    const auto value = hn::Mul(hn::LoadU(df, t.value.data() + b.r), hn::LoadU(df, t.weight.data() + b.r));
+    for (int k = first; k <= last; k += kInteriorBatch) {
+      scatter.quads(df, t, b, k, std::min(kInteriorBatch, last - k + 1), value, band);
+      scatter.add(df, band.data);
+    }
+  }
+}
+
+// volume += the band, where the volume is: rows along b (contiguous), for bundles along y and z.
+// sa and sc are the volume's strides along the bundles' axis and c; n_b and n_c its size.
+template <class DF>
+HWY_INLINE void add_band(DF df, const QuadBand& band, std::ptrdiff_t sa, std::ptrdiff_t sc, int n_b, int n_c,
+                         float* HWY_RESTRICT volume) {
+  const int N = static_cast<int>(hn::Lanes(df));
+  const int b_lo = std::max(0, -band.b0), b_hi = std::min(band.width, n_b - band.b0);
+  const int c_lo = std::max(0, -band.c0), c_hi = std::min(band.height, n_c - band.c0);
+  for (int kk = 0; kk < band.slices; ++kk)
+    for (int cc = c_lo; cc < c_hi; ++cc) {
+      float* row = volume + (band.k0 + kk) * sa + (band.c0 + cc) * sc + band.b0;
+      for (int bb = b_lo; bb < b_hi; bb += N) {
+        const auto sum = band.load(df, kk, cc, bb);
+        if (bb + N <= b_hi) {
+          hn::StoreU(hn::Add(hn::LoadU(df, row + bb), sum), df, row + bb);
+        } else {
+          const auto m = hn::FirstN(df, static_cast<std::size_t>(b_hi - bb));
+          hn::BlendedStore(hn::Add(hn::MaskedLoad(m, df, row + bb), sum), m, df, row + bb);
+        }
+      }
+    }
+}
+
+// A band of bundles along x (b = y, c = z, slices along x) as add_tile reads a tile: it is added
+// back through the same transposition into lines along x.
+struct BandAlongX {
+  int k0, slices, y0, width, z0, height;
+  const QuadBand* band;
+  explicit BandAlongX(const QuadBand& q)
+      : k0(q.k0), slices(q.slices), y0(q.b0), width(q.width), z0(q.c0), height(q.height), band(&q) {}
+  template <class D>
+  HWY_INLINE hn::Vec<D> load(D d, int kk, int zz, int yy) const {
+    return band->load(d, kk, zz, yy);
+  }
+  float at(int kk, int zz, int yy) const { return band->at(kk, zz, yy); }
+};
+
+#endif  // HWY_TARGET != HWY_SCALAR
+}  // namespace HWY_NAMESPACE
+}  // namespace ctk::detail
+HWY_AFTER_NAMESPACE();
+
+#endif
