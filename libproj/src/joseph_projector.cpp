@@ -106,6 +106,38 @@ struct ViewPaths {
   }
 };
 
+// The order in which the back projection batches the views into its tables: a chain from view 0,
+// each next view the one left whose central ray is closest in direction to the last one's. A
+// table's views then look at nearly the same voxels, so its bands gather more samples per voxel
+// and its slabs' rows stay in cache. Circular scans keep their order (each view's nearest is the
+// next); the standard problem's spherical views, given in no such order, went 1.12x faster
+// (360 views, in-process; paired.py 1.088, session 39). The forward projection measured 1.035x
+// in-process but 0.99x in paired.py, and keeps the given order. Quadratic in the views, so scans
+// of more than kMaxChainedViews keep theirs.
+constexpr std::size_t kMaxChainedViews = 8192;
+std::vector<int> neighbour_order(const std::vector<ProjectionMatrix>& views) {
+  std::vector<int> order(views.size());
+  for (std::size_t v = 0; v < views.size(); ++v) order[v] = static_cast<int>(v);
+  if (views.size() < 3 || views.size() > kMaxChainedViews) return order;
+  std::vector<Eigen::Vector3d> direction;
+  for (const auto& P : views) direction.push_back(P.principal_ray().normalized());
+  std::vector<bool> taken(views.size(), false);
+  taken[0] = true;
+  for (std::size_t i = 1; i < views.size(); ++i) {
+    const Eigen::Vector3d& last = direction[static_cast<std::size_t>(order[i - 1])];
+    std::size_t best = 0;
+    double closest = -2;
+    for (std::size_t j = 0; j < views.size(); ++j)
+      if (!taken[j] && direction[j].dot(last) > closest) {
+        closest = direction[j].dot(last);
+        best = j;
+      }
+    taken[best] = true;
+    order[i] = static_cast<int>(best);
+  }
+  return order;
+}
+
 // The detector pixel of table entry (row, lane) of lines from line_begin, or null outside it.
 template <typename Stack, typename Value = std::conditional_t<std::is_const_v<Stack>, const float, float>>
 Value* pixel_of(Stack& y, int v, const detail::LanePath& path, int line, int lane) {
@@ -152,7 +184,8 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
 
 namespace {
 
-// One table's worth of the back projection: `views` views from v0, lines from line_begin.
+// One table's worth of the back projection: `views` views from v0 (in neighbour_order), lines
+// from line_begin.
 struct BackBatch {
   int line_begin = 0, v0 = 0, views = 0;
 };
@@ -218,6 +251,7 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
     table.bundles.resize(detail::bundle_count(table));
   }
   std::vector<AxisSamples> samples(static_cast<std::size_t>(n_threads));
+  const std::vector<int> order = neighbour_order(views);  // slot s of batch b holds view order[b.v0 + s]
   const int lanes = detail::simd_float_lanes();
   const int count = rows_per_block * tables[0].row_stride;  // entries per view
   // A view's entries are filled in n_threads parts of whole bundles, each prepared by its filler.
@@ -226,7 +260,7 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
   // view's rays, their projection values, their bundles, and their samples per axis.
   const auto fill = [&](const BackBatch& b, int buffer, int task) {
     detail::RayTable& table = tables[static_cast<std::size_t>(buffer)];
-    const int slot = task / n_threads, part = task % n_threads, v = b.v0 + slot;
+    const int slot = task / n_threads, part = task % n_threads, v = order[static_cast<std::size_t>(b.v0 + slot)];
     const auto& path = paths.path[static_cast<std::size_t>(v)];
     // Lines past this view's last: rows of the shared table the kernels skip (slot_rows).
     const int rows = std::clamp(path.lines - b.line_begin, 0, rows_per_block);
