@@ -87,7 +87,7 @@ enum class BandFit { nothing, fits, no };
 
 #if HWY_TARGET != HWY_SCALAR  // a quad is a 128-bit vector
 
-// The box that bundles[from, to) touch in slices [k0, k1] (their lanes in range, corners
+// The box that bundles[0, count) touch in slices [k0, k1] (their lanes in range, corners
 // included), in `band`; whether a band there pays (kMaxBandFloats, kMinSamplesPerVoxel).
 template <class DF>
 HWY_INLINE BandFit band_box(DF df, const RayTable& t, const Bundle* bundles, std::size_t count, int k0, int k1, QuadBand& band) {
@@ -95,9 +95,10 @@ HWY_INLINE BandFit band_box(DF df, const RayTable& t, const Bundle* bundles, std
   constexpr int kFar = 1 << 30;
   auto lo_b = hn::Set(di, kFar), hi_b = hn::Set(di, -kFar), lo_c = lo_b, hi_c = hi_b;
   std::int64_t bundle_slices = 0;
-  // The box only grows: once it takes more than kMaxBandFloats, the rest need not be seen
-  // (spherical views' tables, whose views look at different parts of the volume, mostly stop
-  // here; measuring every bundle's box was 3-6 % of their slab tasks).
+  // The box only grows: once it takes more than kMaxBandFloats (by a lower bound of lay_out's
+  // count), the rest need not be seen (spherical views' tables, whose views look at different
+  // parts of the volume, mostly stop here; measuring every bundle's box was 3-6 % of their slab
+  // tasks).
   const auto too_large = [&] {
     const int width = hn::GetLane(hn::MaxOfLanes(di, hi_b)) + 2 - hn::GetLane(hn::MinOfLanes(di, lo_b));
     const int height = hn::GetLane(hn::MaxOfLanes(di, hi_c)) + 2 - hn::GetLane(hn::MinOfLanes(di, lo_c));
@@ -138,7 +139,7 @@ HWY_INLINE BandFit band_box(DF df, const RayTable& t, const Bundle* bundles, std
 // The samples of up to kInteriorBatch slices of one bundle into a band, in two passes as
 // InteriorScatter: quads() finds each sample's quad and its four weights (times `value`), add()
 // adds them. Interior slices (every lane in range, every corner in the volume) take the plain
-// arithmetic; the others masked_sample's, whose corners outside the volume weigh zero and whose
+// arithmetic; the others MaskedSample's, whose corners outside the volume weigh zero and whose
 // lanes out of range add zero to the band's first quad. A lane's corners are always inside the
 // band (band_box), also those outside the volume, which add_band leaves out.
 template <class DF>
