@@ -91,46 +91,31 @@ enum class BandFit { nothing, fits, no };
 // included), in `band`; whether a band there pays (kMaxBandFloats, kMinSamplesPerVoxel).
 template <class DF>
 HWY_INLINE BandFit band_box(DF df, const RayTable& t, const Bundle* bundles, std::size_t count, int k0, int k1, QuadBand& band) {
-  const hn::RebindToSigned<DF> di;
-  constexpr int kFar = 1 << 30;
-  auto lo_b = hn::Set(di, kFar), hi_b = hn::Set(di, -kFar), lo_c = lo_b, hi_c = hi_b;
+  SampleBox<DF> box(df);
   std::int64_t bundle_slices = 0;
-  // The box only grows: once it takes more than kMaxBandFloats (by a lower bound of lay_out's
-  // count), the rest need not be seen (spherical views' tables, whose views look at different
-  // parts of the volume, mostly stop here; measuring every bundle's box was 3-6 % of their slab
-  // tasks).
-  const auto too_large = [&] {
-    const int width = hn::GetLane(hn::MaxOfLanes(di, hi_b)) + 2 - hn::GetLane(hn::MinOfLanes(di, lo_b));
-    const int height = hn::GetLane(hn::MaxOfLanes(di, hi_c)) + 2 - hn::GetLane(hn::MinOfLanes(di, lo_c));
-    return 2.0 * width * (height / 2 + 1) * 2 * (k1 - k0 + 1) > static_cast<double>(kMaxBandFloats);
+  // `band` on the box so far; the floats it takes.
+  const auto place = [&] {
+    band.k0 = k0;
+    band.slices = k1 - k0 + 1;
+    band.b0 = box.b_lo();
+    band.width = box.b_hi() + 2 - band.b0;
+    band.c0 = box.c_lo();
+    band.height = box.c_hi() + 2 - band.c0;
+    return band.lay_out(static_cast<int>(hn::Lanes(df)));
   };
   for (std::size_t i = 0; i < count; ++i) {
-    if (i % 32 == 31 && bundle_slices > 0 && too_large()) return BandFit::no;
+    // The box only grows: once it takes more than kMaxBandFloats, the rest need not be seen
+    // (spherical views' tables, whose views look at different parts of the volume, mostly stop
+    // here; measuring every bundle's box was 3-6 % of their slab tasks).
+    if (i % 32 == 31 && bundle_slices > 0 && place() > kMaxBandFloats) return BandFit::no;
     const Bundle& b = bundles[i];
     const int first = std::max(k0, b.k_lo), last = std::min(k1, b.k_hi);
     if (first > last) continue;
     bundle_slices += last - first + 1;
-    const std::size_t r = b.r;
-    const auto ka = hn::Max(hn::LoadU(di, t.k_first.data() + r), hn::Set(di, k0));
-    const auto kb = hn::Min(hn::LoadU(di, t.k_last.data() + r), hn::Set(di, k1));
-    const auto valid = hn::Lt(ka, hn::Add(kb, hn::Set(di, 1)));
-    // The sample moves linearly with k: its ends bound it (as tile_box).
-    const BundlePosition<DF> position(df, t, r);
-    const auto pa = position.at(df, hn::ConvertTo(df, ka)), pb = position.at(df, hn::ConvertTo(df, kb));
-    lo_b = hn::IfThenElse(valid, hn::Min(lo_b, hn::Min(pa.ib, pb.ib)), lo_b);
-    hi_b = hn::IfThenElse(valid, hn::Max(hi_b, hn::Max(pa.ib, pb.ib)), hi_b);
-    lo_c = hn::IfThenElse(valid, hn::Min(lo_c, hn::Min(pa.ic, pb.ic)), lo_c);
-    hi_c = hn::IfThenElse(valid, hn::Max(hi_c, hn::Max(pa.ic, pb.ic)), hi_c);
+    box.add(df, t, b.r, k0, k1);
   }
-  const int b_lo = hn::GetLane(hn::MinOfLanes(di, lo_b)), b_hi = hn::GetLane(hn::MaxOfLanes(di, hi_b));
-  if (bundle_slices == 0 || b_hi < b_lo) return BandFit::nothing;
-  band.k0 = k0;
-  band.slices = k1 - k0 + 1;
-  band.b0 = b_lo;
-  band.width = b_hi + 2 - b_lo;
-  band.c0 = hn::GetLane(hn::MinOfLanes(di, lo_c));
-  band.height = hn::GetLane(hn::MaxOfLanes(di, hi_c)) + 2 - band.c0;
-  const std::size_t floats = band.lay_out(static_cast<int>(hn::Lanes(df)));
+  if (bundle_slices == 0 || box.b_hi() < box.b_lo()) return BandFit::nothing;
+  const std::size_t floats = place();
   const double samples = static_cast<double>(bundle_slices) * static_cast<double>(hn::Lanes(df));
   const double voxels = static_cast<double>(band.width) * band.height * band.slices;
   return floats <= kMaxBandFloats && samples >= kMinSamplesPerVoxel * voxels ? BandFit::fits : BandFit::no;
@@ -171,11 +156,7 @@ struct QuadScatter {
         const MaskedSample<DF> m(df, t, bundle.r, k, all);
         p = m.p;
         active = m.active;
-        bilinear_weights(p, w);
-        w[0] = hn::IfThenElseZero(hn::And(active, hn::And(m.vb0, m.vc0)), w[0]);
-        w[1] = hn::IfThenElseZero(hn::And(active, hn::And(m.vb1, m.vc0)), w[1]);
-        w[2] = hn::IfThenElseZero(hn::And(active, hn::And(m.vb0, m.vc1)), w[2]);
-        w[3] = hn::IfThenElseZero(hn::And(active, hn::And(m.vb1, m.vc1)), w[3]);
+        m.weights(w);
       }
       // QuadBand::quad in SIMD.
       const auto bb = hn::Sub(p.ib, b0), cc = hn::Sub(p.ic, c0);

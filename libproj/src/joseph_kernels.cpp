@@ -142,12 +142,12 @@ struct StripWorkspace {
   XStrip strip;
   RayTable local;
   std::vector<float> tile_data;
-  // Kept from call to call (each thread's own, thread_local below): shaping the copies and
-  // sizing the tile (value-initialising 384 kB) on every call cost 1-2 % of each projection
-  // (session 39).
+  // Kept from call to call (each thread's own and each target's, thread_local below, so `lanes`
+  // never changes): shaping the copies and sizing the tile (value-initialising 384 kB) on every
+  // call cost 1-2 % of each projection (session 39).
   void reserve(int rows, int lanes) {
     const int bundles = std::min(rows * kStripColumns, XStrip::kMaxBundles);
-    if (local.rows != bundles || local.row_stride != (lanes + kMaxLanes - 1) / kMaxLanes * kMaxLanes) local.shape(1, bundles, lanes);
+    if (local.rows != bundles) local.shape(1, bundles, lanes);
     tile_data.resize(static_cast<std::size_t>(kTileSlices * kTileMaxHeight * kTileMaxWidth));
   }
 };

@@ -127,11 +127,13 @@ std::vector<int> neighbour_order(const std::vector<ProjectionMatrix>& views) {
     const Eigen::Vector3d& last = direction[static_cast<std::size_t>(order[i - 1])];
     std::size_t best = 0;
     double closest = -2;
-    for (std::size_t j = 0; j < views.size(); ++j)
-      if (!taken[j] && direction[j].dot(last) > closest) {
-        closest = direction[j].dot(last);
+    for (std::size_t j = 0; j < views.size(); ++j) {
+      const double cosine = direction[j].dot(last);
+      if (!taken[j] && cosine > closest) {
+        closest = cosine;
         best = j;
       }
+    }
     taken[best] = true;
     order[i] = static_cast<int>(best);
   }

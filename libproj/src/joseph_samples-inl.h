@@ -153,6 +153,15 @@ struct MaskedSample {
     sc = hn::LoadU(di, t.stride_c.data() + r);
     base = hn::Mul(hn::Set(di, k - t.origin_a), hn::LoadU(di, t.stride_a.data() + r));
   }
+  // The bilinear weights of corners (b, c), (b + 1, c), (b, c + 1), (b + 1, c + 1), zero for
+  // corners outside the volume and for lanes not active.
+  void weights(hn::Vec<DF> (&w)[4]) const {
+    bilinear_weights(p, w);
+    w[0] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc0)), w[0]);
+    w[1] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc0)), w[1]);
+    w[2] = hn::IfThenElseZero(hn::And(active, hn::And(vb0, vc1)), w[2]);
+    w[3] = hn::IfThenElseZero(hn::And(active, hn::And(vb1, vc1)), w[3]);
+  }
   // The voxel at (jb, jc) of slice k for the active lanes; voxel 0 for the others (slice k may
   // lie outside the volume for a lane of another axis). Their weights are zero.
   VI index(VI jb, VI jc) const {
@@ -183,11 +192,7 @@ HWY_INLINE MaskedCorners<DF> corners_at(DF df, const RayTable& t, std::size_t r,
   c.index[1] = s.index(jb1, jc0);
   c.index[2] = s.index(jb0, jc1);
   c.index[3] = s.index(jb1, jc1);
-  bilinear_weights(s.p, c.weight);
-  c.weight[0] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb0, s.vc0)), c.weight[0]);
-  c.weight[1] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb1, s.vc0)), c.weight[1]);
-  c.weight[2] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb0, s.vc1)), c.weight[2]);
-  c.weight[3] = hn::IfThenElseZero(hn::And(s.active, hn::And(s.vb1, s.vc1)), c.weight[3]);
+  s.weights(c.weight);
   return out;
 }
 

@@ -338,32 +338,50 @@ HWY_INLINE bool along_x(DF, const RayTable& t, std::size_t r) {
 
 enum class TileFit { nothing, fits, too_large };
 
-// The box of voxels (corners included) the lanes at entries[0 .. count) of `t` touch in slices
-// [k0, k1], as the tile's y and z ranges; nothing when no lane has a sample there.
+// The box of voxels (corners included) that the samples of bundles in slices [k0, k1] touch, lane
+// by lane within each lane's own range; grown bundle by bundle (add). For tiles (tile_box) and the
+// back projection's bands (band_box, joseph_bands-inl.h).
 template <class DF>
-HWY_INLINE TileFit tile_box(DF df, const RayTable& t, const std::size_t* entries, int count, int k0, int k1, Tile& tile) {
-  const hn::RebindToSigned<DF> di;
-  constexpr int kFar = 1 << 30;
-  auto lo_b = hn::Set(di, kFar), hi_b = hn::Set(di, -kFar), lo_c = lo_b, hi_c = hi_b;
-  for (int i = 0; i < count; ++i) {
-    const std::size_t r = entries[i];
+class SampleBox {
+ public:
+  explicit SampleBox(DF) : lo_b_(hn::Set(DI(), kFar)), hi_b_(hn::Set(DI(), -kFar)), lo_c_(lo_b_), hi_c_(hi_b_) {}
+  void add(DF df, const RayTable& t, std::size_t r, int k0, int k1) {
+    const DI di;
     const auto ka = hn::Max(hn::LoadU(di, t.k_first.data() + r), hn::Set(di, k0));
     const auto kb = hn::Min(hn::LoadU(di, t.k_last.data() + r), hn::Set(di, k1));
     const auto valid = hn::Lt(ka, hn::Add(kb, hn::Set(di, 1)));
     // The sample moves linearly with k: its ends bound it. Same arithmetic as the kernels.
-    const auto pa = position_at(df, t, r, hn::ConvertTo(df, ka)), pb = position_at(df, t, r, hn::ConvertTo(df, kb));
-    lo_b = hn::IfThenElse(valid, hn::Min(lo_b, hn::Min(pa.ib, pb.ib)), lo_b);
-    hi_b = hn::IfThenElse(valid, hn::Max(hi_b, hn::Max(pa.ib, pb.ib)), hi_b);
-    lo_c = hn::IfThenElse(valid, hn::Min(lo_c, hn::Min(pa.ic, pb.ic)), lo_c);
-    hi_c = hn::IfThenElse(valid, hn::Max(hi_c, hn::Max(pa.ic, pb.ic)), hi_c);
+    const BundlePosition<DF> position(df, t, r);
+    const auto pa = position.at(df, hn::ConvertTo(df, ka)), pb = position.at(df, hn::ConvertTo(df, kb));
+    lo_b_ = hn::IfThenElse(valid, hn::Min(lo_b_, hn::Min(pa.ib, pb.ib)), lo_b_);
+    hi_b_ = hn::IfThenElse(valid, hn::Max(hi_b_, hn::Max(pa.ib, pb.ib)), hi_b_);
+    lo_c_ = hn::IfThenElse(valid, hn::Min(lo_c_, hn::Min(pa.ic, pb.ic)), lo_c_);
+    hi_c_ = hn::IfThenElse(valid, hn::Max(hi_c_, hn::Max(pa.ic, pb.ic)), hi_c_);
   }
-  const int y0 = hn::GetLane(hn::MinOfLanes(di, lo_b)), y1 = hn::GetLane(hn::MaxOfLanes(di, hi_b)) + 1;
-  const int z0 = hn::GetLane(hn::MinOfLanes(di, lo_c)), z1 = hn::GetLane(hn::MaxOfLanes(di, hi_c)) + 1;
+  // The lower corners' range (the box reaches one voxel further); b_hi() < b_lo() while empty.
+  int b_lo() const { return hn::GetLane(hn::MinOfLanes(DI(), lo_b_)); }
+  int b_hi() const { return hn::GetLane(hn::MaxOfLanes(DI(), hi_b_)); }
+  int c_lo() const { return hn::GetLane(hn::MinOfLanes(DI(), lo_c_)); }
+  int c_hi() const { return hn::GetLane(hn::MaxOfLanes(DI(), hi_c_)); }
+
+ private:
+  using DI = hn::RebindToSigned<DF>;
+  static constexpr int kFar = 1 << 30;
+  hn::Vec<DI> lo_b_, hi_b_, lo_c_, hi_c_;
+};
+
+// The box of voxels (corners included) the lanes at entries[0 .. count) of `t` touch in slices
+// [k0, k1], as the tile's y and z ranges; nothing when no lane has a sample there.
+template <class DF>
+HWY_INLINE TileFit tile_box(DF df, const RayTable& t, const std::size_t* entries, int count, int k0, int k1, Tile& tile) {
+  SampleBox<DF> box(df);
+  for (int i = 0; i < count; ++i) box.add(df, t, entries[i], k0, k1);
+  const int y0 = box.b_lo(), y1 = box.b_hi() + 1;
   if (y1 < y0) return TileFit::nothing;
   tile.y0 = y0;
   tile.width = std::max(32, (y1 - y0 + 16) / 16 * 16);
-  tile.z0 = z0;
-  tile.height = z1 - z0 + 1;
+  tile.z0 = box.c_lo();
+  tile.height = box.c_hi() + 2 - tile.z0;
   return tile.width <= kTileMaxWidth && tile.height <= kTileMaxHeight ? TileFit::fits : TileFit::too_large;
 }
 
