@@ -2,8 +2,10 @@
 // one run on the standard problem (see ctk/proj/standard_problem.hpp), as a table or JSON;
 // --repeat gives medians of runs in which the two take turns; --simd runs the fast projector on
 // a narrower SIMD target than the widest.
-// --dump writes what the fast projector computed on the reference's views, so a yardstick outside
-// the project (benchmarks/yardstick.py) can check it with its own arithmetic.
+// --dump writes what the fast projector computed on the reference's views, and on neighbouring
+// views (which take the back projection's bands), so a yardstick outside the project
+// (benchmarks/yardstick.py) can check it with its own arithmetic.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -50,8 +52,28 @@ std::vector<ProjectionMatrix> reference_subset(const StandardProblem& p, int n) 
   return subset;
 }
 
+// The views the back projection's bands need (a table of views that see the same voxels), which
+// the reference's views, spread evenly, never make: of the 360-view standard trajectory, the
+// kNeighbours / 2 whose central rays lie nearest view 0's and as many nearest view 90's (a
+// quarter turn on the circle: rays along another axis of the volume, through its other bands).
+constexpr int kNeighbours = 16;
+std::vector<ProjectionMatrix> neighbouring_views(const StandardProblem& dense) {
+  std::vector<ProjectionMatrix> chosen;
+  for (const std::size_t centre : {std::size_t{0}, dense.views.size() / 4}) {
+    const Eigen::Vector3d ray = dense.views[centre].principal_ray().normalized();
+    std::vector<std::size_t> order(dense.views.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    const auto cosine = [&](std::size_t i) { return dense.views[i].principal_ray().normalized().dot(ray); };
+    std::partial_sort(order.begin(), order.begin() + kNeighbours / 2, order.end(),
+                      [&](std::size_t a, std::size_t b) { return cosine(a) > cosine(b); });
+    for (int i = 0; i < kNeighbours / 2; ++i) chosen.push_back(dense.views[order[static_cast<std::size_t>(i)]]);
+  }
+  return chosen;
+}
+
 // What the yardstick reads: the layout, the detector, the subset's matrices and the raw files.
-void write_dump_manifest(const StandardProblem& p, const std::vector<ProjectionMatrix>& views, const std::filesystem::path& dir) {
+void write_dump_manifest(const StandardProblem& p, const std::vector<ProjectionMatrix>& views, const std::string& subset,
+                         const std::filesystem::path& dir) {
   nlohmann::json matrices = nlohmann::json::array();
   for (const auto& P : views) {
     nlohmann::json rows = nlohmann::json::array();
@@ -61,6 +83,7 @@ void write_dump_manifest(const StandardProblem& p, const std::vector<ProjectionM
   const nlohmann::json j = {
       {"format", "ctk-bench-dump/1"},
       {"trajectory", p.trajectory},
+      {"subset", subset},
       {"volume", {{"size", p.layout.size}, {"voxel_mm", {p.layout.voxel_mm.x(), p.layout.voxel_mm.y(), p.layout.voxel_mm.z()}},
                   {"origin_mm", {p.layout.origin_mm.x(), p.layout.origin_mm.y(), p.layout.origin_mm.z()}}, {"order", "x fastest"}}},
       {"detector", {{"cols", p.cols}, {"rows", p.rows}, {"pixel", "(u, v) = (column, row) at the pixel centre"}}},
@@ -68,6 +91,37 @@ void write_dump_manifest(const StandardProblem& p, const std::vector<ProjectionM
       {"files", {{"x", "x.raw"}, {"y", "y.raw"}, {"forward", "forward.raw"}, {"back", "back.raw"}}},
       {"meaning", "forward = A x and back = A' y over these views, by the fast projector; float32, views x rows x cols"}};
   write_text_atomically(dir / "manifest.json", j.dump(2) + "\n");
+}
+
+// The benchmark's volume and projections: smooth, nonzero, the same on every run.
+Volume bench_volume(const VolumeLayout& layout) {
+  Volume x(layout);
+  for (std::size_t i = 0; i < x.data.size(); ++i) x.data[i] = 0.5f + 0.5f * std::sin(0.001f * static_cast<float>(i));
+  return x;
+}
+void fill_bench_projections(ProjectionStack& y) {
+  for (std::size_t i = 0; i < y.data.size(); ++i) y.data[i] = 1.0f + 0.5f * std::cos(0.01f * static_cast<float>(i));
+}
+
+// The dump of the fast projector on neighbouring_views (a folder beside the trajectory's): A x and
+// A' y there, which the yardstick checks as it checks the reference's views.
+void dump_neighbours(StandardTrajectory trajectory, const BenchOptions& o) {
+  const StandardProblem dense = standard_problem(trajectory, 360, o.scale);
+  const std::vector<ProjectionMatrix> views = neighbouring_views(dense);
+  const std::filesystem::path dir = o.dump / (dense.trajectory + "-neighbours");
+  std::filesystem::create_directories(dir);
+  const JosephProjector fast({o.threads});
+  const Volume x = bench_volume(dense.layout);
+  ProjectionStack y(static_cast<int>(views.size()), dense.rows, dense.cols), ax(y.views, y.rows, y.cols);
+  fill_bench_projections(y);
+  Volume aty(dense.layout);
+  fast.forward(x, views, ax);
+  fast.back(y, views, aty);
+  write_floats(dir / "x.raw", x.data);
+  write_floats(dir / "y.raw", y.data);
+  write_floats(dir / "forward.raw", ax.data);
+  write_floats(dir / "back.raw", aty.data);
+  write_dump_manifest(dense, views, "neighbours: the views of the 360-view trajectory nearest views 0 and 90 in direction", dir);
 }
 
 template <typename F>
@@ -95,11 +149,10 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
   const std::vector<ProjectionMatrix> ref_views = reference_subset(p, n_ref);
   const std::filesystem::path dump = o.dump.empty() ? o.dump : o.dump / p.trajectory;
 
-  Volume x(p.layout);
-  for (std::size_t i = 0; i < x.data.size(); ++i) x.data[i] = 0.5f + 0.5f * std::sin(0.001f * static_cast<float>(i));
+  const Volume x = bench_volume(p.layout);
   ProjectionStack y(n_views, p.rows, p.cols), y_ref(n_ref, p.rows, p.cols), y_fast_subset(n_ref, p.rows, p.cols);
-  for (std::size_t i = 0; i < y.data.size(); ++i) y.data[i] = 1.0f + 0.5f * std::cos(0.01f * static_cast<float>(i));
-  for (std::size_t i = 0; i < y_ref.data.size(); ++i) y_ref.data[i] = y.data[i];
+  fill_bench_projections(y);
+  fill_bench_projections(y_ref);
 
   double agreement = 0;
   std::vector<double> fast_runs, ref_runs;
@@ -185,7 +238,9 @@ void run_bench(const BenchOptions& o) {
     const StandardProblem p = standard_problem(trajectory, o.views, o.scale);
     if (!o.dump.empty()) {
       std::filesystem::create_directories(o.dump / p.trajectory);
-      write_dump_manifest(p, reference_subset(p, std::min(o.reference_views, o.views)), o.dump / p.trajectory);
+      write_dump_manifest(p, reference_subset(p, std::min(o.reference_views, o.views)), "reference: the views the reference ran on",
+                          o.dump / p.trajectory);
+      dump_neighbours(trajectory, o);
     }
     if (trajectory == StandardTrajectory::circular) {
       result["problem"] = {{"volume", p.layout.size},
@@ -233,7 +288,7 @@ void register_bench(CLI::App& app) {
       ->check(CLI::IsMember(JosephProjector::simd_targets()));
   cmd->add_flag("--json", options->json, "Print the result as JSON on stdout (the table goes to stderr)");
   cmd->add_option("--dump", options->dump,
-                  "Write the fast projector's results on the reference's views to this folder (for benchmarks/yardstick.py)");
+                  "Write the fast projector's results on the reference's views, and on 16 neighbouring views, to this folder (for benchmarks/yardstick.py)");
   cmd->callback([options] { run_bench(*options); });
 }
 
