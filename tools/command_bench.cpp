@@ -53,10 +53,11 @@ std::vector<ProjectionMatrix> reference_subset(const StandardProblem& p, int n) 
 }
 
 // The views the back projection's bands need (a table of views that see the same voxels), which
-// the reference's views, spread evenly, never make: of the 360-view standard trajectory, the
-// kNeighbours / 2 whose central rays lie nearest view 0's and as many nearest view 90's (a
-// quarter turn on the circle: rays along another axis of the volume, through its other bands).
-constexpr int kNeighbours = 16;
+// the reference's views, spread evenly, make only in part (circular views 180 degrees apart share
+// voxels; spherical ones share too few): of the kDenseViews-view standard trajectory, the
+// kNeighbours / 2 whose central rays lie nearest view 0's and as many nearest view kDenseViews / 4's
+// (a quarter turn on the circle: rays along another axis of the volume, through its other bands).
+constexpr int kDenseViews = 360, kNeighbours = 16;
 std::vector<ProjectionMatrix> neighbouring_views(const StandardProblem& dense) {
   std::vector<ProjectionMatrix> chosen;
   for (const std::size_t centre : {std::size_t{0}, dense.views.size() / 4}) {
@@ -106,7 +107,7 @@ void fill_bench_projections(ProjectionStack& y) {
 // The dump of the fast projector on neighbouring_views (a folder beside the trajectory's): A x and
 // A' y there, which the yardstick checks as it checks the reference's views.
 void dump_neighbours(StandardTrajectory trajectory, const BenchOptions& o) {
-  const StandardProblem dense = standard_problem(trajectory, 360, o.scale);
+  const StandardProblem dense = standard_problem(trajectory, kDenseViews, o.scale);
   const std::vector<ProjectionMatrix> views = neighbouring_views(dense);
   const std::filesystem::path dir = o.dump / (dense.trajectory + "-neighbours");
   std::filesystem::create_directories(dir);
