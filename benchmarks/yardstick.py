@@ -9,9 +9,10 @@ It repeats the benchmark's checks:
      of every dumped view, against the fast projector's forward projection;
   2. the back projection at random voxels: the same sums taken the other way (every ray whose
      sample touches the voxel), against the fast projector's back projection;
-  1-3 on two sets of views per trajectory: the reference's (spread evenly) and 16 neighbouring
-     views of the 360-view trajectory, which the fast back projection takes through its bands;
   3. adjointness: <A x, y> against <x, A' y> from the dumped arrays;
+  1-3 on two sets of views per trajectory: the reference's (spread evenly) and 16 neighbouring
+     views of the 360-view trajectory, which the fast back projection takes through its bands
+     (the reference's take them only in part: circular ones 180 degrees apart, spherical ones not);
   4. timing: two runs of `ctk bench` with N/2 and N views (the reference on the same single view
      in both); the growth of the wall clock, measured here, is compared with the growth of the
      fast projector's own reported seconds. The reference's time cancels out, but only as far
@@ -263,7 +264,7 @@ def main():
         failed |= not ok
         print(f"machine: the report names {reported.get('cpu')}, /proc/cpuinfo says {here}  {'ok' if ok else 'FAILED'}")
         # Each trajectory's reference views, and its neighbouring views (a back projection
-        # through bands, which views spread as evenly as the reference's never take).
+        # through bands, which views spread as evenly as the reference's take only in part).
         for folder in ("circular", "spherical", "circular-neighbours", "spherical-neighbours"):
             r = check_dump(os.path.join(dump, folder), args.rays, args.voxels, rng)
             ok = max(r["forward_rel_diff"], r["back_rel_diff"], r["adjointness"]) <= args.tolerance

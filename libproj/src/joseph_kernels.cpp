@@ -475,9 +475,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
       [&](std::size_t r) {
         const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(di, t.axis.data() + r), hn::Set(di, axis)));
         if (hn::AllFalse(df, on_axis)) return;
-        const std::size_t i = r / static_cast<std::size_t>(N);
-        const Bundle b = i < t.bundles.size() && t.bundles[i].axis == axis ? t.bundles[i]
-                                                                           : bundle_at(t, r, static_cast<std::size_t>(N), axis);
+        const Bundle b = table_bundle(t, r, static_cast<std::size_t>(N), axis);
         if (axis != 0 && hn::AllTrue(df, on_axis)) {
           if (std::max(b.k_lo, k_begin) <= std::min(b.k_hi, k_end - 1)) in_volume.push_back(b);
           return;
@@ -493,8 +491,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
         // Kept for back_along_x_in_bands.
         const XStrip& s = w.strips.strip;
         for (int i = 0; i < s.count; ++i) {
-          const std::size_t r = s.entries[i], bundle = r / static_cast<std::size_t>(N);
-          const Bundle b = bundle < t.bundles.size() ? t.bundles[bundle] : bundle_at(t, r, static_cast<std::size_t>(N), -1);
+          const Bundle b = table_bundle(t, s.entries[i], static_cast<std::size_t>(N), -1);
           if (std::max(b.k_lo, k_begin) <= std::min(b.k_hi, k_end - 1)) w.along_x.push_back(b);
         }
       });

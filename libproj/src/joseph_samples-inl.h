@@ -338,6 +338,14 @@ HWY_INLINE Bundle bundle_at(const RayTable& t, std::size_t r, std::size_t n, int
   return b;
 }
 
+// bundle_at, from the bundles the table's fillers prepared (all lanes, RayTable::bundles) where
+// they are the same: for every lane (axis < 0), or where every lane is on `axis`.
+HWY_INLINE Bundle table_bundle(const RayTable& t, std::size_t r, std::size_t n, int axis) {
+  const std::size_t i = r / n;
+  if (i < t.bundles.size() && (axis < 0 || t.bundles[i].axis == axis)) return t.bundles[i];
+  return bundle_at(t, r, n, axis);
+}
+
 // The two floats at volume[index] and volume[index + 1] for every lane, as (first, second): one
 // 64-bit gather per pair instead of two 32-bit ones (gathers cost per element loaded).
 template <class DF>
