@@ -73,11 +73,15 @@ struct QuadBand {
   float at(int kk, int cc, int bb) const { return *first_of_pairs(kk, cc, bb) + *second_of_pairs(kk, cc, bb); }
 };
 
-// Bands larger than this many floats (640 kB, each thread's own) are not used; their bundles
+// Bands larger than this many floats (1 MB, each thread's own) are not used; their bundles
 // scatter as before. In circular views some bands along x are 20-32 rows of z tall (16 slices,
 // up to about 150 k floats): with 96 k, 164 of 512 groups of a half-scale run went strip by strip,
-// and the standard problem's back projection gained 1.10x instead of 1.24x (session 39).
-inline constexpr std::size_t kMaxBandFloats = 160 * 1024;
+// and the standard problem's back projection gained 1.10x instead of 1.24x (session 39). With
+// spherical views in slab order (line_blocks.hpp), bands along y and z of 40-55 rows (8 slices,
+// the whole width: 170-230 k floats) gather 1.1-2.2 samples per voxel; 256 k rather than 160 k
+// made the spherical back projection 1.06-1.07x faster, circular 1.00x (192 k 1.035x, 384 k
+// 1.06x; in-process, session 41).
+inline constexpr std::size_t kMaxBandFloats = 256 * 1024;
 // Nor bands with fewer samples than voxels: zeroing a band and adding it back cost about what a
 // voxel's samples save. Without this limit spherical views lost 5 %; with 0.5, 1 or 2 samples per
 // voxel, in-process: circular 1.30, 1.31, 1.24x, spherical 0.97, 0.98, 0.98x (session 39).

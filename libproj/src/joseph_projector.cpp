@@ -9,12 +9,17 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "line_blocks.hpp"
 #include "ray_table.hpp"
 
 namespace ctk {
 
 namespace {
-constexpr int kBackTableRays = 32768;  // rays per shared back-projection table (~2 MB)
+// Rays per shared back-projection table (about 4.5 MB; there are two). With the views in slab
+// order, a table of more views gathers more samples per band voxel: 65536 rather than 32768 made
+// the spherical back projection 1.054x faster and the circular one 1.026x (49152: 1.032x,
+// 98304: 1.036x spherical; in-process, session 41).
+constexpr int kBackTableRays = 65536;
 }  // namespace
 
 JosephProjector::JosephProjector(ProjectorOptions options) : options_(options) {
@@ -87,58 +92,22 @@ void JosephProjector::use_simd_target(const std::string& target) {
 
 namespace {
 
-// Each view's rays and lane path, and how many tables of `rows_per_block` lines it takes.
+// Each view's rays and lane path, and its lines dealt into slabs (line_blocks.hpp).
 struct ViewPaths {
   std::vector<ViewRays> rays;
   std::vector<detail::LanePath> path;
-  std::vector<int> blocks;
-  int most_blocks = 0;
+  detail::LineBlocks slabs;
   int most_lanes = 0;
   ViewPaths(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout, int cols, int rows,
             int rows_per_block) {
     for (const auto& P : views) {
       rays.push_back(view_rays(P, layout));
       path.push_back(detail::LanePath::for_view(rays.back(), layout, cols, rows));
-      blocks.push_back((path.back().lines + rows_per_block - 1) / rows_per_block);
-      most_blocks = std::max(most_blocks, blocks.back());
       most_lanes = std::max(most_lanes, path.back().majors);
     }
+    slabs = detail::line_blocks(rays, path, layout, cols, rows, rows_per_block);
   }
 };
-
-// The order in which the back projection batches the views into its tables: a chain from view 0,
-// each next view the one left whose central ray is closest in direction to the last one's. A
-// table's views then look at nearly the same voxels, so its bands gather more samples per voxel
-// and its slabs' rows stay in cache. Circular scans keep their order (each view's nearest is the
-// next); the standard problem's spherical views, given in no such order, went 1.12x faster
-// (360 views, in-process; paired.py 1.088, session 39). The forward projection measured 1.035x
-// in-process but 0.99x in paired.py, and keeps the given order. Quadratic in the views, so scans
-// of more than kMaxChainedViews keep theirs.
-constexpr std::size_t kMaxChainedViews = 8192;
-std::vector<int> neighbour_order(const std::vector<ProjectionMatrix>& views) {
-  std::vector<int> order(views.size());
-  for (std::size_t v = 0; v < views.size(); ++v) order[v] = static_cast<int>(v);
-  if (views.size() < 3 || views.size() > kMaxChainedViews) return order;
-  std::vector<Eigen::Vector3d> direction;
-  for (const auto& P : views) direction.push_back(P.principal_ray().normalized());
-  std::vector<bool> taken(views.size(), false);
-  taken[0] = true;
-  for (std::size_t i = 1; i < views.size(); ++i) {
-    const Eigen::Vector3d& last = direction[static_cast<std::size_t>(order[i - 1])];
-    std::size_t best = 0;
-    double closest = -2;
-    for (std::size_t j = 0; j < views.size(); ++j) {
-      const double cosine = direction[j].dot(last);
-      if (!taken[j] && cosine > closest) {
-        closest = cosine;
-        best = j;
-      }
-    }
-    taken[best] = true;
-    order[i] = static_cast<int>(best);
-  }
-  return order;
-}
 
 // The detector pixel of table entry (row, lane) of lines from line_begin, or null outside it.
 template <typename Stack, typename Value = std::conditional_t<std::is_const_v<Stack>, const float, float>>
@@ -155,7 +124,11 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
   check_stack_matches_views(y, views.size());
   const int rows_per_block = lines_per_table(views, x.layout);
   const ViewPaths paths(views, x.layout, y.cols, y.rows, rows_per_block);
-  const int items = y.views * paths.most_blocks;
+  // Every view's lines of one slab, then the next slab's: neighbouring items read the same
+  // voxels, which then stay in cache.
+  std::vector<detail::LineRange> items;
+  for (const auto& slab : paths.slabs.blocks) items.insert(items.end(), slab.begin(), slab.end());
+  const int item_count = static_cast<int>(items.size());
 #pragma omp parallel num_threads(threads())
   {
     // Pixels outside a view's footprint are in none of its lines: their rays miss the volume.
@@ -163,33 +136,28 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
     for (int v = 0; v < y.views; ++v)
       if (!paths.path[static_cast<std::size_t>(v)].whole_detector) std::fill_n(y.view(v), y.pixels_per_view(), 0.0f);
     detail::RayTable table;
-    table.shape(1, rows_per_block, paths.most_lanes);
+    table.shape(1, std::max(1, paths.slabs.capacity), paths.most_lanes);
     std::vector<float> out(table.pb_mid.size());
 #pragma omp for schedule(dynamic, 1)
-    for (int item = 0; item < items; ++item) {
-      // Views vary fastest: the same detector rows of neighbouring views see nearly the same
-      // band of the volume, which then stays in cache.
-      const int v = item % y.views, block = item / y.views;
+    for (int i = 0; i < item_count; ++i) {
+      const detail::LineRange& item = items[static_cast<std::size_t>(i)];
+      const int v = item.view;
       const auto& path = paths.path[static_cast<std::size_t>(v)];
-      if (block >= paths.blocks[static_cast<std::size_t>(v)]) continue;
-      const int line_begin = block * rows_per_block;
-      table.rows = std::min(rows_per_block, path.lines - line_begin);
-      table.fill(paths.rays[static_cast<std::size_t>(v)], x.layout, 0, path, line_begin, 0,
-                 table.rows * table.row_stride);
+      table.rows = item.lines;
+      table.fill(paths.rays[static_cast<std::size_t>(v)], x.layout, 0, path, item.line_begin, 0, table.rows * table.row_stride);
       detail::forward_rays(table, x.data.data(), out.data());
       for (int row = 0; row < table.rows; ++row)
         for (int lane = 0; lane < path.majors; ++lane)
-          if (float* pixel = pixel_of(y, v, path, line_begin + row, lane)) *pixel = out[table.entry(0, row, lane)];
+          if (float* pixel = pixel_of(y, v, path, item.line_begin + row, lane)) *pixel = out[table.entry(0, row, lane)];
     }
   }
 }
 
 namespace {
 
-// One table's worth of the back projection: `views` views from v0 (in neighbour_order), lines
-// from line_begin.
+// One table's worth of the back projection: `views` of slab `slab`'s line ranges from v0.
 struct BackBatch {
-  int line_begin = 0, v0 = 0, views = 0;
+  int slab = 0, v0 = 0, views = 0;
 };
 
 // Samples (lane-slices) per dominant axis that one thread's fill tasks put in a table; summed
@@ -235,46 +203,50 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
   if (y.views == 0) return;
   const int rows_per_block = lines_per_table(views, x.layout);
   const ViewPaths paths(views, x.layout, y.cols, y.rows, rows_per_block);
-  if (paths.most_blocks == 0) return;  // no view's footprint meets its detector
+  if (paths.slabs.capacity == 0) return;  // no view's footprint meets its detector
   const int n_threads = threads();
+  const int capacity = paths.slabs.capacity;
   // Several views share one table, so the threads meet at a barrier once per batch rather than
   // once per view (barriers dominate small problems, and cost dearly when cores are shared).
-  const int per_view = rows_per_block * ((paths.most_lanes + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes);
+  const int per_view = capacity * ((paths.most_lanes + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes);
   const int batch = std::clamp(kBackTableRays / per_view, 1, y.views);
-  // Views innermost, as in forward(): a band of the volume stays in cache across views.
+  // Views innermost, as in forward(): a slab of the volume stays in cache across views.
   std::vector<BackBatch> batches;
-  for (int block = 0; block < paths.most_blocks; ++block)
-    for (int v0 = 0; v0 < y.views; v0 += batch) batches.push_back({block * rows_per_block, v0, std::min(batch, y.views - v0)});
+  for (std::size_t slab = 0; slab < paths.slabs.blocks.size(); ++slab) {
+    const int in_slab = static_cast<int>(paths.slabs.blocks[slab].size());
+    for (int v0 = 0; v0 < in_slab; v0 += batch) batches.push_back({static_cast<int>(slab), v0, std::min(batch, in_slab - v0)});
+  }
   // Two tables, shared by the threads: while the slab tasks read one, threads with no slab left
   // fill the other for the next batch instead of waiting at the barrier.
   std::array<detail::RayTable, 2> tables;
   for (detail::RayTable& table : tables) {
-    table.shape(batch, rows_per_block, paths.most_lanes);
+    table.shape(batch, capacity, paths.most_lanes);
     table.bundles.resize(detail::bundle_count(table));
   }
   std::vector<AxisSamples> samples(static_cast<std::size_t>(n_threads));
-  const std::vector<int> order = neighbour_order(views);  // slot s of batch b holds view order[b.v0 + s]
   const int lanes = detail::simd_float_lanes();
-  const int count = rows_per_block * tables[0].row_stride;  // entries per view
+  const int count = capacity * tables[0].row_stride;  // entries per view
   // A view's entries are filled in n_threads parts of whole bundles, each prepared by its filler.
   const int part_size = ((count + n_threads - 1) / n_threads + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes;
   // Fill task `task` (of b.views * n_threads) of batch b into tables[buffer]: its part of one
   // view's rays, their projection values, their bundles, and their samples per axis.
   const auto fill = [&](const BackBatch& b, int buffer, int task) {
     detail::RayTable& table = tables[static_cast<std::size_t>(buffer)];
-    const int slot = task / n_threads, part = task % n_threads, v = order[static_cast<std::size_t>(b.v0 + slot)];
+    const int slot = task / n_threads, part = task % n_threads;
+    const detail::LineRange& lines = paths.slabs.blocks[static_cast<std::size_t>(b.slab)][static_cast<std::size_t>(b.v0 + slot)];
+    const int v = lines.view;
     const auto& path = paths.path[static_cast<std::size_t>(v)];
-    // Lines past this view's last: rows of the shared table the kernels skip (slot_rows).
-    const int rows = std::clamp(path.lines - b.line_begin, 0, rows_per_block);
+    // Rows past this view's lines in the slab: rows of the shared table the kernels skip (slot_rows).
+    const int rows = lines.lines;
     const int begin = std::min(count, part * part_size), filled = std::min(begin + part_size, rows * table.row_stride);
     const std::size_t first = table.entry(slot, 0, 0);
-    table.fill(paths.rays[static_cast<std::size_t>(v)], x.layout, slot, path, b.line_begin, begin, std::max(begin, filled));
+    table.fill(paths.rays[static_cast<std::size_t>(v)], x.layout, slot, path, lines.line_begin, begin, std::max(begin, filled));
     if (part == 0) table.slot_rows[static_cast<std::size_t>(slot)] = rows;
     if (task == 0) table.views = b.views;
     auto& on_axis = samples[static_cast<std::size_t>(omp_get_thread_num())].of_table[buffer];
     for (int r = begin; r < filled; ++r) {
       const int row = r / table.row_stride, lane = r % table.row_stride;
-      const float* pixel = pixel_of(y, v, path, b.line_begin + row, lane);
+      const float* pixel = pixel_of(y, v, path, lines.line_begin + row, lane);
       const std::size_t e = first + static_cast<std::size_t>(r);
       table.value[e] = pixel ? *pixel : 0.0f;
       if (table.k_last[e] >= table.k_first[e]) on_axis[static_cast<std::size_t>(table.axis[e])] += table.k_last[e] - table.k_first[e] + 1;
