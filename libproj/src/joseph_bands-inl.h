@@ -77,7 +77,7 @@ struct QuadBand {
 // scatter as before. In circular views some bands along x are 20-32 rows of z tall (16 slices,
 // up to about 150 k floats): with 96 k, 164 of 512 groups of a half-scale run went strip by strip,
 // and the standard problem's back projection gained 1.10x instead of 1.24x (session 39). With
-// spherical views in slab order (line_blocks.hpp), bands along y and z of 40-55 rows (8 slices,
+// spherical views in slab order (slab_lines.hpp), bands along y and z of 40-55 rows (8 slices,
 // the whole width: 170-230 k floats) gather 1.1-2.2 samples per voxel; 256 k rather than 160 k
 // made the spherical back projection 1.06-1.07x faster, circular 1.00x (192 k 1.035x, 384 k
 // 1.06x; in-process, session 41).

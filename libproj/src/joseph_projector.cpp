@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "line_blocks.hpp"
+#include "slab_lines.hpp"
 #include "ray_table.hpp"
 
 namespace ctk {
@@ -92,11 +92,11 @@ void JosephProjector::use_simd_target(const std::string& target) {
 
 namespace {
 
-// Each view's rays and lane path, and its lines dealt into slabs (line_blocks.hpp).
+// Each view's rays and lane path, and its lines dealt into slabs (slab_lines.hpp).
 struct ViewPaths {
   std::vector<ViewRays> rays;
   std::vector<detail::LanePath> path;
-  detail::LineBlocks slabs;
+  detail::SlabLines dealt;
   int most_lanes = 0;
   ViewPaths(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout, int cols, int rows,
             int rows_per_block) {
@@ -105,7 +105,7 @@ struct ViewPaths {
       path.push_back(detail::LanePath::for_view(rays.back(), layout, cols, rows));
       most_lanes = std::max(most_lanes, path.back().majors);
     }
-    slabs = detail::line_blocks(rays, path, layout, cols, rows, rows_per_block);
+    dealt = detail::slab_lines(rays, path, layout, cols, rows, rows_per_block);
   }
 };
 
@@ -127,7 +127,7 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
   // Every view's lines of one slab, then the next slab's: neighbouring items read the same
   // voxels, which then stay in cache.
   std::vector<detail::LineRange> items;
-  for (const auto& slab : paths.slabs.blocks) items.insert(items.end(), slab.begin(), slab.end());
+  for (const auto& slab : paths.dealt.slabs) items.insert(items.end(), slab.begin(), slab.end());
   const int item_count = static_cast<int>(items.size());
 #pragma omp parallel num_threads(threads())
   {
@@ -136,7 +136,7 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
     for (int v = 0; v < y.views; ++v)
       if (!paths.path[static_cast<std::size_t>(v)].whole_detector) std::fill_n(y.view(v), y.pixels_per_view(), 0.0f);
     detail::RayTable table;
-    table.shape(1, std::max(1, paths.slabs.capacity), paths.most_lanes);
+    table.shape(1, std::max(1, paths.dealt.capacity), paths.most_lanes);
     std::vector<float> out(table.pb_mid.size());
 #pragma omp for schedule(dynamic, 1)
     for (int i = 0; i < item_count; ++i) {
@@ -203,17 +203,17 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
   if (y.views == 0) return;
   const int rows_per_block = lines_per_table(views, x.layout);
   const ViewPaths paths(views, x.layout, y.cols, y.rows, rows_per_block);
-  if (paths.slabs.capacity == 0) return;  // no view's footprint meets its detector
+  if (paths.dealt.capacity == 0) return;  // no view's footprint meets its detector
   const int n_threads = threads();
-  const int capacity = paths.slabs.capacity;
+  const int capacity = paths.dealt.capacity;
   // Several views share one table, so the threads meet at a barrier once per batch rather than
   // once per view (barriers dominate small problems, and cost dearly when cores are shared).
   const int per_view = capacity * ((paths.most_lanes + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes);
   const int batch = std::clamp(kBackTableRays / per_view, 1, y.views);
   // Views innermost, as in forward(): a slab of the volume stays in cache across views.
   std::vector<BackBatch> batches;
-  for (std::size_t slab = 0; slab < paths.slabs.blocks.size(); ++slab) {
-    const int in_slab = static_cast<int>(paths.slabs.blocks[slab].size());
+  for (std::size_t slab = 0; slab < paths.dealt.slabs.size(); ++slab) {
+    const int in_slab = static_cast<int>(paths.dealt.slabs[slab].size());
     for (int v0 = 0; v0 < in_slab; v0 += batch) batches.push_back({static_cast<int>(slab), v0, std::min(batch, in_slab - v0)});
   }
   // Two tables, shared by the threads: while the slab tasks read one, threads with no slab left
@@ -233,7 +233,7 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
   const auto fill = [&](const BackBatch& b, int buffer, int task) {
     detail::RayTable& table = tables[static_cast<std::size_t>(buffer)];
     const int slot = task / n_threads, part = task % n_threads;
-    const detail::LineRange& lines = paths.slabs.blocks[static_cast<std::size_t>(b.slab)][static_cast<std::size_t>(b.v0 + slot)];
+    const detail::LineRange& lines = paths.dealt.slabs[static_cast<std::size_t>(b.slab)][static_cast<std::size_t>(b.v0 + slot)];
     const int v = lines.view;
     const auto& path = paths.path[static_cast<std::size_t>(v)];
     // Rows past this view's lines in the slab: rows of the shared table the kernels skip (slot_rows).

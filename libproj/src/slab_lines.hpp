@@ -17,15 +17,16 @@ struct LineRange {
   int view = 0, line_begin = 0, lines = 0;
 };
 
-struct LineBlocks {
-  int capacity = 0;                            // most lines of one view in one slab: the tables' rows
-  std::vector<std::vector<LineRange>> blocks;  // per slab, the lines of each view crossing it, in slab order
+struct SlabLines {
+  int capacity = 0;                           // most lines of one view in one slab: the tables' rows
+  std::vector<std::vector<LineRange>> slabs;  // per slab, the lines of each view crossing it, in slab order
 };
 
 /// The slabs, each about `rows_per_block` lines of the view with the densest lines thick, and
 /// every view's lines through each. Views come in slab order: by the dominant axis of their
-/// central ray, then by the tilt of their lines' planes about the axis their lanes run along.
-LineBlocks line_blocks(const std::vector<ViewRays>& rays, const std::vector<LanePath>& paths, const VolumeLayout& layout,
-                       int cols, int rows, int rows_per_block);
+/// central ray, then by the tilt of their lines' planes about the axis their lanes run along,
+/// then by heading; or as given where that is as coherent (circular trajectories).
+SlabLines slab_lines(const std::vector<ViewRays>& rays, const std::vector<LanePath>& paths, const VolumeLayout& layout,
+                     int cols, int rows, int rows_per_block);
 
 }  // namespace ctk::detail

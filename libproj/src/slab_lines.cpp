@@ -1,4 +1,4 @@
-#include "line_blocks.hpp"
+#include "slab_lines.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -84,8 +84,8 @@ std::vector<int> slab_order(const std::vector<LinePlanes>& planes) {
 
 }  // namespace
 
-LineBlocks line_blocks(const std::vector<ViewRays>& rays, const std::vector<LanePath>& paths, const VolumeLayout& layout,
-                       int cols, int rows, int rows_per_block) {
+SlabLines slab_lines(const std::vector<ViewRays>& rays, const std::vector<LanePath>& paths, const VolumeLayout& layout,
+                     int cols, int rows, int rows_per_block) {
   std::vector<LinePlanes> planes;
   std::vector<double> steps;  // each view's mean step between lines
   double lowest = 1e300, highest = -1e300;  // the outermost lines
@@ -100,7 +100,7 @@ LineBlocks line_blocks(const std::vector<ViewRays>& rays, const std::vector<Lane
     const double step = o.size() > 1 ? std::abs(o.back() - o.front()) / static_cast<double>(o.size() - 1) : 0.0;
     if (std::isfinite(step) && step > 0) steps.push_back(step);
   }
-  LineBlocks result;
+  SlabLines result;
   if (lines == 0) return result;
   // Slabs as thick as rows_per_block lines of the view with the densest lines, so that no view
   // has many more in one; but no thinner than half the median view's (a view whose lines barely
@@ -126,8 +126,8 @@ LineBlocks line_blocks(const std::vector<ViewRays>& rays, const std::vector<Lane
       const std::size_t slab = slab_of(o[line]);
       std::size_t end = line + 1;
       while (end < o.size() && slab_of(o[end]) == slab) ++end;
-      if (result.blocks.size() <= slab) result.blocks.resize(slab + 1);
-      result.blocks[slab].push_back({v, static_cast<int>(line), static_cast<int>(end - line)});
+      if (result.slabs.size() <= slab) result.slabs.resize(slab + 1);
+      result.slabs[slab].push_back({v, static_cast<int>(line), static_cast<int>(end - line)});
       result.capacity = std::max(result.capacity, static_cast<int>(end - line));
       line = end;
     }

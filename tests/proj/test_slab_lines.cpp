@@ -1,4 +1,4 @@
-// How the fast projector deals views' lines into tables (libproj/src/line_blocks.hpp): every
+// How the fast projector deals views' lines into tables (libproj/src/slab_lines.hpp): every
 // line once, circular views as they come, spherical views so that neighbours share slabs.
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 
 #include "ctk/proj/ray_geometry.hpp"
 #include "ctk/proj/standard_problem.hpp"
-#include "line_blocks.hpp"
+#include "slab_lines.hpp"
 
 namespace ctk {
 namespace {
@@ -16,13 +16,13 @@ struct Dealt {
   StandardProblem problem;
   std::vector<ViewRays> rays;
   std::vector<detail::LanePath> paths;
-  detail::LineBlocks blocks;
+  detail::SlabLines dealt;
   Dealt(StandardTrajectory trajectory, int views, int rows_per_block) : problem(standard_problem(trajectory, views, 4)) {
     for (const ProjectionMatrix& P : problem.views) {
       rays.push_back(view_rays(P, problem.layout));
       paths.push_back(detail::LanePath::for_view(rays.back(), problem.layout, problem.cols, problem.rows));
     }
-    blocks = detail::line_blocks(rays, paths, problem.layout, problem.cols, problem.rows, rows_per_block);
+    dealt = detail::slab_lines(rays, paths, problem.layout, problem.cols, problem.rows, rows_per_block);
   }
 };
 
@@ -48,7 +48,7 @@ Eigen::Vector3d central_plane_normal(const Dealt& d, int v) {
 double mean_turn_within_slabs(const Dealt& d) {
   double sum = 0;
   int count = 0;
-  for (const auto& slab : d.blocks.blocks)
+  for (const auto& slab : d.dealt.slabs)
     for (std::size_t i = 1; i < slab.size(); ++i) {
       const double c = std::abs(central_plane_normal(d, slab[i - 1].view).dot(central_plane_normal(d, slab[i].view)));
       sum += std::acos(std::min(1.0, c));
@@ -57,14 +57,14 @@ double mean_turn_within_slabs(const Dealt& d) {
   return count > 0 ? sum / count : 0.0;
 }
 
-TEST(LineBlocks, EveryLineOfEveryViewIsInExactlyOneSlab) {
+TEST(SlabLines, EveryLineOfEveryViewIsInExactlyOneSlab) {
   for (const StandardTrajectory trajectory : {StandardTrajectory::circular, StandardTrajectory::spherical}) {
     const int rows_per_block = 8;
     const Dealt d(trajectory, 60, rows_per_block);
     std::vector<std::vector<int>> taken(d.paths.size());
     for (std::size_t v = 0; v < d.paths.size(); ++v) taken[v].assign(static_cast<std::size_t>(d.paths[v].lines), 0);
     int longest = 0;
-    for (const auto& slab : d.blocks.blocks)
+    for (const auto& slab : d.dealt.slabs)
       for (const detail::LineRange& r : slab) {
         ASSERT_GE(r.line_begin, 0);
         ASSERT_GT(r.lines, 0);
@@ -74,17 +74,17 @@ TEST(LineBlocks, EveryLineOfEveryViewIsInExactlyOneSlab) {
       }
     for (std::size_t v = 0; v < taken.size(); ++v)
       for (std::size_t line = 0; line < taken[v].size(); ++line) EXPECT_EQ(taken[v][line], 1) << "view " << v << " line " << line;
-    EXPECT_EQ(d.blocks.capacity, longest);
+    EXPECT_EQ(d.dealt.capacity, longest);
     // Views whose lines are further apart than the densest view's take fewer per slab, none more.
-    EXPECT_LE(d.blocks.capacity, rows_per_block + 1);
+    EXPECT_LE(d.dealt.capacity, rows_per_block + 1);
   }
 }
 
-TEST(LineBlocks, CircularViewsComeInTheirOrderWithTheSameLines) {
+TEST(SlabLines, CircularViewsComeInTheirOrderWithTheSameLines) {
   const Dealt d(StandardTrajectory::circular, 60, 8);
-  ASSERT_EQ(d.blocks.capacity, 8);
-  for (std::size_t s = 0; s < d.blocks.blocks.size(); ++s) {
-    const auto& slab = d.blocks.blocks[s];
+  ASSERT_EQ(d.dealt.capacity, 8);
+  for (std::size_t s = 0; s < d.dealt.slabs.size(); ++s) {
+    const auto& slab = d.dealt.slabs[s];
     ASSERT_EQ(slab.size(), d.problem.views.size()) << "slab " << s;
     for (std::size_t i = 0; i < slab.size(); ++i) {
       EXPECT_EQ(slab[i].view, static_cast<int>(i));
@@ -94,7 +94,7 @@ TEST(LineBlocks, CircularViewsComeInTheirOrderWithTheSameLines) {
   }
 }
 
-TEST(LineBlocks, SphericalViewsAreOrderedSoThatNeighboursShareSlabs) {
+TEST(SlabLines, SphericalViewsAreOrderedSoThatNeighboursShareSlabs) {
   const Dealt d(StandardTrajectory::spherical, 360, 24);
   // In the given order (random directions) consecutive views' central planes turn by 0.79 rad on
   // average (session 41); in slab order, by about the spacing of 360 views over the sphere or less.
@@ -105,7 +105,7 @@ TEST(LineBlocks, SphericalViewsAreOrderedSoThatNeighboursShareSlabs) {
   // passes the centre at about the same signed distance as the others', within a slab's
   // thickness (24 lines of at most 1.07 voxels) of each other.
   double widest = 0;
-  for (const auto& slab : d.blocks.blocks)
+  for (const auto& slab : d.dealt.slabs)
     for (int axis = 0; axis < 3; ++axis) {
       double lo = 1e300, hi = -1e300;
       for (const detail::LineRange& r : slab) {
