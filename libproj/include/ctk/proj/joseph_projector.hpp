@@ -19,8 +19,10 @@ namespace ctk {
 
 struct ProjectorOptions {
   int threads = 0;         // 0: all OpenMP threads
-  int rows_per_block = 0;  // detector lines per ray table (rows, or staircases across the
-                           // detector); 0: JosephProjector::default_rows_per_block of the views
+  int rows_per_block = 0;  // detector lines of a view per ray table (rows, or staircases across
+                           // the detector): the tables take slabs of the volume that many lines
+                           // of the densest view thick, so views with sparser lines take fewer;
+                           // 0: JosephProjector::default_rows_per_block of the views
 };
 
 class JosephProjector {
