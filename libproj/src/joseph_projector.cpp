@@ -105,7 +105,7 @@ struct ViewPaths {
       path.push_back(detail::LanePath::for_view(rays.back(), layout, cols, rows));
       most_lanes = std::max(most_lanes, path.back().majors);
     }
-    dealt = detail::slab_lines(rays, path, layout, cols, rows, rows_per_block);
+    dealt = detail::slab_lines(rays, path, layout, rows_per_block);
   }
 };
 

@@ -16,6 +16,8 @@ LanePath LanePath::for_view(const ViewRays& rays, const VolumeLayout& layout, in
   const int c = other_axes(a)[1];
   const double gu = rays.du[c] * d[a] - d[c] * rays.du[a], gv = rays.dv[c] * d[a] - d[c] * rays.dv[a];
   LanePath p;
+  p.central_ray = d;
+  p.axis = a;
   p.along_u = std::abs(gv) >= std::abs(gu);  // the step (gv, -gu) is mostly along u
   p.slope = p.along_u ? (gv != 0 ? -gu / gv : 0.0) : -gv / gu;
   p.minors = p.along_u ? rows : cols;
@@ -55,7 +57,7 @@ void LanePath::find_footprint(const ViewRays& rays, const VolumeLayout& layout) 
   double lo_u = 1e300, hi_u = -1e300, lo_v = 1e300, hi_v = -1e300;
   for (int corner = 0; corner < 8; ++corner) {
     Eigen::Vector3d X;
-    for (int axis = 0; axis < 3; ++axis) X[axis] = (corner >> axis) & 1 ? box_hi[axis] : box_lo[axis];
+    for (int i = 0; i < 3; ++i) X[i] = (corner >> i) & 1 ? box_hi[i] : box_lo[i];
     const double depth = normal.dot(X - rays.source);
     if (!(depth > 1e-6 * (X - rays.source).norm())) return;  // a corner behind the source or beside it: unbounded
     A.col(2) = -(X - rays.source);

@@ -44,6 +44,8 @@ struct Bundle {
 // the other axis's lanes then spread over several rows and gather; a path per axis removed
 // those gathers but measured no faster (benchmarks/README.md, session 27).
 struct LanePath {
+  Eigen::Vector3d central_ray = Eigen::Vector3d::UnitZ();  // the ray through the detector's centre
+  int axis = 2;                   // its dominant axis, the one the path is chosen for
   bool along_u = true;            // the major axis is u (columns)
   double slope = 0;               // minor pixels per lane, |slope| <= 1
   int major_first = 0, majors = 1;  // the footprint's pixels along the major axis (lanes per line)

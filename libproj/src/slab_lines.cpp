@@ -19,10 +19,10 @@ struct LinePlanes {
   std::vector<double> offset;  // per line: its plane's signed distance from the centre (voxels)
 };
 
-LinePlanes line_planes(const ViewRays& rays, const LanePath& path, const VolumeLayout& layout, int cols, int rows) {
+LinePlanes line_planes(const ViewRays& rays, const LanePath& path, const VolumeLayout& layout) {
   LinePlanes p;
-  const Eigen::Vector3d centre_ray = rays.d0 + 0.5 * (cols - 1) * rays.du + 0.5 * (rows - 1) * rays.dv;
-  centre_ray.cwiseAbs().maxCoeff(&p.axis);
+  const Eigen::Vector3d& centre_ray = path.central_ray;
+  p.axis = path.axis;
   const int c = other_axes(p.axis)[1];
   const Eigen::Vector3d centre = 0.5 * (Eigen::Vector3d(layout.size[0], layout.size[1], layout.size[2]) - Eigen::Vector3d::Ones());
   const auto ray = [&](double major, double minor) {
@@ -85,13 +85,13 @@ std::vector<int> slab_order(const std::vector<LinePlanes>& planes) {
 }  // namespace
 
 SlabLines slab_lines(const std::vector<ViewRays>& rays, const std::vector<LanePath>& paths, const VolumeLayout& layout,
-                     int cols, int rows, int rows_per_block) {
+                     int rows_per_block) {
   std::vector<LinePlanes> planes;
   std::vector<double> steps;  // each view's mean step between lines
   double lowest = 1e300, highest = -1e300;  // the outermost lines
   double lines = 0;                         // of every view
   for (std::size_t v = 0; v < rays.size(); ++v) {
-    planes.push_back(paths[v].lines > 0 ? line_planes(rays[v], paths[v], layout, cols, rows) : LinePlanes{});
+    planes.push_back(paths[v].lines > 0 ? line_planes(rays[v], paths[v], layout) : LinePlanes{});
     const std::vector<double>& o = planes.back().offset;
     if (o.empty()) continue;
     lowest = std::min({lowest, o.front(), o.back()});

@@ -27,6 +27,6 @@ struct SlabLines {
 /// central ray, then by the tilt of their lines' planes about the axis their lanes run along,
 /// then by heading; or as given where that is as coherent (circular trajectories).
 SlabLines slab_lines(const std::vector<ViewRays>& rays, const std::vector<LanePath>& paths, const VolumeLayout& layout,
-                     int cols, int rows, int rows_per_block);
+                     int rows_per_block);
 
 }  // namespace ctk::detail

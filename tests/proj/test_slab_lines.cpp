@@ -22,18 +22,12 @@ struct Dealt {
       rays.push_back(view_rays(P, problem.layout));
       paths.push_back(detail::LanePath::for_view(rays.back(), problem.layout, problem.cols, problem.rows));
     }
-    dealt = detail::slab_lines(rays, paths, problem.layout, problem.cols, problem.rows, rows_per_block);
+    dealt = detail::slab_lines(rays, paths, problem.layout, rows_per_block);
   }
 };
 
-// The dominant axis of view v's central ray.
-int central_axis(const Dealt& d, int v) {
-  const ViewRays& r = d.rays[static_cast<std::size_t>(v)];
-  const Eigen::Vector3d centre_ray = r.d0 + 0.5 * (d.problem.cols - 1) * r.du + 0.5 * (d.problem.rows - 1) * r.dv;
-  int axis = 0;
-  centre_ray.cwiseAbs().maxCoeff(&axis);
-  return axis;
-}
+// The dominant axis of view v's central ray, which its lane path is chosen for.
+int central_axis(const Dealt& d, int v) { return d.paths[static_cast<std::size_t>(v)].axis; }
 
 Eigen::Vector3d volume_centre(const Dealt& d) { return Eigen::Vector3d::Constant(0.5 * (d.problem.layout.size[0] - 1)); }
 
