@@ -12,8 +12,10 @@
 #include <hwy/highway.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "joseph_samples-inl.h"
@@ -218,6 +220,47 @@ HWY_INLINE void scatter_into_band(DF df, const RayTable& t, const Bundle* bundle
       scatter.add(df, band.data);
     }
   }
+}
+
+// Bundles in groups of equal key, each group's bundles in their given order.
+class BundleGroups {
+ public:
+  // Sorts bundles[0, count) by key(bundle), an int.
+  template <class Key>
+  void sort(const Bundle* bundles, std::size_t count, Key&& key) {
+    bundles_ = bundles;
+    key_.resize(count);
+    for (std::size_t i = 0; i < count; ++i) key_[i] = {key(bundles[i]), i};
+    std::sort(key_.begin(), key_.end());
+  }
+  // f(members) for each group in turn, its bundles in a contiguous vector.
+  template <class F>
+  void for_each(F&& f) {
+    for (std::size_t begin = 0; begin < key_.size();) {
+      members_.clear();
+      std::size_t end = begin;
+      for (; end < key_.size() && key_[end].first == key_[begin].first; ++end) members_.push_back(bundles_[key_[end].second]);
+      begin = end;
+      f(members_);
+    }
+  }
+
+ private:
+  const Bundle* bundles_ = nullptr;
+  std::vector<std::pair<int, std::size_t>> key_;  // key, index
+  std::vector<Bundle> members_;
+};
+
+// The stretch of the volume, `width` voxels wide along b or c, where the middle lane of
+// `bundle` (of `lanes`) is at slice k, or at the nearest slice it visits. In spherical views
+// neighbouring views of a table look at the volume from other headings, so one column or row
+// of the table is elsewhere in each; bundles of one stretch, of whichever views, share a band.
+inline int stretch_of(const RayTable& t, const Bundle& bundle, std::size_t lanes, float k, bool along_c, float width) {
+  const std::size_t r = bundle.r + lanes / 2;
+  const float at = std::clamp(k, static_cast<float>(bundle.k_lo), static_cast<float>(bundle.k_hi));
+  const float p = (along_c ? t.pc_mid[r] : t.pb_mid[r]) + (along_c ? t.beta_c[r] : t.beta_b[r]) * (at - t.k_mid[r]);
+  // A middle lane far outside the volume (it may miss it) joins the nearest stretch.
+  return static_cast<int>(std::floor(std::clamp(p, -1e6f, 1e6f) / width));
 }
 
 // volume += the band, where the volume is: rows along b (contiguous), for bundles along y and z.

@@ -14,6 +14,7 @@
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/proj/joseph_projector.hpp"
 #include "ctk/proj/reference_projector.hpp"
+#include "ctk/proj/standard_problem.hpp"
 #include "simd_targets.hpp"
 
 namespace ctk {
@@ -248,6 +249,18 @@ TEST(JosephProjector, NeighbouringCircularViewsThroughBandsAgreeWithTheReference
       EXPECT_LT(expect_fast_matches_reference(p, 81, options), 1e-5) << threads << " threads";
     }
   });
+}
+
+// Neighbouring spherical views (the standard problem's trajectory at a quarter of its size):
+// the views of a table look from other headings and tilts, so one column of the table is
+// another part of the volume in each. The back projection groups their bundles along x by the
+// stretch of y they cross where the table's strips of columns would not pay, and those along y
+// and z by the rows they cross where the table's band would not; some of those groups pay,
+// others go strip by strip or scatter into the volume (all five seen on AVX-512 and AVX2).
+TEST(JosephProjector, NeighbouringSphericalViewsThroughBandsAgreeWithTheReferenceAndAreAdjoint) {
+  const StandardProblem standard = standard_problem(StandardTrajectory::spherical, 120, 4);
+  const Problem p{standard.layout, standard.rows, standard.cols, standard.views};
+  testing::on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 91), 1e-5); });
 }
 
 // A table of many lines on a wide detector: a strip of bundles along x (64 pixels of each of
