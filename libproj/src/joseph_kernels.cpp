@@ -426,24 +426,24 @@ HWY_INLINE void back_along_x_in_bands(DF df, const RayTable& t, int k_begin, int
   const std::size_t view_stride = static_cast<std::size_t>(t.view_stride), row_stride = static_cast<std::size_t>(t.row_stride);
   const std::size_t strip_width = kStripColumns * N;
   // Through bands if every chunk's pays; whether they did.
-  const auto in_bands = [&](const std::vector<Bundle>& members) {
+  const auto in_bands = [&](const Bundle* members, std::size_t count) {
     int k_lo = 1 << 30, k_hi = -(1 << 30);
-    for (const Bundle& b : members) {
-      k_lo = std::min(k_lo, b.k_lo);
-      k_hi = std::max(k_hi, b.k_hi);
+    for (std::size_t i = 0; i < count; ++i) {
+      k_lo = std::min(k_lo, members[i].k_lo);
+      k_hi = std::max(k_hi, members[i].k_hi);
     }
     w.chunks.clear();
     bool pays = true;
     for_each_chunk(k_lo, k_hi, k_begin, k_end, [&](int k0, int k1) {
       QuadBand band;
-      const BandFit fit = pays ? band_box(df, t, members.data(), members.size(), k0, k1, band) : BandFit::no;
+      const BandFit fit = pays ? band_box(df, t, members, count, k0, k1, band) : BandFit::no;
       pays = pays && fit != BandFit::no;
       if (fit == BandFit::fits) w.chunks.push_back(band);
     });
     if (!pays) return false;
-    const XGrid g = x_grid(t, members.front().r, N);
+    const XGrid g = x_grid(t, members[0].r, N);
     for (QuadBand& band : w.chunks) {
-      scatter_into_band(df, t, members.data(), members.size(), band, w.band_floats);
+      scatter_into_band(df, t, members, count, band, w.band_floats);
       add_tile(BandAlongX(band), g, volume, NextChunk{next_chunk(band.k0 + band.slices - 1, k_hi, k_end)});
     }
     return true;
@@ -451,21 +451,21 @@ HWY_INLINE void back_along_x_in_bands(DF df, const RayTable& t, int k_begin, int
   w.left.clear();
   w.groups.sort(w.along_x.data(), w.along_x.size(),
                 [&](const Bundle& b) { return static_cast<int>(b.r % view_stride % row_stride / strip_width); });
-  w.groups.for_each([&](const std::vector<Bundle>& members) {
-    if (!in_bands(members)) w.left.insert(w.left.end(), members.begin(), members.end());
+  w.groups.for_each([&](const Bundle* members, std::size_t count) {
+    if (!in_bands(members, count)) w.left.insert(w.left.end(), members, members + count);
   });
   const float k_middle = 0.5f * static_cast<float>(k_begin + k_end - 1);
   w.groups.sort(w.left.data(), w.left.size(),
                 [&](const Bundle& b) { return stretch_of(t, b, N, k_middle, false, static_cast<float>(strip_width)); });
-  w.groups.for_each([&](const std::vector<Bundle>& members) {
-    if (in_bands(members)) return;
+  w.groups.for_each([&](const Bundle* members, std::size_t count) {
+    if (in_bands(members, count)) return;
     // Strip by strip: a view's bundles of the group, as many as the strip's copies hold.
     const int most = w.strips.local.rows;
-    for (std::size_t i = 0; i < members.size();) {
+    for (std::size_t i = 0; i < count;) {
       const std::size_t view = members[i].r / view_stride;
       XStrip& s = w.strips.strip;
       s.count = 0;
-      for (; i < members.size() && members[i].r / view_stride == view && s.count < most; ++i) s.entries[s.count++] = members[i].r;
+      for (; i < count && members[i].r / view_stride == view && s.count < most; ++i) s.entries[s.count++] = members[i].r;
       back_strip(df, t, k_begin, k_end, w.strips, volume);
     }
   });
@@ -545,13 +545,13 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
     const int k1 = std::min(k_end - 1, k0 + kBackChunkSlices - 1);
 #if HWY_TARGET != HWY_SCALAR
     // The bundles through one band where it pays, their samples added to the volume band by band.
-    const auto through_band = [&](const std::vector<Bundle>& bundles) {
+    const auto through_band = [&](const Bundle* bundles, std::size_t count) {
       QuadBand band;
-      const BandFit fit = band_box(df, t, bundles.data(), bundles.size(), k0, k1, band);
+      const BandFit fit = band_box(df, t, bundles, count, k0, k1, band);
       if (fit == BandFit::fits) {
         add_pending();
-        const std::size_t r = bundles.front().r;
-        scatter_into_band(df, t, bundles.data(), bundles.size(), band, w.band_floats);
+        const std::size_t r = bundles[0].r;
+        scatter_into_band(df, t, bundles, count, band, w.band_floats);
         add_band(df, band, t.stride_a[r], t.stride_c[r], t.n_b[r], t.n_c[r], volume);
       }
       return fit;
@@ -561,13 +561,13 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
     // Where that band would not pay (spherical views, whose lines part away from the volume's
     // centre), the bundles that cross the same kBandRows rows at the chunk's middle share one,
     // and those left over scatter into the volume.
-    const BandFit fit = in_volume.empty() ? BandFit::nothing : through_band(in_volume);
+    const BandFit fit = in_volume.empty() ? BandFit::nothing : through_band(in_volume.data(), in_volume.size());
     if (fit == BandFit::nothing || fit == BandFit::fits) continue;
     const float k_middle = 0.5f * static_cast<float>(k0 + k1);
     w.groups.sort(in_volume.data(), in_volume.size(),
                   [&](const Bundle& b) { return stretch_of(t, b, hn::Lanes(df), k_middle, true, kBandRows); });
-    w.groups.for_each([&](const std::vector<Bundle>& members) {
-      if (through_band(members) == BandFit::no) scatter_into_volume(members.data(), members.size(), k0, k1);
+    w.groups.for_each([&](const Bundle* members, std::size_t count) {
+      if (through_band(members, count) == BandFit::no) scatter_into_volume(members, count, k0, k1);
     });
 #else
     scatter_into_volume(in_volume.data(), in_volume.size(), k0, k1);
