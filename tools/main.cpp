@@ -27,7 +27,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // CLI11 prints the message (or the help); a malformed command line is bad input like any
+    // other, so it exits 2 rather than with CLI11's own codes (105 for a missing file, ...).
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const ctk::InputError& e) {
     std::cerr << "ctk: input error: " << e.what() << "\n";
     return 2;

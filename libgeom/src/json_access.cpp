@@ -1,6 +1,7 @@
 #include "ctk/geom/json_access.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -23,6 +24,20 @@ std::string key_before(const std::string& text, std::size_t offset) {
     colon = text.rfind(':', colon - 1);
   }
   return {};
+}
+
+// Whether the literal at byte `offset` is a non-finite number as Python's json module writes
+// them (NaN, Infinity, -Infinity; also nan, inf): JSON has none, and the parser's own message
+// ("invalid literal") does not say why such a file fails.
+bool non_finite_literal_at(const std::string& text, std::size_t offset) {
+  offset = std::min(offset, text.size());
+  std::size_t start = text.find_last_of(" \t\r\n:,[{", offset == 0 ? 0 : offset - 1);
+  start = start == std::string::npos ? 0 : start + 1;
+  if (start > offset) start = offset;
+  if (start < text.size() && (text[start] == '-' || text[start] == '+')) ++start;
+  std::string word = text.substr(start, 3);
+  std::transform(word.begin(), word.end(), word.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return word == "nan" || word == "inf";
 }
 
 std::string type_name(const nlohmann::json& v) {
@@ -53,8 +68,11 @@ nlohmann::json read_json_file(const std::filesystem::path& file) {
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(file.string(), position(e.byte == 0 ? 0 : e.byte - 1),
-                     "not valid JSON (NaN and Infinity are not JSON numbers): " + std::string(e.what()));
+    const std::size_t at = e.byte == 0 ? 0 : e.byte - 1;
+    throw InputError(file.string(), position(at),
+                     std::string(non_finite_literal_at(text, at) ? "not valid JSON (NaN and Infinity are not JSON numbers): "
+                                                                 : "not valid JSON: ") +
+                         e.what());
   } catch (const nlohmann::json::out_of_range& e) {
     // A number too large for a double ("1e999"): the message quotes the literal; find it.
     const std::string what = e.what();

@@ -74,29 +74,48 @@ TEST(ScanFile, WrongTypeIsNamed) {
   expect_error_naming(file, [](nlohmann::json& j) { j["detector"]["pixel_pitch_mm"] = {0.6}; }, "detector.pixel_pitch_mm");
 }
 
-TEST(ScanFile, NaNIsNamed) {
-  const auto dir = testing::scratch_dir();
-  const auto file = write_valid_scan(dir);
-  // NaN is not JSON (but Python's json module writes it): the error names the line and key.
-  std::string text = read_json_file(file).dump(2);
-  const std::string key = "\"source_to_detector_mm\": ";
-  const auto at = text.find(key) + key.size();
-  text.replace(at, text.find_first_of(",\n}", at) - at, "NaN");
+// Writes `text` as scan.json and returns read_scan's error message ("" if it was accepted).
+std::string error_reading(const std::filesystem::path& file, const std::string& text) {
   testing::write_text(file, text);
   try {
     read_scan(file);
-    FAIL() << "NaN accepted";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("source_to_detector_mm"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("line"), std::string::npos) << e.what();
+    return e.what();
+  }
+  return {};
+}
+
+TEST(ScanFile, NaNIsNamed) {
+  const auto dir = testing::scratch_dir();
+  const auto file = write_valid_scan(dir);
+  // NaN is not JSON (but Python's json module writes it, and -Infinity): the error names the
+  // line and key, and says why.
+  const std::string valid = read_json_file(file).dump(2);
+  const std::string key = "\"source_to_detector_mm\": ";
+  const auto at = valid.find(key) + key.size();
+  const auto with = [&](const std::string& literal) {
+    return std::string(valid).replace(at, valid.find_first_of(",\n}", at) - at, literal);
+  };
+  for (const std::string literal : {"NaN", "-Infinity"}) {
+    const std::string what = error_reading(file, with(literal));
+    ASSERT_FALSE(what.empty()) << literal << " accepted";
+    EXPECT_NE(what.find("source_to_detector_mm"), std::string::npos) << what;
+    EXPECT_NE(what.find("line"), std::string::npos) << what;
+    EXPECT_NE(what.find("NaN and Infinity are not JSON numbers"), std::string::npos) << what;
   }
   // An infinite value that JSON does parse (1e999) is rejected too.
-  const auto file2 = write_valid_scan(dir);
-  text = read_json_file(file2).dump(2);
-  const auto at2 = text.find(key) + key.size();
-  text.replace(at2, text.find_first_of(",\n}", at2) - at2, "1e999");
-  testing::write_text(file2, text);
-  EXPECT_THROW(read_scan(file2), InputError);
+  EXPECT_FALSE(error_reading(file, with("1e999")).empty());
+}
+
+// A file cut short (a copy interrupted) is named with where it ends, and not blamed on NaN.
+TEST(ScanFile, TruncatedFileIsNamedWithoutBlamingNaN) {
+  const auto file = write_valid_scan(testing::scratch_dir());
+  const std::string text = read_json_file(file).dump(2);
+  const std::string what = error_reading(file, text.substr(0, text.size() / 2));
+  ASSERT_FALSE(what.empty()) << "a truncated file accepted";
+  EXPECT_NE(what.find("not valid JSON"), std::string::npos) << what;
+  EXPECT_NE(what.find("line"), std::string::npos) << what;
+  EXPECT_EQ(what.find("NaN and Infinity"), std::string::npos) << what;
 }
 
 TEST(ScanFile, RotationMustBeARotation) {
