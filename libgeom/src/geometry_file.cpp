@@ -25,6 +25,8 @@ std::vector<int> Geometry::ok_views() const {
   return out;
 }
 
+std::string Geometry::source() const { return file.empty() ? std::string("geometry") : file.string(); }
+
 Geometry read_geometry(const std::filesystem::path& file) {
   const nlohmann::json root = read_json_file(file);
   std::vector<std::string> warnings;  // geometry files are machine-written; unknown keys are not reported
@@ -32,6 +34,7 @@ Geometry read_geometry(const std::filesystem::path& file) {
   const std::string format = top.at("format").string();
   if (format != kFormat) top.at("format").fail("expected \"" + std::string(kFormat) + "\", got \"" + format + "\"");
   Geometry g;
+  g.file = file;
   const JsonNode det = top.at("detector");
   g.detector.cols = det.at("cols").integer();
   g.detector.rows = det.at("rows").integer();

@@ -44,6 +44,30 @@ TEST(Measurements, RejectedViewsAreNeverRead) {
   }
 }
 
+// A geometry that does not fit the scan (another scan's, or another binning) is refused with
+// the geometry file and its key named, as every bad input is.
+TEST(Measurements, AGeometryForAnotherDetectorNamesItsFileAndKey) {
+  const auto dir = testing::scratch_dir();
+  simulate_scan(tiny_scan(SimulatedOutput::line_integrals), dir);
+  const ScanDescription scan = read_scan(dir / "scan.json");
+  const auto file = dir / "truth-geometry.json";
+  const auto expect_refused = [&](const Geometry& g, const std::string& key) {
+    try {
+      load_measurements(scan, g);
+      FAIL() << "expected an InputError naming " << key;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), file.string()) << e.what();
+      EXPECT_EQ(e.where(), "key '" + key + "'") << e.what();
+    }
+  };
+  Geometry g = read_geometry(file);
+  g.detector.cols = scan.detector.cols / 2;
+  expect_refused(g, "detector");
+  g = read_geometry(file);
+  g.views[4].index = scan.projections.count;
+  expect_refused(g, "views[4].index");
+}
+
 TEST(Measurements, CountsGiveLineIntegralsNearTheTruthAndWeights) {
   const auto dir = testing::scratch_dir();
   ScanSimulation sim = tiny_scan(SimulatedOutput::counts);

@@ -26,8 +26,11 @@ struct GeometryView {
 struct Geometry {
   Detector detector;
   std::vector<GeometryView> views;
+  std::filesystem::path file;  // what read_geometry read it from; empty for one made in memory
 
   std::vector<int> ok_views() const;  // indices into views
+  /// The file for error messages: `file`, or "geometry" for one made in memory.
+  std::string source() const;
 };
 
 /// Throws InputError naming file and key; an "ok" view must carry P.
