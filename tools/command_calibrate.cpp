@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "ctk/geom/statistics.hpp"
 #include "ctk/calib/calibration_pictures.hpp"
 #include "ctk/calib/robot_prior.hpp"
@@ -182,8 +183,8 @@ void register_calibrate(CLI::App& app) {
   cmd->add_option("--out", o->out, "Geometry to write (ctk-geometry/1)")->capture_default_str();
   cmd->add_option("--report", o->report, "Report (JSON; default: <out>.report.json)");
   cmd->add_option("--min-spheres", o->calibration.min_spheres, "Fewer matched spheres: view rejected")->check(CLI::Range(6, 1000))->capture_default_str();
-  cmd->add_option("--max-rms", o->calibration.max_rms_px, "Larger reprojection RMS (px): view rejected")->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--search", o->calibration.search_px, "How far (px) the first guess may misplace the sphere pattern")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--max-rms", o->calibration.max_rms_px, "Larger reprojection RMS (px): view rejected")->check(positive_number)->capture_default_str();
+  cmd->add_option("--search", o->calibration.search_px, "How far (px) the first guess may misplace the sphere pattern")->check(positive_number)->capture_default_str();
   cmd->add_flag("--image-only", o->image_only,
                  "Poses from the images alone (default: combined with the robot's prior, its base, mount and repeatability "
                  "measured on the scan)");

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "ctk/calib/diagnosis.hpp"
 #include "ctk/calib/diagnosis_pictures.hpp"
 #include "ctk/geom/atomic_write.hpp"
@@ -81,8 +82,8 @@ void register_diagnose(CLI::App& app) {
   cmd->add_option("--geometry", o->geometry, "Its calibrated geometry (ctk-geometry/1, from ctk calibrate)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "Report to write (ctk-diagnosis/1)")->capture_default_str();
   cmd->add_option("--corrected-scan", o->corrected, "Corrected scan to write (default: <out>.corrected-scan.json)");
-  cmd->add_option("--robot-repeatability-mm", o->diagnosis.robot_sigma_mm, "Robot repeatability (3-D RMS) the prior assumes")->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--robot-repeatability-deg", o->diagnosis.robot_sigma_deg, "Same, rotation")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--robot-repeatability-mm", o->diagnosis.robot_sigma_mm, "Robot repeatability (3-D RMS) the prior assumes")->check(positive_number)->capture_default_str();
+  cmd->add_option("--robot-repeatability-deg", o->diagnosis.robot_sigma_deg, "Same, rotation")->check(positive_number)->capture_default_str();
   cmd->callback([o] { run_diagnose(*o); });
 }
 

@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "ctk/geom/error.hpp"
 #include "ctk/geom/scan_import.hpp"
 
@@ -42,14 +43,14 @@ struct ConeVecOptions : ProjectionOptions {
 void add_projection_options(CLI::App* cmd, ProjectionOptions& o, bool pitch_required) {
   cmd->add_option("--out", o.out, "scan.json to write (the matrices go beside it as <stem>.matrices.json)")->required();
   cmd->add_option("--files", o.files, "Projection files: a printf pattern (with --count) or the names in view order")->required();
-  cmd->add_option("--count", o.count, "Number of projections when --files is a pattern")->check(CLI::PositiveNumber);
+  cmd->add_option("--count", o.count, "Number of projections when --files is a pattern")->check(positive_number);
   cmd->add_option("--kind", o.kind, "counts (raw, needs --flat and --dark) or line_integrals")
       ->check(CLI::IsMember({"counts", "line_integrals"}))
       ->capture_default_str();
   cmd->add_option("--flat", o.flat, "Flat (open-beam) frame(s); several are averaged");
   cmd->add_option("--dark", o.dark, "Dark (offset) frame(s); several are averaged");
-  cmd->add_option("--detector", o.detector, "Columns and rows of the image the geometry describes")->expected(2)->required()->check(CLI::PositiveNumber);
-  auto* pitch = cmd->add_option("--pitch", o.pitch, "Pixel pitch in mm: one value or u v")->expected(1, 2)->check(CLI::PositiveNumber);
+  cmd->add_option("--detector", o.detector, "Columns and rows of the image the geometry describes")->expected(2)->required()->check(positive_number);
+  auto* pitch = cmd->add_option("--pitch", o.pitch, "Pixel pitch in mm: one value or u v")->expected(1, 2)->check(positive_number);
   if (pitch_required) pitch->required();
 }
 
@@ -136,8 +137,8 @@ void register_import(CLI::App& app) {
       "A circular orbit: view k at angle first + k step; volume frame with the rotation axis on +z; at t = sense * angle the "
       "source is at SOD (sin t, cos t, 0), columns run along (cos t, -sin t, 0), rows along -z");
   add_projection_options(circular, *c, true);
-  circular->add_option("--sod", c->sod, "Source to rotation axis, mm")->required()->check(CLI::PositiveNumber);
-  circular->add_option("--sdd", c->sdd, "Source to detector, mm")->required()->check(CLI::PositiveNumber);
+  circular->add_option("--sod", c->sod, "Source to rotation axis, mm")->required()->check(positive_number);
+  circular->add_option("--sdd", c->sdd, "Source to detector, mm")->required()->check(positive_number);
   circular->add_option("--first-angle", c->first_angle_deg, "Angle of view 0, degrees")->capture_default_str();
   circular->add_option("--step", c->step_deg, "Angle between views, degrees")->required();
   circular->add_option("--principal-point", c->principal_point,

@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/geom/trajectory.hpp"
@@ -356,34 +357,34 @@ void register_plan(CLI::App& app) {
   cmd->add_option("--phantom", o->phantoms, "Simulation mode: built-in phantoms or ctk-phantom/1 files in the holder");
   cmd->add_option("--lab", o->lab, "Lab mode: the folder shared with the acquisition process (request/answer files)");
   cmd->add_option("--setup", o->setup, "Lab mode: the lab's ctk-scan/1 file (detector, robot frames, holder, flat, dark)")->check(CLI::ExistingFile);
-  cmd->add_option("--timeout", o->timeout_s, "Lab mode: seconds to wait for each answer")->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--sod", o->sod_mm, "Source-to-isocentre distance (mm)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--timeout", o->timeout_s, "Lab mode: seconds to wait for each answer")->check(positive_number)->capture_default_str();
+  cmd->add_option("--sod", o->sod_mm, "Source-to-isocentre distance (mm)")->check(positive_number)->capture_default_str();
   cmd->add_option("--views", o->views, "Views to acquire, scout included")->check(CLI::Range(2, 10000))->capture_default_str();
   cmd->add_option("--scout-nside", o->scout_nside, "HEALPix resolution of the scout (6 nside^2 directions: one of each opposite pair of cells)")->check(CLI::Range(1, 16))->capture_default_str();
   cmd->add_option("--candidate-nside", o->candidate_nside, "HEALPix resolution of the candidate directions")->check(CLI::Range(1, 64))->capture_default_str();
-  cmd->add_option("--spread-exponent", o->spread_exponent, "m: how strongly the largest gaps between views are preferred")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--spread-exponent", o->spread_exponent, "m: how strongly the largest gaps between views are preferred")->check(non_negative_number)->capture_default_str();
   cmd->add_option("--widest-gap-fraction", o->widest_gap_fraction, "f: draw only among directions whose gap to the views so far is at least f times the widest (0: all)")->check(CLI::Range(0.0, 1.0))->capture_default_str();
   cmd->add_option("--edge-tangency-weight", o->edge_tangency_weight, "b: share of the view density that follows the directions tangent to the sample's strong edges (0: even)")->check(CLI::Range(0.0, 1.0))->capture_default_str();
   cmd->add_option("--tangent-width", o->tangent_width_deg, "How far from an edge's tangent plane a direction still counts as grazing it (deg)")->check(CLI::Range(1.0, 45.0))->capture_default_str();
-  cmd->add_option("--damage-exponent", o->damage_exponent, "s: how strongly long absorber paths are avoided")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--damage-exponent", o->damage_exponent, "s: how strongly long absorber paths are avoided")->check(non_negative_number)->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the planner's draws (and of the simulation)")->capture_default_str();
   cmd->add_option("--cols", o->cols, "Simulated detector columns")->check(CLI::Range(16, 100000))->capture_default_str();
   cmd->add_option("--rows", o->rows, "Simulated detector rows")->check(CLI::Range(16, 100000))->capture_default_str();
-  cmd->add_option("--pitch", o->pitch_mm, "Simulated pixel pitch (mm)")->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--sdd", o->sdd_mm, "Simulated source-to-detector distance (mm)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--pitch", o->pitch_mm, "Simulated pixel pitch (mm)")->check(positive_number)->capture_default_str();
+  cmd->add_option("--sdd", o->sdd_mm, "Simulated source-to-detector distance (mm)")->check(positive_number)->capture_default_str();
   cmd->add_option("--kvp", o->kvp, "Simulated tube voltage (polychromatic)")->check(CLI::Range(16.0, 150.0))->capture_default_str();
-  cmd->add_option("--filter-al-mm", o->filter_al_mm, "Simulated aluminium filter")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--filter-al-mm", o->filter_al_mm, "Simulated aluminium filter")->check(non_negative_number)->capture_default_str();
   cmd->add_option("--flat-counts", o->flat_counts, "Simulated open-beam counts")->check(CLI::Range(1.0, 65000.0))->capture_default_str();
   cmd->add_option("--coarse-size", o->coarse_size, "Voxels per axis of the planner's volume")->check(CLI::Range(8, 1024))->capture_default_str();
-  cmd->add_option("--coarse-voxel", o->coarse_voxel_mm, "Voxel size of the planner's volume (mm)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--coarse-voxel", o->coarse_voxel_mm, "Voxel size of the planner's volume (mm)")->check(positive_number)->capture_default_str();
   cmd->add_option("--binning", o->binning, "Detector binning of the planner's reconstruction")->check(CLI::Range(1, 64))->capture_default_str();
   cmd->add_flag("--compare", o->compare, "Simulation mode: also acquire and reconstruct the whole-sphere and random trajectories of the same size");
   cmd->add_option("--random-draws", o->random_draws, "With --compare: random trajectories to compare with (random/, random-2/ ...), summarised by mean and range")
       ->check(CLI::Range(1, 100))->capture_default_str();
   cmd->add_option("--eval-size", o->eval_size, "Voxels per axis of a cube for the comparison reconstructions (0: a volume holding the holder and the sample)")->check(CLI::Range(0, 2048))->capture_default_str();
-  cmd->add_option("--eval-voxel", o->eval_voxel_mm, "Voxel size of the comparison reconstructions (mm)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--eval-voxel", o->eval_voxel_mm, "Voxel size of the comparison reconstructions (mm)")->check(positive_number)->capture_default_str();
   cmd->add_option("--eval-iterations", o->eval_iterations, "WLS-CG iterations of the comparison reconstructions")->check(CLI::Range(1, 1000))->capture_default_str();
-  cmd->add_option("--eval-lambda", o->eval_lambda, "Gradient penalty of the comparison reconstructions")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--eval-lambda", o->eval_lambda, "Gradient penalty of the comparison reconstructions")->check(non_negative_number)->capture_default_str();
   cmd->add_flag("--compare-only", o->compare_only, "Reconstruct and compare the trajectories already in --out (no acquisition)");
   cmd->add_option("--eval-binning", o->eval_binning, "Detector binning of the comparison reconstructions")->check(CLI::Range(1, 64))->capture_default_str();
   cmd->callback([o] { run_plan(*o); });

@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/image_io.hpp"
@@ -158,11 +159,11 @@ void register_reconstruct(CLI::App& app) {
   cmd->add_option("--out", o->out, "Volume to write (.nrrd, with .raw beside it)")->required();
   cmd->add_option("--method", o->method, "wls-cg, sirt or fdk (circular scans only)")->check(CLI::IsMember({"wls-cg", "sirt", "fdk"}))->capture_default_str();
   cmd->add_option("--iterations", o->iterations, "Iterations (default: 30 for wls-cg, 100 for sirt)")->check(CLI::Range(1, 100000));
-  cmd->add_option("--lambda", o->lambda, "Regularisation weight")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--lambda", o->lambda, "Regularisation weight")->check(non_negative_number)->capture_default_str();
   cmd->add_option("--regulariser", o->regulariser, "identity (Tikhonov) or gradient")
       ->check(CLI::IsMember({"identity", "gradient"}))
       ->capture_default_str();
-  cmd->add_option("--tolerance", o->tolerance, "Stop when the gradient has fallen by this factor")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--tolerance", o->tolerance, "Stop when the gradient has fallen by this factor")->check(non_negative_number)->capture_default_str();
   cmd->add_flag("--unweighted", o->unweighted, "Unit weights even for counts (plain least squares)");
   cmd->add_flag("--as-measured", o->as_measured,
                 "Use the images as measured even when the scan declares a detector distortion (by default they are "
@@ -170,7 +171,7 @@ void register_reconstruct(CLI::App& app) {
   cmd->add_option("--size", o->size, "Voxels: n (cube) or nx ny nz (default: cover the holder, or the field of view)")
       ->expected(1, 3)
       ->check(CLI::Range(1, 100000));
-  cmd->add_option("--voxel", o->voxel_mm, "Voxel size in mm (default: a pixel seen at the holder origin)")->check(CLI::PositiveNumber);
+  cmd->add_option("--voxel", o->voxel_mm, "Voxel size in mm (default: a pixel seen at the holder origin)")->check(positive_number);
   cmd->callback([o] { run_reconstruct(*o); });
 }
 

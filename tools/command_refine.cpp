@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/error.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
@@ -113,8 +114,8 @@ void register_refine(CLI::App& app) {
   cmd->add_option("--out", o->out, "Report (ctk-diagnosis/1); beside it <stem>.geometry.json, <stem>.scan.json, slices")->required();
   cmd->add_option("--coarsening", o->coarsening, "Voxel of the held-out predictions, in pixels seen at the axis")->check(CLI::Range(1.0, 8.0))->capture_default_str();
   cmd->add_option("--blur-arc", o->blur_arc_deg, "Arc of rotation each view is known to integrate, degrees (sets the blur scan's step)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--z", o->z_accept, "Acceptance: held-out improvement in standard errors")->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(non_negative_number);
+  cmd->add_option("--z", o->z_accept, "Acceptance: held-out improvement in standard errors")->check(positive_number)->capture_default_str();
   cmd->add_option("--effects", o->effects, "Candidates (default: all)")
       ->check(CLI::IsMember({"detector_offset", "detector_roll", "axis_tilt", "magnification", "angular_blur", "beam_hardening"}));
   cmd->callback([o] { run_refine(*o); });

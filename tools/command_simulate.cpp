@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/scan_simulation.hpp"
@@ -143,9 +144,9 @@ void register_simulate(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--cols", o->cols, "Detector columns")->check(CLI::Range(1, 100000))->capture_default_str();
   cmd->add_option("--rows", o->rows, "Detector rows")->check(CLI::Range(1, 100000))->capture_default_str();
-  cmd->add_option("--pitch", o->pitch_mm, "Pixel pitch (mm)")->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--sdd", o->sdd_mm, "Source-to-detector distance (mm)")->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--sod", o->sod_mm, "Source-to-isocentre distance (mm)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--pitch", o->pitch_mm, "Pixel pitch (mm)")->check(positive_number)->capture_default_str();
+  cmd->add_option("--sdd", o->sdd_mm, "Source-to-detector distance (mm)")->check(positive_number)->capture_default_str();
+  cmd->add_option("--sod", o->sod_mm, "Source-to-isocentre distance (mm)")->check(positive_number)->capture_default_str();
   cmd->add_option("--supersampling", o->supersampling, "s x s rays per pixel")->check(CLI::Range(1, 16))->capture_default_str();
   cmd->add_option("--output", o->output, "counts: 16-bit TIFF with flat and dark; line-integrals: float EXR, noise-free")
       ->check(CLI::IsMember({"counts", "line-integrals"}))
@@ -155,10 +156,10 @@ void register_simulate(CLI::App& app) {
   cmd->add_option("--kvp", o->kvp, "Polychromatic rays from a tube at this voltage (Kramers spectrum; beam hardening)")
       ->check(CLI::Range(16.0, 150.0));
   cmd->add_option("--filter-al-mm", o->filter_al_mm, "Aluminium filter of the polychromatic spectrum")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number)
       ->capture_default_str();
-  cmd->add_option("--robot-noise-mm", o->robot_noise_mm, "Pose repeatability, RMS translation (0: off)")->check(CLI::NonNegativeNumber)->capture_default_str();
-  cmd->add_option("--robot-noise-deg", o->robot_noise_deg, "Pose repeatability, RMS rotation (0: off)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--robot-noise-mm", o->robot_noise_mm, "Pose repeatability, RMS translation (0: off)")->check(non_negative_number)->capture_default_str();
+  cmd->add_option("--robot-noise-deg", o->robot_noise_deg, "Pose repeatability, RMS rotation (0: off)")->check(non_negative_number)->capture_default_str();
   cmd->add_option("--seed", o->seed, "Random seed (noise, effects)")->capture_default_str();
 
   const std::string effects = "Effects (undeclared: only truth.json knows)";
@@ -168,7 +169,7 @@ void register_simulate(CLI::App& app) {
   cmd->add_option("--distortion-k1", o->distortion_k1, "Radial distortion k1 (1/px^2)")->group(effects);
   cmd->add_option("--distortion-centre-px", o->distortion_centre_px, "Distortion centre (default: detector centre)")->expected(2)->group(effects);
   cmd->add_option("--displaced-spheres", o->displaced_spheres, "Number of spheres off their declared centre")->check(CLI::Range(0, 1000))->group(effects);
-  cmd->add_option("--displacement-mm", o->displacement_mm, "How far each displaced sphere is off")->check(CLI::PositiveNumber)->capture_default_str()->group(effects);
+  cmd->add_option("--displacement-mm", o->displacement_mm, "How far each displaced sphere is off")->check(positive_number)->capture_default_str()->group(effects);
   cmd->add_option("--base-translation-mm", o->base_translation_mm, "Robot base-frame offset (base axes)")->expected(3)->group(effects);
   cmd->add_option("--base-rotation-deg", o->base_rotation_deg, "Robot base-frame rotation vector")->expected(3)->group(effects);
   cmd->add_option("--mount-translation-mm", o->mount_translation_mm, "Holder-mount offset (flange axes)")->expected(3)->group(effects);
@@ -179,7 +180,7 @@ void register_simulate(CLI::App& app) {
                   "Outside the diagnosis' vocabulary: the holder turns towards gravity by this much times the sine of its axis' angle to it")
       ->group(effects);
   cmd->add_option("--blur-fraction", o->blur_fraction, "Fraction of views blurred")->check(CLI::Range(0.0, 1.0))->group(effects);
-  cmd->add_option("--blur-sigma-px", o->blur_sigma_px, "Blur of those views")->check(CLI::PositiveNumber)->capture_default_str()->group(effects);
+  cmd->add_option("--blur-sigma-px", o->blur_sigma_px, "Blur of those views")->check(positive_number)->capture_default_str()->group(effects);
   cmd->add_option("--false-blobs", o->false_blobs, "Spurious sphere-like blobs per view")->check(CLI::Range(0, 10000))->group(effects);
   cmd->callback([o] { run_simulate(*o); });
 }

@@ -1,0 +1,27 @@
+#pragma once
+// Checks of numeric options with messages a user can read. CLI11 2.1's PositiveNumber and
+// NonNegativeNumber are ranges up to the largest double, and their message prints that bound in
+// full ("not in range 0.000000 to 1797693134862315708...", 310 digits).
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <string>
+
+namespace ctk::tools {
+
+// A finite number above zero (`strictly`) or at least zero.
+inline CLI::Validator finite_number_from_zero(bool strictly) {
+  return CLI::Validator(
+      [strictly](std::string& input) -> std::string {
+        double value = 0;
+        if (!CLI::detail::lexical_cast(input, value) || !std::isfinite(value)) return "expected a finite number, got " + input;
+        if (strictly ? value > 0 : value >= 0) return {};
+        return std::string(strictly ? "expected a number above 0" : "expected a number of at least 0") + ", got " + input;
+      },
+      strictly ? "POSITIVE" : "NONNEGATIVE", strictly ? "positive number" : "non-negative number");
+}
+
+inline const CLI::Validator positive_number = finite_number_from_zero(true);
+inline const CLI::Validator non_negative_number = finite_number_from_zero(false);
+
+}  // namespace ctk::tools
