@@ -68,9 +68,15 @@ void run_reconstruct(const ReconstructOptions& o) {
                                                           : ReconstructionMethod::wls_cg;
   const bool weighted = method == ReconstructionMethod::wls_cg && !o.unweighted && scan.projections.kind == ProjectionKind::counts;
   const int used = static_cast<int>(geometry.ok_views().size());
-  if (used == 0) throw InputError(o.geometry.empty() ? o.scan.string() : o.geometry.string(), "views", "no view is \"ok\": nothing to reconstruct");
+  if (used == 0) throw InputError(o.geometry.empty() ? o.scan.string() : o.geometry.string(), "key 'views'", "no view is \"ok\": nothing to reconstruct");
+  const int described = static_cast<int>(geometry.views.size());
   std::cout << "geometry: " << (o.geometry.empty() ? "nominal (from the scan file)" : o.geometry.string()) << ", " << used
-            << " of " << geometry.views.size() << " views ok (the others are not used)\n";
+            << " of " << described << " views ok (the others are not used)";
+  // A geometry of part of the scan is legitimate (views are matched by index), but so is a slip
+  // of the wrong file: say so.
+  if (described != scan.projections.count)
+    std::cout << "; it describes " << described << " of the scan's " << scan.projections.count << " projections";
+  std::cout << "\n";
 
   // The plan needs the layout, which needs the source distance: from the matrices, before any image.
   std::vector<ProjectionMatrix> ok_matrices;
