@@ -24,6 +24,18 @@ int main(int argc, char** argv) {
   ctk::tools::register_plan(app);
   ctk::tools::register_reconstruct(app);
   ctk::tools::register_bench(app);
+  // CLI11 answers a mistyped subcommand ("ctk reconstuct") with "A subcommand is required",
+  // which hides the typo: name it, and the subcommands there are.
+  if (argc > 1 && argv[1][0] != '-') {
+    try {
+      app.get_subcommand(argv[1]);
+    } catch (const CLI::OptionNotFound&) {
+      std::cerr << "ctk: unknown subcommand '" << argv[1] << "'; the subcommands are:";
+      for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) std::cerr << " " << sub->get_name();
+      std::cerr << "\nRun with --help for more information.\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
