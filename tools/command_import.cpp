@@ -5,11 +5,13 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 
 #include "commands.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/error.hpp"
 #include "ctk/geom/scan_import.hpp"
+#include "ctk/proj/image_io.hpp"
 
 namespace ctk::tools {
 
@@ -80,7 +82,36 @@ Detector described_detector(const ProjectionOptions& o, double pitch_u, double p
   return Detector{o.detector[0], o.detector[1], pitch_u, pitch_v};
 }
 
+// The images the scan names, checked before anything is written: a wrong pattern or a wrong
+// --detector would otherwise surface only at calibrate or reconstruct, view by view. Some missing
+// files are allowed (those views are rejected there, with the reason); none at all is not.
+void check_images(const ScanDescription& scan) {
+  int missing = 0;
+  fs::path first_missing, first_present;
+  for (int v = 0; v < scan.projections.count; ++v) {
+    // Lexically, as import_matrices made the names relative: the scan's folder may not exist yet.
+    const fs::path file = scan.projection_path(v).lexically_normal();
+    if (fs::exists(file)) {
+      if (first_present.empty()) first_present = file;
+    } else if (missing++ == 0) {
+      first_missing = file;
+    }
+  }
+  if (first_present.empty())
+    throw InputError("--files", "", "none of the " + std::to_string(scan.projections.count) + " projection files exists (the first would be " +
+                                        first_missing.string() + ")");
+  if (missing > 0)
+    std::cerr << "warning: " << missing << " of " << scan.projections.count << " projection files do not exist (the first is "
+              << first_missing.string() << "); calibrate and reconstruct will reject those views\n";
+  const Image image = read_image(first_present);
+  const Detector& d = scan.detector;
+  if (image.cols != d.cols || image.rows != d.rows)
+    throw InputError("--detector", "", "the scan would declare " + std::to_string(d.cols) + " x " + std::to_string(d.rows) + " pixels, but " +
+                                           first_present.string() + " is " + std::to_string(image.cols) + " x " + std::to_string(image.rows));
+}
+
 void finish(const ImportedScan& imported, const fs::path& out) {
+  check_images(imported.scan);
   write_imported_scan(imported, out);
   const ScanDescription check = read_scan(out);  // what every other command will read
   for (const auto& w : check.warnings) std::cerr << "warning: " << w << "\n";
@@ -90,6 +121,10 @@ void finish(const ImportedScan& imported, const fs::path& out) {
 
 void run_circular(const CircularOptions& o) {
   const ProjectionSet projections = projection_set(o);
+  if (!(o.sod < o.sdd))
+    throw InputError("--sod", "", (std::ostringstream() << o.sod << " mm is not less than --sdd " << o.sdd
+                                                        << " mm: the rotation axis lies between the source and the detector")
+                                      .str());
   const double pu = o.pitch.front(), pv = o.pitch.back();
   CircularOrbit orbit;
   orbit.detector = described_detector(o, pu, pv);
