@@ -76,6 +76,10 @@ SimulationEffects effects_from(const SimulateOptions& o, const PandaSetup& setup
 
 void run_simulate(const SimulateOptions& o) {
   const auto start = std::chrono::steady_clock::now();
+  // Running again into a simulation's folder replaces it; a scan that no simulation wrote (a
+  // measured one: scan.json without truth.json) is never overwritten by a slip of --out.
+  if (std::filesystem::exists(o.out / "scan.json") && !std::filesystem::exists(o.out / "truth.json"))
+    throw InputError("--out", "", o.out.string() + " holds a scan that ctk simulate did not write (scan.json without truth.json): choose another folder");
   const Detector detector{o.cols, o.rows, o.pitch_mm, o.pitch_mm};
   ScanSimulation sim;
   sim.setup = reference_panda_setup(detector, o.sdd_mm, o.sod_mm);
@@ -96,7 +100,7 @@ void run_simulate(const SimulateOptions& o) {
   if (!o.poses.empty()) {
     sim.poses = read_geometry(o.poses);
     if (sim.poses->detector.cols != o.cols || sim.poses->detector.rows != o.rows)
-      throw InputError(o.poses.string(), "detector", "is not the simulated detector (--cols, --rows)");
+      throw InputError(o.poses.string(), "key 'detector'", "is not the simulated detector (--cols, --rows)");
   } else if (o.trajectory == "circular") {
     sim.trajectory = circular_robot_trajectory(sim.setup, o.views);
   } else {

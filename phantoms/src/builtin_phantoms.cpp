@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
+
+#include "ctk/geom/error.hpp"
 
 namespace ctk {
 
@@ -169,7 +170,7 @@ Phantom builtin_phantom(const std::string& name) {
   if (name == "walnut") return walnut_phantom();
   std::string names;
   for (const auto& n : builtin_phantom_names()) names += (names.empty() ? "" : ", ") + n;
-  throw std::invalid_argument("no built-in phantom \"" + name + "\" (built in: " + names + ")");
+  throw InputError(name, "", "not a built-in phantom (built in: " + names + "; a phantom file's name ends in .json)");
 }
 
 }  // namespace ctk

@@ -196,7 +196,13 @@ TEST(Phantoms, BadFilesNameTheKey) {
   testing::write_text(dir / "neg.json", R"({"format": "ctk-phantom/1", "primitives": [{"type": "box",
                       "center_mm": [0, 0, 0], "size_mm": [1, -2, 1], "attenuation_per_mm": 0.1}]})");
   EXPECT_THROW(read_phantom(dir / "neg.json"), InputError);
-  EXPECT_THROW(builtin_phantom("no-such-phantom"), std::invalid_argument);
+  try {
+    builtin_phantom("no-such-phantom");
+    FAIL() << "an unknown phantom name accepted";
+  } catch (const InputError& e) {  // bad input: the command line exits 2
+    EXPECT_EQ(e.file(), "no-such-phantom");
+    EXPECT_NE(std::string(e.what()).find("sample-2"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

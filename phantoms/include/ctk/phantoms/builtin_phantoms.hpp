@@ -37,7 +37,8 @@ Phantom sample2_phantom();
 Phantom walnut_phantom();
 
 std::vector<std::string> builtin_phantom_names();
-/// By name ("helix-holder" uses the reference holder); throws std::invalid_argument listing the names.
+/// By name ("helix-holder" uses the reference holder). A name that is none of them is bad input:
+/// InputError naming it and listing the names.
 Phantom builtin_phantom(const std::string& name);
 
 }  // namespace ctk
