@@ -2,6 +2,8 @@
 #include <malloc.h>
 
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "ctk/geom/error.hpp"
@@ -24,14 +26,20 @@ int main(int argc, char** argv) {
   ctk::tools::register_plan(app);
   ctk::tools::register_reconstruct(app);
   ctk::tools::register_bench(app);
-  // CLI11 answers a mistyped subcommand ("ctk reconstuct") with "A subcommand is required",
-  // which hides the typo: name it, and the subcommands there are.
-  if (argc > 1 && argv[1][0] != '-') {
+  // CLI11 answers a mistyped subcommand ("ctk reconstuct", "ctk import circulr") with "A
+  // subcommand is required", which hides the typo: follow the words down the subcommands and
+  // name the first that is none of them, with those there are.
+  std::string path = "ctk";
+  CLI::App* level = &app;
+  for (int i = 1; i < argc && argv[i][0] != '-'; ++i) {
+    const std::vector<CLI::App*> subs = level->get_subcommands([](CLI::App*) { return true; });
+    if (subs.empty()) break;  // the words from here on are this subcommand's arguments
     try {
-      app.get_subcommand(argv[1]);
+      level = level->get_subcommand(argv[i]);
+      path += " " + level->get_name();
     } catch (const CLI::OptionNotFound&) {
-      std::cerr << "ctk: unknown subcommand '" << argv[1] << "'; the subcommands are:";
-      for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) std::cerr << " " << sub->get_name();
+      std::cerr << path << ": unknown subcommand '" << argv[i] << "'; the subcommands are:";
+      for (const CLI::App* sub : subs) std::cerr << " " << sub->get_name();
       std::cerr << "\nRun with --help for more information.\n";
       return 2;
     }
