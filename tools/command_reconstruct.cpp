@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/error.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/image_io.hpp"
 #include "ctk/recon/default_volume.hpp"
@@ -68,7 +69,7 @@ void run_reconstruct(const ReconstructOptions& o) {
                                                           : ReconstructionMethod::wls_cg;
   const bool weighted = method == ReconstructionMethod::wls_cg && !o.unweighted && scan.projections.kind == ProjectionKind::counts;
   const int used = static_cast<int>(geometry.ok_views().size());
-  if (used == 0) throw InputError(o.geometry.empty() ? o.scan.string() : o.geometry.string(), "key 'views'", "no view is \"ok\": nothing to reconstruct");
+  if (used == 0) throw InputError(o.geometry.empty() ? o.scan.string() : o.geometry.string(), json_key("views"), "no view is \"ok\": nothing to reconstruct");
   const int described = static_cast<int>(geometry.views.size());
   std::cout << "geometry: " << (o.geometry.empty() ? "nominal (from the scan file)" : o.geometry.string()) << ", " << used
             << " of " << described << " views ok (the others are not used)";

@@ -7,6 +7,7 @@
 
 #include "commands.hpp"
 #include "option_checks.hpp"
+#include "ctk/geom/error.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/scan_simulation.hpp"
@@ -100,7 +101,7 @@ void run_simulate(const SimulateOptions& o) {
   if (!o.poses.empty()) {
     sim.poses = read_geometry(o.poses);
     if (sim.poses->detector.cols != o.cols || sim.poses->detector.rows != o.rows)
-      throw InputError(o.poses.string(), "key 'detector'", "is not the simulated detector (--cols, --rows)");
+      throw InputError(o.poses.string(), json_key("detector"), "is not the simulated detector (--cols, --rows)");
   } else if (o.trajectory == "circular") {
     sim.trajectory = circular_robot_trajectory(sim.setup, o.views);
   } else {

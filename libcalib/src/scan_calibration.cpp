@@ -98,7 +98,7 @@ ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOpt
 ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& calibrated, const CalibrationOptions& options,
                                  const std::function<void(int, int)>& progress) {
   if (static_cast<int>(calibrated.views.size()) != scan.projections.count)
-    throw InputError(calibrated.source(), "key 'views'",
+    throw InputError(calibrated.source(), json_key("views"),
                      "has " + std::to_string(calibrated.views.size()) + " views; the scan has " +
                          std::to_string(scan.projections.count) + " projections");
   std::vector<FirstGuess> guesses;

@@ -8,6 +8,8 @@ static std::string compose_message(const std::string& file, const std::string& w
   return message + ": " + what;
 }
 
+std::string json_key(const std::string& path) { return "key '" + path + "'"; }
+
 InputError::InputError(std::string file, std::string where, const std::string& what)
     : std::runtime_error(compose_message(file, where, what)), file_(std::move(file)), where_(std::move(where)) {}
 

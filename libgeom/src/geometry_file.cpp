@@ -1,6 +1,7 @@
 #include "ctk/geom/geometry_file.hpp"
 
 #include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/error.hpp"
 #include "ctk/geom/json_access.hpp"
 
 namespace ctk {
@@ -65,7 +66,7 @@ Geometry read_geometry(const std::filesystem::path& file) {
         P->fail(e.what());
       }
     } else if (view.status == ViewStatus::ok) {
-      throw InputError(file.string(), "key '" + v.path() + ".P'", "missing (required for a view with status \"ok\")");
+      throw InputError(file.string(), json_key(v.path() + ".P"), "missing (required for a view with status \"ok\")");
     }
     if (auto r = v.find("rms_px")) view.rms_px = r->number();
     if (auto s = v.find("spheres_used")) view.spheres_used = s->integer();

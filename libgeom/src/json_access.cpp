@@ -87,7 +87,7 @@ JsonNode::JsonNode(const nlohmann::json& value, std::string file, std::string pa
     : value_(&value), file_(std::move(file)), path_(std::move(path)), warnings_(warnings) {}
 
 void JsonNode::fail(const std::string& what) const {
-  throw InputError(file_, path_.empty() ? std::string("top level") : "key '" + path_ + "'", what);
+  throw InputError(file_, path_.empty() ? std::string("top level") : json_key(path_), what);
 }
 
 void JsonNode::expect_object() const {
@@ -100,7 +100,7 @@ JsonNode JsonNode::at(std::string_view key) const {
   expect_object();
   const std::string child = path_.empty() ? std::string(key) : path_ + "." + std::string(key);
   auto it = value_->find(key);
-  if (it == value_->end()) throw InputError(file_, "key '" + child + "'", "missing (required)");
+  if (it == value_->end()) throw InputError(file_, json_key(child), "missing (required)");
   return JsonNode(*it, file_, child, warnings_);
 }
 

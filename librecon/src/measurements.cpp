@@ -15,14 +15,14 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
                                const std::function<void(int, int)>& progress) {
   const Detector& d = scan.detector;
   if (geometry.detector.cols != d.cols || geometry.detector.rows != d.rows)
-    throw InputError(geometry.source(), "key 'detector'",
+    throw InputError(geometry.source(), json_key("detector"),
                      std::to_string(geometry.detector.cols) + " x " + std::to_string(geometry.detector.rows) +
                          " pixels, but the scan's detector is " + std::to_string(d.cols) + " x " + std::to_string(d.rows));
   Measurements m;
   for (int i : geometry.ok_views()) {
     const GeometryView& v = geometry.views[static_cast<std::size_t>(i)];
     if (v.index < 0 || v.index >= scan.projections.count)
-      throw InputError(geometry.source(), "key 'views[" + std::to_string(i) + "].index'",
+      throw InputError(geometry.source(), json_key("views[" + std::to_string(i) + "].index"),
                        "view " + std::to_string(v.index) + " is not in the scan (0 .. " +
                            std::to_string(scan.projections.count - 1) + ")");
     m.view_indices.push_back(v.index);

@@ -6,6 +6,9 @@
 
 namespace ctk {
 
+/// The place of a JSON key, as every InputError names one: "key 'views[3].P'".
+std::string json_key(const std::string& path);
+
 class InputError : public std::runtime_error {
  public:
   InputError(std::string file, std::string where, const std::string& what);
