@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/statistics.hpp"
 #include "ctk/calib/calibration_pictures.hpp"
@@ -133,8 +134,16 @@ std::vector<std::string> write_pictures(const ScanDescription& scan, const ScanC
   return written;
 }
 
+fs::path report_file(const CalibrateOptions& o) { return o.report.empty() ? fs::path(o.out).replace_extension(".report.json") : o.report; }
+
 void run_calibrate(const CalibrateOptions& o) {
   const ScanDescription scan = read_scan(o.scan);
+  RunFiles files;
+  files.scan("--scan", o.scan, scan);
+  files.output("--out", o.out);
+  files.output("--report", report_file(o));
+  files.output_family("pictures beside --out", fs::path(o.out).replace_extension("").string() + ".", ".png");
+  files.check();
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   Progress progress("calibrate", "views");
   ScanCalibration c = calibrate_scan(scan, o.calibration, std::ref(progress));
@@ -146,7 +155,7 @@ void run_calibrate(const CalibrateOptions& o) {
     c.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   write_geometry(c.geometry, o.out);
-  const fs::path report = o.report.empty() ? fs::path(o.out).replace_extension(".report.json") : o.report;
+  const fs::path report = report_file(o);
   nlohmann::json j = report_json(c, o);
   j["robot_prior"] = robot_prior_json(prior);
   j["pictures"] = write_pictures(scan, c, o);

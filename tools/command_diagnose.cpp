@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/calib/diagnosis.hpp"
 #include "ctk/calib/diagnosis_pictures.hpp"
@@ -24,6 +25,15 @@ struct DiagnoseOptions {
 
 void run_diagnose(const DiagnoseOptions& o) {
   const ScanDescription scan = read_scan(o.scan);
+  const fs::path stem = fs::path(o.out).replace_extension("");
+  const fs::path corrected_file = o.corrected.empty() ? fs::path(stem.string() + ".corrected-scan.json") : o.corrected;
+  RunFiles files;
+  files.scan("--scan", o.scan, scan);
+  files.input("--geometry", o.geometry);
+  files.output("--out", o.out);
+  files.output("--corrected-scan", corrected_file);
+  files.output_family("pictures beside --out", stem.string() + ".", ".png");
+  files.check();
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   if (!scan.holder) throw InputError(o.scan.string(), "holder", "the diagnosis needs the holder's spheres (missing)");
   const Geometry geometry = read_geometry(o.geometry);
@@ -40,10 +50,8 @@ void run_diagnose(const DiagnoseOptions& o) {
   nlohmann::json report = diagnosis_to_json(d, observations);
   report["scan"] = o.scan.string();
   report["geometry"] = o.geometry.string();
-  const fs::path stem = fs::path(o.out).replace_extension("");
   report["pictures"] = write_diagnosis_pictures(d, observations, stem);
   const ScanDescription corrected = corrected_scan(scan, d);
-  const fs::path corrected_file = o.corrected.empty() ? fs::path(stem.string() + ".corrected-scan.json") : o.corrected;
   // Relative names in the corrected scan must still find the projections: write it beside the
   // original unless the user chose a place, and say where its data lives.
   nlohmann::json corrected_json = scan_to_json(corrected);

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "ctk/geom/run_files.hpp"
 #include "ctk/geom/astra.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 
@@ -52,6 +53,11 @@ void report(const ScanDescription& scan, const Geometry& g) {
 
 void run_geometry(const GeometryOptions& o) {
   const ScanDescription scan = read_scan(o.scan);
+  RunFiles files;
+  files.scan("--scan", o.scan, scan);
+  files.output("--out", o.out);
+  files.output("--astra", o.astra);
+  files.check();
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   const Geometry g = nominal_geometry(scan);
   write_geometry(g, o.out);

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/error.hpp"
 #include "ctk/geom/scan_import.hpp"
@@ -106,7 +107,17 @@ void check_images(const ScanDescription& scan) {
   read_image(first_present, scan.detector.cols, scan.detector.rows);  // names the file and both sizes where they differ
 }
 
-void finish(const ImportedScan& imported, const fs::path& out) {
+// `vectors`: the geometry file read, if any.
+void finish(const ImportedScan& imported, const fs::path& out, const fs::path& vectors = {}) {
+  const ScanDescription& scan = imported.scan;
+  RunFiles files;
+  for (int v = 0; v < scan.projections.count; ++v) files.input("--files: projection " + std::to_string(v), scan.projection_path(v));
+  for (const std::string& f : scan.projections.flat) files.input("--flat", scan.resolve(f));
+  for (const std::string& d : scan.projections.dark) files.input("--dark", scan.resolve(d));
+  files.input("--vectors", vectors);
+  files.output("--out", out);
+  files.output("the matrices beside --out", scan.resolve(scan.matrices->file));
+  files.check();
   check_images(imported.scan);
   write_imported_scan(imported, out);
   const ScanDescription check = read_scan(out);  // what every other command will read
@@ -153,7 +164,7 @@ void run_cone_vec(const ConeVecOptions& o) {
     const ProjectionMatrix described_P = from_cone_vec(all[static_cast<std::size_t>(r)], described);
     matrices.push_back(ProjectionMatrix(to_stored * described_P.matrix()));
   }
-  finish(import_matrices(stored_detector(orientation, described), matrices, projections, o.out), o.out);
+  finish(import_matrices(stored_detector(orientation, described), matrices, projections, o.out), o.out, o.vectors);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/error.hpp"
@@ -20,6 +21,7 @@
 #include "ctk/recon/memory_plan.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/wls_cg.hpp"
+#include "measurement_report.hpp"
 #include "progress.hpp"
 
 namespace ctk::tools {
@@ -50,18 +52,28 @@ VolumeLayout volume_layout(const ReconstructOptions& o, const ScanDescription& s
   return layout;
 }
 
+fs::path preview_file(const fs::path& out, const std::string& slice) { return out.parent_path() / (out.stem().string() + slice); }
+
 void write_previews(const Volume& x, const fs::path& out) {
   const float high = preview_ceiling(x);
   const auto& n = x.layout.size;
-  const std::string stem = (out.parent_path() / out.stem()).string();
-  write_slice_png(x, 2, n[2] / 2, 0.0f, high, stem + "_axial.png");
-  write_slice_png(x, 1, n[1] / 2, 0.0f, high, stem + "_coronal.png");
-  write_slice_png(x, 0, n[0] / 2, 0.0f, high, stem + "_sagittal.png");
+  write_slice_png(x, 2, n[2] / 2, 0.0f, high, preview_file(out, "_axial.png"));
+  write_slice_png(x, 1, n[1] / 2, 0.0f, high, preview_file(out, "_coronal.png"));
+  write_slice_png(x, 0, n[0] / 2, 0.0f, high, preview_file(out, "_sagittal.png"));
 }
 
 void run_reconstruct(const ReconstructOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const ScanDescription scan = read_scan(o.scan);
+  RunFiles files;
+  files.scan("--scan", o.scan, scan);
+  files.input("--geometry", o.geometry);
+  files.output("--out", o.out);
+  files.output("the data beside --out", fs::path(o.out).replace_extension(".raw"));
+  files.output("the log beside --out", fs::path(o.out).replace_extension(".log.json"));
+  for (const char* slice : {"_axial.png", "_coronal.png", "_sagittal.png"})
+    files.output(std::string("the preview beside --out"), preview_file(o.out, slice));
+  files.check();
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   const Geometry geometry = o.geometry.empty() ? nominal_geometry(scan) : read_geometry(o.geometry);
   const ReconstructionMethod method = o.method == "sirt"  ? ReconstructionMethod::sirt
@@ -100,6 +112,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   Measurements m = load_measurements(scan, geometry, reading_options, std::ref(reading));
   if (!m.distortion_note.empty()) std::cout << m.distortion_note << "\n";
   if (m.clamped_pixels > 0) std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
+  report_masked_and_left_out(m, o.geometry.empty() ? o.scan : o.geometry);
 
   const JosephProjector A;
   Volume x(layout);
@@ -143,6 +156,8 @@ void run_reconstruct(const ReconstructOptions& o) {
       {"volume", {{"size", layout.size}, {"voxel_mm", layout.voxel_mm.x()}, {"origin_mm", {layout.origin_mm.x(), layout.origin_mm.y(), layout.origin_mm.z()}}}},
       {"views_used", m.view_indices},
       {"clamped_pixels", m.clamped_pixels},
+      {"masked_pixels", m.masked_pixels},
+      {"views_left_out", m.left_out},
       {"notes", m.notes},
       {"detector_distortion", m.distortion_note},
       {"memory_plan", plan.describe()},

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/error.hpp"
 #include "ctk/geom/trajectory.hpp"
@@ -81,6 +82,14 @@ void run_simulate(const SimulateOptions& o) {
   // measured one: scan.json without truth.json) is never overwritten by a slip of --out.
   if (std::filesystem::exists(o.out / "scan.json") && !std::filesystem::exists(o.out / "truth.json"))
     throw InputError("--out", "", o.out.string() + " holds a scan that ctk simulate did not write (scan.json without truth.json): choose another folder");
+  RunFiles files;
+  for (const std::string& name : o.phantoms)
+    if (std::filesystem::path(name).extension() == ".json") files.input("--phantom", name);
+  files.input("--poses", o.poses);
+  for (const char* name : {"scan.json", "truth.json", "truth-geometry.json", "joints.csv", "poses.json", "flat.tif", "dark.tif"})
+    files.output(std::string("--out: ") + name, o.out / name);
+  files.output_folder("--out: projections", o.out / "projections");
+  files.check();
   const Detector detector{o.cols, o.rows, o.pitch_mm, o.pitch_mm};
   ScanSimulation sim;
   sim.setup = reference_panda_setup(detector, o.sdd_mm, o.sod_mm);

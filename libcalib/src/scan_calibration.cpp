@@ -45,8 +45,14 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
                              scan.distortion);
         if (out.T_camera_holder) out.T_camera_holder = camera.from_nominal.inverse() * *out.T_camera_holder;
       } catch (const InputError& e) {
+        out = ViewCalibration{};
         out.status = ViewStatus::rejected;
         out.reason = std::string("unreadable image: ") + e.what();
+      } catch (const std::exception& e) {
+        // Whatever else one view's data provokes is that view's rejection, never the batch's end.
+        out = ViewCalibration{};
+        out.status = ViewStatus::rejected;
+        out.reason = std::string("calibration failed: ") + e.what();
       }
     }
 #pragma omp critical(ctk_calibration_progress)

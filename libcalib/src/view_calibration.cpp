@@ -114,7 +114,13 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   ViewCalibration out;
   // Projected sphere radius at the holder's depth.
   const double depth = (K.row(2) * initial.translation())(0);
-  const double radius_px = 0.5 * holder.sphere_diameter_mm * K(0, 0) / std::max(depth, 1e-9);
+  if (!(depth > holder.sphere_diameter_mm)) {
+    std::ostringstream r;
+    r << "no pose: the first guess puts the holder's centre " << depth << " mm from the source along the beam (behind it or at it)";
+    out.reason = r.str();
+    return out;
+  }
+  const double radius_px = 0.5 * holder.sphere_diameter_mm * K(0, 0) / depth;
   out.radius_px = radius_px;
   DetectionOptions detection;
   detection.radius_px = radius_px;

@@ -1,7 +1,6 @@
 #include "ctk/geom/scan.hpp"
 
 #include <cstdio>
-#include <regex>
 
 #include "ctk/geom/atomic_write.hpp"
 
@@ -13,9 +12,15 @@ namespace {
 
 const char* kFormat = "ctk-scan/1";
 
+// Exactly one conversion, %d with an optional zero flag and width, and no other '%'. Scanned by
+// hand: std::regex recurses per character and overflows the stack on a pattern of some 10^4.
 bool is_printf_pattern(const std::string& pattern) {
-  static const std::regex one_integer(R"(^[^%]*%0?[0-9]*d[^%]*$)");
-  return std::regex_match(pattern, one_integer);
+  const std::size_t percent = pattern.find('%');
+  if (percent == std::string::npos || pattern.find('%', percent + 1) != std::string::npos) return false;
+  std::size_t i = percent + 1;
+  if (i < pattern.size() && pattern[i] == '0') ++i;
+  while (i < pattern.size() && pattern[i] >= '0' && pattern[i] <= '9') ++i;
+  return i < pattern.size() && pattern[i] == 'd';
 }
 
 void require_readable(const ScanDescription& scan, const JsonNode& node, const std::string& name) {

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <optional>
+#include <utility>
 
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/error.hpp"
@@ -18,10 +20,29 @@ using OIIO::ImageOutput;
 using OIIO::ImageSpec;
 using OIIO::TypeDesc;
 
-Image read_image(const fs::path& file) {
+namespace {
+
+// Larger than any detector (4 GB of floats): a header claiming more is damaged or hostile.
+constexpr std::size_t kMostPixels = std::size_t{1} << 30;
+
+// Reads the pixels after the header's size has been checked against `expected` (when given), so a
+// header claiming 20000 x 20000 costs nothing. Only regular files: a FIFO or a device would hang.
+Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>>& expected) {
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec))
+    throw InputError(file.string(), "", fs::exists(file, ec) ? "not a regular file (a folder, a pipe or a device)" : "no such file");
   auto in = ImageInput::open(file.string());
   if (!in) throw InputError(file.string(), "", "cannot read the image: " + OIIO::geterror());
   const ImageSpec& spec = in->spec();
+  if (expected && (spec.width != expected->first || spec.height != expected->second || spec.depth > 1))
+    throw InputError(file.string(), "", "image is " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
+                                            " pixels, the scan declares " + std::to_string(expected->first) + " x " +
+                                            std::to_string(expected->second));
+  if (spec.width <= 0 || spec.height <= 0 || spec.depth > 1 ||
+      static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height) > kMostPixels)
+    throw InputError(file.string(), "", "the header claims " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
+                                            (spec.depth > 1 ? " x " + std::to_string(spec.depth) : "") +
+                                            " pixels: not a projection (damaged header?)");
   Image image;
   image.cols = spec.width;
   image.rows = spec.height;
@@ -39,13 +60,11 @@ Image read_image(const fs::path& file) {
   return image;
 }
 
-Image read_image(const fs::path& file, int cols, int rows) {
-  Image image = read_image(file);
-  if (image.cols != cols || image.rows != rows)
-    throw InputError(file.string(), "", "image is " + std::to_string(image.cols) + " x " + std::to_string(image.rows) +
-                                            " pixels, the scan declares " + std::to_string(cols) + " x " + std::to_string(rows));
-  return image;
-}
+}  // namespace
+
+Image read_image(const fs::path& file) { return read_checked(file, std::nullopt); }
+
+Image read_image(const fs::path& file, int cols, int rows) { return read_checked(file, std::make_pair(cols, rows)); }
 
 namespace {
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace ctk {
 
@@ -39,14 +40,42 @@ void counts_to_line_integrals(const Image& counts, const Image& flat, const Imag
   }
 }
 
+std::size_t mask_non_finite(Image& image, float* weights) {
+  std::vector<std::size_t> bad;
+  for (std::size_t i = 0; i < image.pixels.size(); ++i)
+    if (!std::isfinite(image.pixels[i])) bad.push_back(i);
+  const auto cols = static_cast<std::ptrdiff_t>(image.cols), rows = static_cast<std::ptrdiff_t>(image.rows);
+  for (const std::size_t i : bad) {
+    const auto r = static_cast<std::ptrdiff_t>(i) / cols, c = static_cast<std::ptrdiff_t>(i) % cols;
+    double sum = 0;
+    int n = 0;
+    for (std::ptrdiff_t dr = -1; dr <= 1; ++dr)
+      for (std::ptrdiff_t dc = -1; dc <= 1; ++dc) {
+        const std::ptrdiff_t rr = r + dr, cc = c + dc;
+        if (rr < 0 || rr >= rows || cc < 0 || cc >= cols) continue;
+        const float x = image.pixels[static_cast<std::size_t>(rr * cols + cc)];
+        if (std::isfinite(x)) {
+          sum += x;
+          ++n;
+        }
+      }
+    image.pixels[i] = n > 0 ? static_cast<float>(sum / n) : 0.0f;
+    if (weights) weights[i] = 0.0f;
+  }
+  return bad.size();
+}
+
 Image read_line_integrals(const ScanDescription& scan, int view, const std::optional<FlatDark>& flat_dark, float* weights,
-                          std::size_t* clamped) {
+                          std::size_t* clamped, std::size_t* non_finite) {
   Image image = read_image(scan.projection_path(view), scan.detector.cols, scan.detector.rows);
-  if (scan.projections.kind == ProjectionKind::line_integrals) return image;
-  if (!flat_dark) throw std::invalid_argument("read_line_integrals: a counts scan needs its flat and dark");
-  std::size_t count = 0;
-  counts_to_line_integrals(image, flat_dark->flat, flat_dark->dark, image.pixels.data(), weights, count);
-  if (clamped) *clamped += count;
+  if (scan.projections.kind == ProjectionKind::counts) {
+    if (!flat_dark) throw std::invalid_argument("read_line_integrals: a counts scan needs its flat and dark");
+    std::size_t count = 0;
+    counts_to_line_integrals(image, flat_dark->flat, flat_dark->dark, image.pixels.data(), weights, count);
+    if (clamped) *clamped += count;
+  }
+  const std::size_t masked = mask_non_finite(image, weights);
+  if (non_finite) *non_finite += masked;
   return image;
 }
 

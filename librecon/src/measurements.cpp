@@ -11,6 +11,31 @@
 
 namespace ctk {
 
+namespace {
+
+// The stack without the views not in `kept` (ascending stack positions).
+void keep_views(Measurements& m, const std::vector<int>& kept) {
+  const auto n = static_cast<int>(kept.size());
+  auto compact = [&](ProjectionStack& stack) {
+    if (stack.views == 0) return;
+    ProjectionStack out(n, stack.rows, stack.cols);
+    for (int k = 0; k < n; ++k) std::copy_n(stack.view(kept[static_cast<std::size_t>(k)]), stack.pixels_per_view(), out.view(k));
+    stack = std::move(out);
+  };
+  compact(m.line_integrals);
+  compact(m.weights);
+  std::vector<int> indices;
+  std::vector<ProjectionMatrix> matrices;
+  for (int k : kept) {
+    indices.push_back(m.view_indices[static_cast<std::size_t>(k)]);
+    matrices.push_back(m.matrices[static_cast<std::size_t>(k)]);
+  }
+  m.view_indices = std::move(indices);
+  m.matrices = std::move(matrices);
+}
+
+}  // namespace
+
 Measurements load_measurements(const ScanDescription& scan, const Geometry& geometry, const MeasurementOptions& options,
                                const std::function<void(int, int)>& progress) {
   const Detector& d = scan.detector;
@@ -25,6 +50,15 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
       throw InputError(geometry.source(), json_key("views[" + std::to_string(i) + "].index"),
                        "view " + std::to_string(v.index) + " is not in the scan (0 .. " +
                            std::to_string(scan.projections.count - 1) + ")");
+    const std::string key = "views[" + std::to_string(i) + "]";
+    if (std::find(m.view_indices.begin(), m.view_indices.end(), v.index) != m.view_indices.end())
+      throw InputError(geometry.source(), json_key(key + ".index"), "view " + std::to_string(v.index) + " is described twice");
+    // p2 is the depth in mm (the matrices are normalised): the holder origin, where the volume is
+    // centred, must lie in front of the source.
+    if (!(v.P->matrix()(2, 3) > 0))
+      throw InputError(geometry.source(), json_key(key + ".P"),
+                       "puts the holder origin " + std::to_string(v.P->matrix()(2, 3)) + " mm from the source along the beam (behind it): "
+                       "a matrix of the wrong sign?");
     m.view_indices.push_back(v.index);
     m.matrices.push_back(*v.P);
   }
@@ -51,12 +85,13 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
     m.distortion_note = note.str();
   }
   const std::optional<FlatDark> flat_dark = read_flat_dark(scan);
-  std::vector<std::size_t> clamped(static_cast<std::size_t>(n), 0);
+  std::vector<std::size_t> clamped(static_cast<std::size_t>(n), 0), masked(static_cast<std::size_t>(n), 0);
   int done = 0;
   // Reading is I/O bound and OpenImageIO is thread safe: a few images at a time.
   parallel_for_dynamic(n, [&](int k) {
     const Image image = read_line_integrals(scan, m.view_indices[static_cast<std::size_t>(k)], flat_dark,
-                                            m.weights.views ? m.weights.view(k) : nullptr, &clamped[static_cast<std::size_t>(k)]);
+                                            m.weights.views ? m.weights.view(k) : nullptr, &clamped[static_cast<std::size_t>(k)],
+                                            &masked[static_cast<std::size_t>(k)]);
     if (!undistortion) {
       std::copy(image.pixels.begin(), image.pixels.end(), m.line_integrals.view(k));
     } else {
@@ -69,13 +104,23 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
 #pragma omp critical(ctk_measurements_progress)
     if (progress) progress(++done, n);
   });
+  std::vector<int> kept;
+  const std::size_t pixels = m.line_integrals.pixels_per_view();
   for (int k = 0; k < n; ++k) {
-    const std::size_t c = clamped[static_cast<std::size_t>(k)];
-    m.clamped_pixels += c;
-    if (c > 0)
-      m.notes.push_back("view " + std::to_string(m.view_indices[static_cast<std::size_t>(k)]) + ": " + std::to_string(c) +
-                        " pixels clamped (counts at or below dark, or above the flat)");
+    const auto i = static_cast<std::size_t>(k);
+    const std::string view = "view " + std::to_string(m.view_indices[i]) + ": ";
+    m.clamped_pixels += clamped[i];
+    if (clamped[i] > 0) m.notes.push_back(view + std::to_string(clamped[i]) + " pixels clamped (counts at or below dark, or above the flat)");
+    if (static_cast<double>(masked[i]) > kMostMaskedFraction * static_cast<double>(pixels)) {
+      m.left_out.push_back(view + std::to_string(masked[i]) + " of " + std::to_string(pixels) +
+                           " pixels are not finite numbers (NaN or infinite): left out");
+      continue;
+    }
+    m.masked_pixels += masked[i];
+    if (masked[i] > 0) m.notes.push_back(view + std::to_string(masked[i]) + " pixels not finite (NaN or infinite): masked");
+    kept.push_back(k);
   }
+  if (static_cast<int>(kept.size()) < n) keep_views(m, kept);
   return m;
 }
 

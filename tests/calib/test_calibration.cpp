@@ -173,6 +173,17 @@ TEST(Calibration, BadInputIsARejectionOrAClearError) {
   sim.trajectory = circular_robot_trajectory(sim.setup, 4);
   simulate_scan(sim, dir);
   ScanDescription scan = read_scan(dir / "scan.json");
+  // A first guess that puts the holder behind the source is that view's rejection, with the
+  // reason; the batch goes on.
+  {
+    Geometry guesses = read_geometry(dir / "truth-geometry.json");
+    guesses.views[0].P = ProjectionMatrix::compose(scan.intrinsics(), make_rigid(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, -1360)));
+    const ScanCalibration behind = recalibrate_scan(scan, guesses, {});
+    EXPECT_EQ(behind.views[0].status, ViewStatus::rejected);
+    EXPECT_NE(behind.views[0].reason.find("behind"), std::string::npos) << behind.views[0].reason;
+    const ScanCalibration from_robot = calibrate_scan(scan, {});
+    for (std::size_t v = 1; v < 4; ++v) EXPECT_EQ(behind.views[v].status, from_robot.views[v].status) << behind.views[v].reason;
+  }
   // A truncated image: that view is rejected with the reason, the others go on.
   const auto path = scan.projection_path(1);
   const auto size = std::filesystem::file_size(path);

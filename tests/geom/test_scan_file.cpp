@@ -118,6 +118,18 @@ TEST(ScanFile, TruncatedFileIsNamedWithoutBlamingNaN) {
   EXPECT_EQ(what.find("NaN and Infinity"), std::string::npos) << what;
 }
 
+// A pattern of tens of thousands of characters is checked without recursion (std::regex
+// overflowed the stack on one), accepted when it is a pattern and refused naming the key when not.
+TEST(ScanFile, LongFilePatternsAreCheckedWithoutCrashing) {
+  const auto dir = testing::scratch_dir();
+  const auto file = write_valid_scan(dir);
+  expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["files"] = std::string(30000, 'x') + "%d_%d.tif"; },
+                      "projections.files");
+  expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["files"] = std::string(30000, 'x') + ".tif"; },
+                      "projections.files");
+  expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["files"] = "proj_%4.tif"; }, "projections.files");
+}
+
 TEST(ScanFile, RotationMustBeARotation) {
   const auto file = write_valid_scan(testing::scratch_dir());
   expect_error_naming(file, [](nlohmann::json& j) { j["pose_source"]["T_camera_base"]["R"][0][0] = 2.0; },

@@ -6,6 +6,9 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <sys/stat.h>
+
+#include <cstdint>
 #include <fstream>
 
 #include "../test_support.hpp"
@@ -69,6 +72,47 @@ TEST(ImageIo, BadImagesAreClearErrors) {
     EXPECT_NE(std::string(e.what()).find("full.tif"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("64 x 63"), std::string::npos) << e.what();
   }
+}
+
+// A 200-byte TIFF whose header claims 20000 x 20000 16-bit pixels.
+void write_lying_tiff(const std::filesystem::path& file) {
+  std::vector<unsigned char> bytes{'I', 'I', 42, 0, 8, 0, 0, 0};
+  auto put = [&](std::uint32_t value, int size) {
+    for (int i = 0; i < size; ++i) bytes.push_back(static_cast<unsigned char>(value >> (8 * i)));
+  };
+  const std::uint32_t entries[][3] = {{256, 4, 20000}, {257, 4, 20000}, {258, 3, 16},    {259, 3, 1},        {262, 3, 1},
+                                      {273, 4, 200},   {277, 3, 1},     {278, 4, 20000}, {279, 4, 800000000u}};
+  put(9, 2);
+  for (const auto& e : entries) {
+    put(e[0], 2);
+    put(e[1], 2);
+    put(1, 4);
+    put(e[2], 4);
+  }
+  put(0, 4);
+  bytes.resize(200, 0);
+  std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+// A header is checked against the declared detector before any pixel memory is taken, and only
+// regular files are read (a pipe would wait for a writer forever).
+TEST(ImageIo, HeadersAreCheckedBeforeAllocationAndOnlyFilesAreRead) {
+  const auto dir = testing::scratch_dir();
+  write_lying_tiff(dir / "liar.tif");
+  try {
+    read_image(dir / "liar.tif", 64, 64);
+    FAIL() << "a header of the wrong size was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("20000 x 20000"), std::string::npos) << e.what();
+  }
+  ASSERT_EQ(::mkfifo((dir / "pipe.tif").c_str(), 0600), 0);
+  try {
+    read_image(dir / "pipe.tif", 64, 64);
+    FAIL() << "a pipe was opened";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(read_image(dir), InputError);
 }
 
 TEST(ImageIo, VolumeOutputs) {

@@ -2,6 +2,9 @@
 // opened), counts scans get weights, line-integral scans come through unchanged.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "../test_support.hpp"
 #include "ctk/geom/error.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
@@ -80,6 +83,67 @@ TEST(Measurements, CountsGiveLineIntegralsNearTheTruthAndWeights) {
   EXPECT_NEAR(m.line_integrals.at(0, 0, 0), 0.0, 0.03);
   EXPECT_NEAR(m.weights.at(0, 0, 0), 1.0, 0.03);
   EXPECT_EQ(m.clamped_pixels, 0u);
+}
+
+// A view described twice, or a matrix that puts the volume behind the source (an all-zero volume
+// before), is refused naming the geometry file and key.
+TEST(Measurements, DuplicateViewsAndMatricesBehindTheSourceAreRefused) {
+  const auto dir = testing::scratch_dir();
+  simulate_scan(tiny_scan(SimulatedOutput::line_integrals), dir);
+  const ScanDescription scan = read_scan(dir / "scan.json");
+  const Geometry good = read_geometry(dir / "truth-geometry.json");
+  auto refused = [&](const Geometry& g, const std::string& key) {
+    try {
+      load_measurements(scan, g);
+      ADD_FAILURE() << "accepted; expected an error naming " << key;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  };
+  Geometry twice = good;
+  twice.views[3].index = 1;
+  refused(twice, "key 'views[3].index'");
+  Geometry behind = good;
+  behind.views[2].P = ProjectionMatrix(-behind.views[2].P->matrix());
+  refused(behind, "key 'views[2].P'");
+}
+
+// Non-finite pixels (a dead pixel written as NaN, an overflow as inf) are masked with their
+// neighbours' mean and counted; a view with more of them than kMostMaskedFraction is left out
+// with the reason. Nothing that reaches a solver is anything but a finite number.
+TEST(Measurements, NonFinitePixelsAreMaskedAndAViewFullOfThemIsLeftOut) {
+  const auto dir = testing::scratch_dir();
+  simulate_scan(tiny_scan(SimulatedOutput::line_integrals), dir);
+  const ScanDescription scan = read_scan(dir / "scan.json");
+  Image few = read_image(scan.projection_path(1));
+  const Image clean = few;
+  const int cols = few.cols;
+  few.pixels[static_cast<std::size_t>(10 * cols + 20)] = std::numeric_limits<float>::quiet_NaN();
+  few.pixels[static_cast<std::size_t>(30 * cols + 5)] = std::numeric_limits<float>::infinity();
+  few.pixels[0] = -std::numeric_limits<float>::infinity();
+  write_image_float(few, scan.projection_path(1));
+  Image many = read_image(scan.projection_path(4));
+  for (std::size_t i = 0; i < many.pixels.size(); i += 50) many.pixels[i] = std::numeric_limits<float>::quiet_NaN();  // 2 %
+  write_image_float(many, scan.projection_path(4));
+
+  const Measurements m = load_measurements(scan, read_geometry(dir / "truth-geometry.json"));
+  EXPECT_EQ(m.view_indices, (std::vector<int>{0, 1, 2, 3, 5}));
+  ASSERT_EQ(m.line_integrals.views, 5);
+  ASSERT_EQ(m.matrices.size(), 5u);
+  EXPECT_EQ(m.masked_pixels, 3u);
+  ASSERT_EQ(m.left_out.size(), 1u);
+  EXPECT_NE(m.left_out.front().find("view 4: "), std::string::npos) << m.left_out.front();
+  for (std::size_t i = 0; i < m.line_integrals.data.size(); ++i) ASSERT_TRUE(std::isfinite(m.line_integrals.data[i])) << i;
+  // The NaN's neighbours are all finite: it becomes their mean.
+  double sum = 0;
+  for (int dr = -1; dr <= 1; ++dr)
+    for (int dc = -1; dc <= 1; ++dc)
+      if (dr != 0 || dc != 0) sum += clean.pixels[static_cast<std::size_t>((10 + dr) * cols + 20 + dc)];
+  EXPECT_NEAR(m.line_integrals.at(1, 10, 20), sum / 8, 1e-5);
+  // The view after the one left out is the scan's view 5, where it belongs.
+  const Image view5 = read_image(scan.projection_path(5));
+  EXPECT_TRUE(std::equal(view5.pixels.begin(), view5.pixels.end(), m.line_integrals.view(4)));
+  EXPECT_TRUE(m.matrices[4].matrix().isApprox(read_geometry(dir / "truth-geometry.json").views[5].P->matrix()));
 }
 
 }  // namespace

@@ -24,9 +24,16 @@ std::optional<FlatDark> read_flat_dark(const ScanDescription& scan);
 void counts_to_line_integrals(const Image& counts, const Image& flat, const Image& dark, float* line_integrals,
                               float* weights, std::size_t& clamped);
 
+/// Pixels whose line integral is not a finite number (NaN or infinite in a float image, a NaN
+/// count) carry no measurement: each becomes the mean of its finite neighbours (0 when none is) so
+/// that solvers without weights stay finite, and gets weight 0 where `weights` is given. Returns
+/// how many there were.
+std::size_t mask_non_finite(Image& line_integrals, float* weights);
+
 /// Projection `view` as line integrals; throws InputError naming the file when it is missing,
-/// damaged or of the wrong size. `flat_dark` is required for counts scans.
+/// damaged or of the wrong size. `flat_dark` is required for counts scans. Non-finite pixels are
+/// masked (mask_non_finite) and counted in `non_finite`.
 Image read_line_integrals(const ScanDescription& scan, int view, const std::optional<FlatDark>& flat_dark,
-                          float* weights = nullptr, std::size_t* clamped = nullptr);
+                          float* weights = nullptr, std::size_t* clamped = nullptr, std::size_t* non_finite = nullptr);
 
 }  // namespace ctk

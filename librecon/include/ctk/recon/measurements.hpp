@@ -21,6 +21,8 @@ struct Measurements {
   ProjectionStack line_integrals;          // b
   ProjectionStack weights;                 // W: empty (views == 0) when unit weights
   std::size_t clamped_pixels = 0;          // counts at or below dark (or flat not above dark)
+  std::size_t masked_pixels = 0;           // not finite (NaN, inf): weight 0, neighbours' mean
+  std::vector<std::string> left_out;       // views of the geometry not used, each with the reason
   std::vector<std::string> notes;          // per-view findings worth a line in the log
   std::string distortion_note;             // what was done with a declared detector distortion; empty when none
 };
@@ -32,8 +34,14 @@ struct MeasurementOptions {
   bool undistort = true;
 };
 
+/// Share of a view's pixels that may be masked (not finite) before the view is left out: beyond
+/// it the neighbours' mean no longer stands for the lost measurements.
+constexpr double kMostMaskedFraction = 0.01;
+
 /// Reads every "ok" view of `geometry` (others are not used); throws InputError naming the image
-/// that cannot be read or has the wrong size. `progress(done, total)` after each image.
+/// that cannot be read or has the wrong size. A view with more than kMostMaskedFraction of its
+/// pixels not finite is left out (`left_out` says why); fewer are masked and counted.
+/// `progress(done, total)` after each image.
 Measurements load_measurements(const ScanDescription& scan, const Geometry& geometry, const MeasurementOptions& options = {},
                                const std::function<void(int, int)>& progress = {});
 

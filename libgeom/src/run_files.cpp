@@ -1,0 +1,123 @@
+#include "ctk/geom/run_files.hpp"
+
+#include <sys/stat.h>
+
+#include <map>
+#include <set>
+#include <utility>
+
+#include "ctk/geom/error.hpp"
+#include "ctk/geom/scan.hpp"
+
+namespace ctk {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path place_of(const fs::path& p) {
+  std::error_code ec;
+  fs::path resolved = fs::weakly_canonical(fs::absolute(p, ec), ec);
+  return ec ? fs::absolute(p).lexically_normal() : resolved;
+}
+
+// The same file under another name (a hard link): device and inode.
+std::pair<dev_t, ino_t> identity(const fs::path& p, bool& exists) {
+  struct stat s {};
+  exists = ::stat(p.c_str(), &s) == 0;
+  return {s.st_dev, s.st_ino};
+}
+
+bool inside(const fs::path& file, const fs::path& folder) {
+  auto f = file.begin();
+  for (auto d = folder.begin(); d != folder.end(); ++d, ++f) {
+    if (d->empty()) continue;  // a trailing separator
+    if (f == file.end() || *f != *d) return false;
+  }
+  return true;
+}
+
+bool starts_and_ends(const std::string& s, const std::string& prefix, const std::string& suffix) {
+  return s.size() >= prefix.size() + suffix.size() && s.compare(0, prefix.size(), prefix) == 0 &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::string named(const std::string& what, const fs::path& p) { return what + " (" + p.string() + ")"; }
+
+}  // namespace
+
+void RunFiles::input(std::string what, const fs::path& file) {
+  if (!file.empty()) inputs_.push_back({std::move(what), file, place_of(file), ""});
+}
+
+void RunFiles::scan(const std::string& what, const fs::path& scan_file, const ScanDescription& s) {
+  input(what, scan_file);
+  for (int v = 0; v < s.projections.count; ++v) input(what + ": projection " + std::to_string(v), s.projection_path(v));
+  for (const std::string& f : s.projections.flat) input(what + ": projections.flat", s.resolve(f));
+  for (const std::string& d : s.projections.dark) input(what + ": projections.dark", s.resolve(d));
+  if (s.panda) input(what + ": pose_source.joints_csv", s.resolve(s.panda->joints_csv));
+  if (s.matrices) input(what + ": pose_source.file", s.resolve(s.matrices->file));
+}
+
+void RunFiles::input_folder(std::string what, const fs::path& folder) {
+  if (!folder.empty()) input_folders_.push_back({std::move(what), folder, place_of(folder), ""});
+}
+
+void RunFiles::output(std::string what, const fs::path& file) {
+  if (!file.empty()) outputs_.push_back({std::move(what), file, place_of(file), ""});
+}
+
+void RunFiles::output_folder(std::string what, const fs::path& folder) {
+  if (!folder.empty()) output_folders_.push_back({std::move(what), folder, place_of(folder), ""});
+}
+
+void RunFiles::output_family(std::string what, const fs::path& prefix, const std::string& suffix) {
+  // The prefix's folder is resolved; its last part is a name's beginning, kept as given.
+  const fs::path folder = place_of(prefix.has_parent_path() ? prefix.parent_path() : fs::path("."));
+  families_.push_back({std::move(what), prefix, folder / prefix.filename(), suffix});
+}
+
+void RunFiles::check() const {
+  auto refuse = [](const Entry& out, const std::string& what) {
+    throw InputError(out.path.string(), out.what, "would overwrite " + what + "; name another output");
+  };
+  std::map<fs::path, const Entry*> by_place;
+  std::map<std::pair<dev_t, ino_t>, const Entry*> by_identity;
+  for (const Entry& in : inputs_) {
+    by_place.emplace(in.place, &in);
+    bool exists = false;
+    const auto id = identity(in.place, exists);
+    if (exists) by_identity.emplace(id, &in);
+  }
+  std::map<fs::path, const Entry*> written;
+  for (const Entry& out : outputs_) {
+    if (const auto it = by_place.find(out.place); it != by_place.end()) refuse(out, "the input " + named(it->second->what, it->second->path));
+    bool exists = false;
+    const auto id = identity(out.place, exists);
+    if (exists)
+      if (const auto it = by_identity.find(id); it != by_identity.end())
+        refuse(out, "the input " + named(it->second->what, it->second->path) + ", the same file under another name");
+    for (const Entry& folder : input_folders_)
+      if (inside(out.place, folder.place)) refuse(out, "a file in the input folder " + named(folder.what, folder.path));
+    if (const auto [it, added] = written.emplace(out.place, &out); !added)
+      refuse(out, "the output " + named(it->second->what, it->second->path) + " of the same run");
+  }
+  for (const Entry& folder : output_folders_) {
+    for (const Entry& in : inputs_)
+      if (inside(in.place, folder.place)) refuse(folder, "the input " + named(in.what, in.path) + ", which lies in it");
+    for (const Entry& in : input_folders_)
+      if (inside(in.place, folder.place) || inside(folder.place, in.place))
+        refuse(folder, "files of the input folder " + named(in.what, in.path));
+  }
+  for (const Entry& family : families_) {
+    const std::string prefix = family.place.string();
+    for (const Entry& in : inputs_)
+      if (starts_and_ends(in.place.string(), prefix, family.suffix))
+        refuse(family, "the input " + named(in.what, in.path) + " (it writes " + family.path.string() + "*" + family.suffix + ")");
+    for (const Entry& out : outputs_)
+      if (starts_and_ends(out.place.string(), prefix, family.suffix))
+        refuse(out, "a file of " + named(family.what, fs::path(family.path.string() + "*" + family.suffix)) + " of the same run");
+  }
+}
+
+}  // namespace ctk
