@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/scan.hpp"
@@ -90,8 +91,7 @@ ScanSimulation simulation_from(const PlanCommandOptions& o) {
 
 // Lab mode: the declared setup comes from a ctk-scan/1 file of the lab (detector, frames, holder,
 // flat and dark); the isocentre distance from the command line.
-PlanningSetup setup_from_scan(const fs::path& file, double sod_mm) {
-  const ScanDescription scan = read_scan(file);
+PlanningSetup setup_from_scan(const fs::path& file, const ScanDescription& scan, double sod_mm) {
   if (!scan.panda) throw InputError(file.string(), "pose_source", "lab mode needs a panda pose source (the robot's frames)");
   if (!scan.holder) throw InputError(file.string(), "holder", "lab mode calibrates every view: the holder is required");
   const std::optional<FlatDark> fd = read_flat_dark(scan);
@@ -109,11 +109,12 @@ PlanningSetup setup_from_scan(const fs::path& file, double sod_mm) {
   return s;
 }
 
-void print_view(const PlannedViewRecord& v, int wanted, int& acquired) {
-  if (v.acquired) ++acquired;
-  std::fprintf(stderr, "%s request %3d: %s, %d / %d acquired", v.scout ? "scout" : "plan ", v.index,
-               v.acquired ? "acquired" : ("refused (" + v.reason + ")").c_str(), acquired, wanted);
-  if (v.acquired) std::fprintf(stderr, ", calibration %.3f px", v.calibration_rms_px);
+void print_view(const PlannedViewRecord& v, int wanted, int& calibrated) {
+  if (v.calibrated) ++calibrated;
+  const std::string what = v.calibrated ? "calibrated" : v.acquired ? "left out (" + v.reason + ")" : "refused (" + v.reason + ")";
+  std::fprintf(stderr, "%s request %3d: %s, %d / %d calibrated", v.scout ? "scout" : "plan ", v.index, what.c_str(), calibrated,
+               wanted);
+  if (v.calibrated) std::fprintf(stderr, ", calibration %.3f px", v.calibration_rms_px);
   if (!v.scout) std::fprintf(stderr, ", predicted absorber path %.1f mm, planner %.2f s", v.damage_mm, v.planning_seconds);
   std::fprintf(stderr, "\n");
 }
@@ -124,7 +125,8 @@ void report_plan(const PlanningResult& r, const fs::path& folder) {
     worst = std::max(worst, s);
     sum += s;
   }
-  std::cout << folder.string() << ": " << r.acquired() << " views acquired in " << r.views.size() << " requests";
+  std::cout << folder.string() << ": " << r.calibrated() << " views calibrated, " << r.acquired() << " acquired in "
+            << r.views.size() << " requests";
   if (!r.step_seconds.empty())
     std::cout << "; planner step " << sum / static_cast<double>(r.step_seconds.size()) << " s mean, " << worst << " s max";
   std::cout << "; absorbers: " << (r.segmentation.voxels > 0 ? std::to_string(r.segmentation.voxels) + " coarse voxels" : r.segmentation.note)
@@ -210,10 +212,10 @@ void acquire_others(const PlanCommandOptions& o, const ScanSimulation& simulatio
     p.max_attempts = static_cast<int>(run.order.size());
     SimulatedLab lab(simulation);
     SimulatedAcquisition acquisition(lab, o.out / run.name);
-    Progress progress(run.name + " trajectory", "views acquired");
-    int acquired = 0;
+    Progress progress(run.name + " trajectory", "views calibrated");
+    int calibrated = 0;
     const PlanningResult r = plan_trajectory(acquisition, setup, p, [&](const PlannedViewRecord& v) {
-      if (v.acquired) progress(++acquired, n);
+      if (v.calibrated) progress(++calibrated, n);
     });
     write_planned_scan(r, setup, o.out / run.name);
     report_plan(r, o.out / run.name);
@@ -308,11 +310,21 @@ void run_plan(const PlanCommandOptions& o) {
   if (o.phantoms.empty() == o.lab.empty())
     throw std::invalid_argument("give either --phantom (simulation) or --lab with --setup (lab mode)");
   const PlanningOptions options = planning_options(o);
-  int acquired = 0;
-  auto on_view = [&](const PlannedViewRecord& v) { print_view(v, o.views, acquired); };
+  int calibrated = 0;
+  auto on_view = [&](const PlannedViewRecord& v) { print_view(v, o.views, calibrated); };
   if (!o.lab.empty()) {
     if (o.setup.empty()) throw std::invalid_argument("lab mode needs --setup (the lab's ctk-scan/1 file)");
-    const PlanningSetup setup = setup_from_scan(o.setup, o.sod_mm);
+    const ScanDescription lab_scan = read_scan(o.setup);
+    RunFiles files;
+    files.input("--setup", o.setup);
+    for (const std::string& f : lab_scan.projections.flat) files.input("--setup: projections.flat", lab_scan.resolve(f));
+    for (const std::string& d : lab_scan.projections.dark) files.input("--setup: projections.dark", lab_scan.resolve(d));
+    files.input_folder("--lab", o.lab);
+    for (const char* name : {"scan.json", "joints.csv", "flat.tif", "dark.tif", "geometry.json", "trajectory.json", "plan-map.png",
+                             "coarse.nrrd", "coarse.raw"})
+      files.output(std::string("--out: ") + name, o.out / name);
+    files.check();
+    const PlanningSetup setup = setup_from_scan(o.setup, lab_scan, o.sod_mm);
     FileExchangeAcquisition acquisition(o.lab, setup.setup.detector.cols, setup.setup.detector.rows, std::chrono::seconds(o.timeout_s));
     PlanningResult r = plan_trajectory(acquisition, setup, options, on_view);
     acquisition.finish();
@@ -327,6 +339,11 @@ void run_plan(const PlanCommandOptions& o) {
     report_plan(r, o.out);
     return;
   }
+  RunFiles files;
+  for (const std::string& name : o.phantoms)
+    if (fs::path(name).extension() == ".json") files.input("--phantom", name);
+  files.output_folder("--out", o.out);
+  files.check();
   if (o.compare_only) {
     compare(o, simulation_from(o));
     return;
@@ -341,7 +358,7 @@ void run_plan(const PlanCommandOptions& o) {
   write_volume_nrrd(r.coarse, folder / "coarse.nrrd");
   report_plan(r, folder);
   if (o.compare) {
-    acquire_others(o, lab.simulation(), setup, r.acquired());
+    acquire_others(o, lab.simulation(), setup, r.calibrated());
     compare(o, lab.simulation());
   }
   std::cout << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s\n";

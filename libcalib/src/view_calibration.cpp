@@ -13,7 +13,16 @@ namespace ctk {
 
 namespace {
 
-constexpr double kGrazingCosine = 0.3;  // |radial . ray| below: the sphere sits on the silhouette
+// Whether the ray from the source to a sphere on the wall grazes it. The wall is a cylinder, so
+// what matters is the ray across the axis: at the sphere's radius r the 2D line passes the axis at
+// r |sin| of its angle to the radial direction, and |cos| below 0.3 puts it within 5 % of r, on
+// the silhouette. Taken in 3D instead, every ray of a view along the axis would look grazing.
+bool grazes_wall(const Eigen::Vector3d& sphere, const Eigen::Vector3d& source) {
+  constexpr double kGrazingCosine = 0.3;
+  const Eigen::Vector2d radial = sphere.head<2>(), across = (sphere - source).head<2>();
+  if (radial.norm() == 0 || across.norm() < 1e-9 * (sphere - source).norm()) return false;  // down the bore
+  return std::abs(radial.normalized().dot(across.normalized())) < kGrazingCosine;
+}
 
 struct Prediction {
   std::vector<Eigen::Vector2d> uv;
@@ -34,8 +43,7 @@ Prediction predict(const Eigen::Matrix3d& K, const Rigid& T, const Holder& holde
   for (const auto& X : holder.spheres_mm) {
     const Eigen::Vector3d c = K * (T * X);
     p.uv.push_back(c.head<2>() / c.z());
-    const Eigen::Vector3d radial(X.x(), X.y(), 0), ray = (X - source).normalized();
-    const bool grazing = !holder.wall && radial.norm() > 0 && std::abs(radial.normalized().dot(ray)) < kGrazingCosine;
+    const bool grazing = !holder.wall && grazes_wall(X, source);
     p.visible.push_back(c.z() > 0 && detector.contains(p.uv.back(), radius_px + 6) && !grazing);
   }
   const double apart = touching_distance_px(radius_px);

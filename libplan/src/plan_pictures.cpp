@@ -57,7 +57,7 @@ cv::Mat direction_map(const PlanningResult& r, const std::vector<double>& value,
   chart.ticks(60, 0.5);
   for (const PlannedViewRecord& v : r.views) {
     const MapPoint p = equal_area_map(v.requested);
-    if (!v.acquired)
+    if (!v.calibrated)
       chart.cross(p.x * kDeg, p.y, colour::red, 5);
     else
       chart.dot(p.x * kDeg, p.y, v.scout ? colour::black : colour::blue, v.scout ? 2 : 4);
@@ -71,7 +71,7 @@ void write_plan_map_png(const PlanningResult& r, const std::filesystem::path& pn
   std::vector<double> density;
   for (const CandidateWeight& w : r.weights) density.push_back(w.density);
   cv::Mat picture;
-  const cv::Mat damage = direction_map(r, r.damage_mm, "directions (equal-area); colour: predicted absorber path; . scout, o planned, x refused");
+  const cv::Mat damage = direction_map(r, r.damage_mm, "directions (equal-area); colour: predicted absorber path; . scout, o planned, x refused or not calibrated");
   const cv::Mat wanted = direction_map(r, density, "colour: view density the sample's edges want, least to most (from the last coarse volume)");
   cv::vconcat(damage, wanted, picture);
   write_png_atomically(picture, png);

@@ -51,16 +51,21 @@ class Loop {
     counts_to_line_integrals(answer.counts, s_.flat, s_.dark, p.pixels.data(), w.pixels.data(), clamped);
     const Rigid guess = s_.setup.T_camera_base * panda::forward_kinematics(answer.joints) * s_.setup.T_flange_holder;
     const ViewCalibration cal = calibrate_view(p, K_.K(), guess, s_.holder, d, o_.calibration);
-    if (cal.status == ViewStatus::ok && cal.P) {
-      rec.P = *cal.P;
-      rec.calibration_rms_px = cal.rms_px;
-    } else {
-      rec.P = ProjectionMatrix::compose(K_, guess);
-      rec.reason = "calibration failed (" + cal.reason + "): the robot's pose is used";
+    if (cal.status != ViewStatus::ok || !cal.P) {
+      // The robot's pose is a millimetre off (its base is never where the setup says): such a
+      // view would blur the reconstruction, so it is kept out and the planner draws another
+      // direction, away from this one.
+      rec.reason = "calibration failed: " + cal.reason;
+      planner_.record_unreachable(rec.requested);
+      rec.planning_seconds = seconds_since(start);
+      return rec;
     }
+    rec.calibrated = true;
+    rec.P = *cal.P;
+    rec.calibration_rms_px = cal.rms_px;
     recon_.add_view(*rec.P, p, w);
     planner_.record_acquired(rec.P->principal_ray());
-    ++acquired_;
+    ++calibrated_;
     rec.planning_seconds = seconds_since(start);
     return rec;
   }
@@ -90,22 +95,23 @@ class Loop {
     const int max_attempts = o_.max_attempts > 0 ? o_.max_attempts : 3 * o_.views;
     if (!o_.fixed_directions.empty()) {
       for (const Eigen::Vector3d& d : o_.fixed_directions) {
-        if (acquired_ >= o_.views || next_index_ >= max_attempts) break;
+        if (calibrated_ >= o_.views || next_index_ >= max_attempts) break;
         report(take(d, false, 0));
       }
       refresh();
       return finish(std::move(result));
     }
     for (const Eigen::Vector3d& d : scout_directions(o_.scout_nside)) {
-      if (acquired_ >= o_.views) break;
+      if (calibrated_ >= o_.views) break;
       PlannedViewRecord rec = take(d, true, 0);
-      const bool refused = !rec.acquired;
+      const bool refused = !rec.calibrated;
       report(std::move(rec));
-      // The opposite direction sees nearly the same lines, and the robot may reach it.
-      if (refused && acquired_ < o_.views) report(take(-d, true, 0));
+      // The opposite direction sees nearly the same lines, and the robot may reach it (or its
+      // spheres may fix the pose).
+      if (refused && calibrated_ < o_.views) report(take(-d, true, 0));
     }
     result.views.back().planning_seconds += refresh();
-    while (acquired_ < o_.views && next_index_ < max_attempts) {
+    while (calibrated_ < o_.views && next_index_ < max_attempts) {
       const auto start = Clock::now();
       const std::optional<Eigen::Vector3d> next = planner_.next();
       if (!next) break;
@@ -113,7 +119,7 @@ class Loop {
       const double chosen = seconds_since(start);
       PlannedViewRecord rec = take(*next, false, damage_.empty() ? 0.0 : damage_[cell]);
       rec.planning_seconds += chosen;
-      if (rec.acquired) rec.planning_seconds += refresh();
+      if (rec.calibrated) rec.planning_seconds += refresh();
       result.step_seconds.push_back(rec.planning_seconds);
       report(std::move(rec));
     }
@@ -140,13 +146,17 @@ class Loop {
   Intrinsics K_;
   AbsorberSegmentation segmentation_;
   std::vector<double> damage_;
-  int next_index_ = 0, acquired_ = 0;
+  int next_index_ = 0, calibrated_ = 0;
 };
 
 }  // namespace
 
 int PlanningResult::acquired() const {
   return static_cast<int>(std::count_if(views.begin(), views.end(), [](const PlannedViewRecord& v) { return v.acquired; }));
+}
+
+int PlanningResult::calibrated() const {
+  return static_cast<int>(std::count_if(views.begin(), views.end(), [](const PlannedViewRecord& v) { return v.calibrated; }));
 }
 
 // HEALPix cells come in opposite pairs; the scout keeps the cell of each pair whose first non-zero

@@ -17,7 +17,8 @@ nlohmann::json trajectory_to_json(const PlanningResult& r) {
     if (!v.reason.empty()) j["reason"] = v.reason;
     if (v.acquired) {
       j["projection"] = v.projection_file;
-      j["calibration_rms_px"] = v.calibration_rms_px;
+      j["calibrated"] = v.calibrated;
+      if (v.calibrated) j["calibration_rms_px"] = v.calibration_rms_px;
     }
     views.push_back(j);
   }
@@ -28,6 +29,7 @@ nlohmann::json trajectory_to_json(const PlanningResult& r) {
   }
   return {{"format", "ctk-plan/1"},
           {"acquired", r.acquired()},
+          {"calibrated", r.calibrated()},
           {"requests", r.views.size()},
           {"absorbers",
            {{"voxels", r.segmentation.voxels},
@@ -74,8 +76,13 @@ void write_planned_scan(const PlanningResult& r, const PlanningSetup& s, const s
     GeometryView g;
     g.index = index;
     g.projection = v.projection_file;
-    g.P = v.P;
-    if (v.calibration_rms_px > 0) g.rms_px = v.calibration_rms_px;
+    if (v.calibrated) {
+      g.P = v.P;
+      g.rms_px = v.calibration_rms_px;
+    } else {
+      g.status = ViewStatus::rejected;  // reconstruction leaves it out
+      g.reason = v.reason;
+    }
     geometry.views.push_back(g);
   }
   scan.projections.count = static_cast<int>(scan.projections.file_names.size());

@@ -46,10 +46,11 @@ struct PlannedViewRecord {
   int index = 0;                 // request number (the exchange's view number)
   bool scout = false;
   Eigen::Vector3d requested{0, 0, 1};
-  bool acquired = false;
-  std::string reason;            // unreachable, or a calibration fallback
+  bool acquired = false;         // the lab took the projection
+  bool calibrated = false;       // and its spheres fixed the pose: only such views are used
+  std::string reason;            // unreachable, or why calibration failed
   panda::Joints joints{};
-  std::optional<ProjectionMatrix> P;  // calibrated (or the robot's when calibration failed)
+  std::optional<ProjectionMatrix> P;  // calibrated; absent when calibration failed
   double calibration_rms_px = 0;
   double damage_mm = 0;          // of the requested direction when it was chosen
   std::string projection_file;
@@ -66,7 +67,8 @@ struct PlanningResult {
   std::vector<double> step_seconds;      // planner time of each planned (not scout) step
   PlannerOptions planner;                // the settings the draws were made with
   EdgeTangencyOptions edge_tangency;     // and how the edges' demand was found
-  int acquired() const;
+  int acquired() const;    // projections taken
+  int calibrated() const;  // of those, calibrated: the views of the trajectory
 };
 
 PlanningResult plan_trajectory(Acquisition& acquisition, const PlanningSetup& setup, const PlanningOptions& options,
