@@ -7,16 +7,20 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "commands.hpp"
+#include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/error.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/image_io.hpp"
+#include "ctk/recon/conjugate_rays.hpp"
 #include "ctk/recon/default_volume.hpp"
 #include "ctk/recon/markerless_refinement.hpp"
 #include "ctk/recon/measurements.hpp"
+#include "measurement_report.hpp"
 #include "progress.hpp"
 
 namespace ctk::tools {
@@ -37,14 +41,48 @@ fs::path beside(const fs::path& out, const std::string& suffix) { return out.par
 
 void write_central_slice(const Volume& x, float high, const fs::path& file) { write_slice_png(x, 2, x.layout.size[2] / 2, 0.0f, high, file); }
 
+// The axis' column from the data alone (conjugate rays of the row through the principal point):
+// an estimate that does not rest on the yardstick. Full circles at equal steps only; otherwise
+// `why_not` says why there is none.
+std::optional<ConjugateRayEstimate> conjugate_rays(const Measurements& m, const ConsistencyProbe& probe, const ScanDescription& scan,
+                                                   std::string& why_not) {
+  const Eigen::Vector2d pp = probe.nominal_principal_point();
+  try {
+    const FanSinogram s = row_sinogram(m.line_integrals, probe.orbit(), scan.detector, pp.y(), scan.source_to_detector_mm);
+    return conjugate_ray_u0(s, pp.x(), 30);
+  } catch (const std::invalid_argument& e) {
+    why_not = e.what();
+    return std::nullopt;
+  }
+}
+
+nlohmann::json cross_check_json(const std::optional<ConjugateRayEstimate>& e, const std::string& why_not, double loop_u0) {
+  if (!e) return {{"method", "conjugate rays"}, {"note", "not available: " + why_not}};
+  return {{"method", "conjugate rays: each line measured half a turn apart must agree"},
+          {"u0_px", e->u0_px},
+          {"uncertainty_px", e->standard_error_px},
+          {"rms_mismatch", e->rms_mismatch},
+          {"rms_mismatch_other_sense", e->rms_mismatch_other_sense},
+          {"loop_u0_px", loop_u0},
+          {"difference_px", e->u0_px - loop_u0}};
+}
+
 void run_refine(const RefineOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const ScanDescription scan = read_scan(o.scan);
+  RunFiles files;
+  files.scan("--scan", o.scan, scan);
+  files.input("--geometry", o.geometry);
+  files.output("--out", o.out);
+  for (const char* suffix : {".geometry.json", ".scan.json", ".before.png", ".after.png"})
+    files.output(std::string("beside --out: ") + suffix, beside(o.out, suffix));
+  files.check();
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   Geometry geometry = o.geometry.empty() ? nominal_geometry(scan) : read_geometry(o.geometry);
   Progress reading("reading projections", "views");
   const Measurements m = load_measurements(scan, geometry, {false}, std::ref(reading));
   if (m.clamped_pixels > 0) std::cout << "clamped " << m.clamped_pixels << " pixels\n";
+  report_masked_and_left_out(m, o.geometry.empty() ? o.scan : o.geometry);
 
   // Sharpness and pictures need only the central axial slice at full resolution. The coarse grid
   // reaches 20 % beyond the detector's field along the axis, so the cone's edge rays stay inside
@@ -52,7 +90,9 @@ void run_refine(const RefineOptions& o) {
   VolumeLayout fine = default_volume_layout(scan, m.matrices);
   fine = VolumeLayout::centred({fine.size[0], fine.size[1], 1}, fine.voxel_mm);
   VolumeLayout coarse = default_volume_layout(scan, m.matrices, 0, o.coarsening);
-  coarse = VolumeLayout::centred({coarse.size[0], coarse.size[1], static_cast<int>(std::ceil(1.2 * coarse.size[2]))}, coarse.voxel_mm);
+  // A one-row (fan-beam) detector sees one slice, in the orbit's plane: the grid is that slice.
+  const int coarse_slices = scan.detector.rows == 1 ? 1 : static_cast<int>(std::ceil(1.2 * coarse.size[2]));
+  coarse = VolumeLayout::centred({coarse.size[0], coarse.size[1], coarse_slices}, coarse.voxel_mm);
   std::cout << "held-out predictions on " << coarse.size[0] << " x " << coarse.size[1] << " x " << coarse.size[2] << " voxels of "
             << coarse.voxel_mm.x() << " mm; sharpness on " << fine.size[0] << " x " << fine.size[1] << " x " << fine.size[2] << "\n";
   const ConsistencyProbe probe(m.line_integrals, m.matrices, scan.detector, coarse, interleaved_split(m.line_integrals.views));
@@ -65,7 +105,19 @@ void run_refine(const RefineOptions& o) {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "[" << static_cast<int>(t) << " s] " << line << std::endl;
   };
+  std::string why_not;
+  const std::optional<ConjugateRayEstimate> conjugate = conjugate_rays(m, probe, scan, why_not);
+  if (conjugate) {
+    log("conjugate rays put the axis at column " + std::to_string(conjugate->u0_px) + " +- " + std::to_string(conjugate->standard_error_px) +
+        " px: the detector offset's scan starts there");
+    options.knob_starts["u0_px"] = conjugate->u0_px;
+  }
   const RefinementResult r = refine_markerless(probe, fine, options, log);
+  const double loop_u0 = probe.nominal_principal_point().x() + r.geometry.du_px;
+  const nlohmann::json cross_check = cross_check_json(conjugate, why_not, loop_u0);
+  if (conjugate)
+    std::cout << "cross-check: conjugate rays " << conjugate->u0_px << " +- " << conjugate->standard_error_px << " px, the loop " << loop_u0
+              << " px (difference " << conjugate->u0_px - loop_u0 << " px)\n";
 
   // The refined matrices replace the ok views' matrices; other views stay as they were.
   const std::vector<ProjectionMatrix> refined = apply_global_geometry(r.geometry, m.matrices, probe.orbit());
@@ -85,6 +137,7 @@ void run_refine(const RefineOptions& o) {
   report["scan"] = o.scan.string();
   report["corrected_geometry"] = geometry_file.string();
   report["corrected_scan"] = scan_file.string();
+  report["cross_check"] = cross_check;
   nlohmann::json lacks = nlohmann::json::array();
   if (r.model.blur_arc_rad > 0) lacks.push_back("angular_blur");
   if (r.model.hardening_c2 != 0) lacks.push_back("beam_hardening");

@@ -149,10 +149,15 @@ void voxel_backproject(const ProjectionStack& q, const std::vector<ProjectionMat
   std::fill(x.data.begin(), x.data.end(), 0.0f);
   const auto& n = x.layout.size;
   const Eigen::Vector3d step_i(x.layout.voxel_mm.x(), 0, 0);
-  // A z slice (256 kB at 256^2) stays in cache while every view adds to it, and meets only a
-  // band of each view's rows on a circular scan.
+  // A block of a z slice's rows stays in cache while every view adds to it, and meets only a
+  // band of each view's rows on a circular scan. Blocks of rows rather than whole slices, so that a
+  // volume of few slices (one, for a fan beam) still keeps every core busy; each voxel still adds
+  // the views in their order, so the result does not depend on the blocks.
+  constexpr int kRowsPerBlock = 16;
+  const int blocks = (n[1] + kRowsPerBlock - 1) / kRowsPerBlock;
 #pragma omp parallel for schedule(dynamic)
-  for (int k = 0; k < n[2]; ++k)
+  for (int task = 0; task < n[2] * blocks; ++task) {
+    const int k = task / blocks, j_begin = (task % blocks) * kRowsPerBlock, j_end = std::min(n[1], j_begin + kRowsPerBlock);
     for (std::size_t v = 0; v < views.size(); ++v) {
       const Matrix34d& P = views[v].matrix();
       detail::VoxelRow r{};
@@ -163,12 +168,13 @@ void voxel_backproject(const ProjectionStack& q, const std::vector<ProjectionMat
       r.rows = q.rows;
       r.scale2 = static_cast<float>(scale_mm * scale_mm);
       r.voxels = n[0];
-      for (int j = 0; j < n[1]; ++j) {
+      for (int j = j_begin; j < j_end; ++j) {
         const Eigen::Vector3d p0 = P.leftCols<3>() * x.layout.centre_of(0, j, k) + P.col(3);
         for (int a = 0; a < 3; ++a) r.p0[a] = static_cast<float>(p0[a]);
         HWY_DYNAMIC_DISPATCH(detail::BackprojectRow)(r, &x.at(0, j, k));
       }
     }
+  }
 }
 
 void voxel_backproject_reference(const ProjectionStack& q, const std::vector<ProjectionMatrix>& views, double scale_mm,

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <optional>
 #include <sstream>
@@ -38,7 +39,19 @@ struct Candidate {
   std::vector<Knob> knobs;
 };
 
-std::vector<Candidate> make_candidates(const Eigen::Vector2d& nominal_pp, const RefinementOptions& o) {
+// What a detector of one row cannot observe: every ray lies in the orbit's plane, so moving the
+// row across it (v0), turning it in its plane (a roll lifts its ends out of the plane) or tilting
+// the axis changes nothing the row sees to first order.
+const std::vector<std::pair<std::string, std::string>> kUnobservableOnOneRow = {
+    {"v0_px", "one detector row: its height is not seen (every ray lies in the orbit's plane)"},
+    {"detector_roll", "one detector row: a roll moves its ends out of the orbit's plane, which the row does not see"},
+    {"axis_tilt", "one detector row: a tilt of the axis moves the slice, which the row does not see"}};
+
+bool unobservable_on_one_row(const std::string& name) {
+  return std::any_of(kUnobservableOnOneRow.begin(), kUnobservableOnOneRow.end(), [&](const auto& u) { return u.first == name; });
+}
+
+std::vector<Candidate> make_candidates(const Eigen::Vector2d& nominal_pp, const RefinementOptions& o, bool one_row) {
   const double arc = o.nominal_blur_arc_deg > 0 ? o.nominal_blur_arc_deg : 2.0;
   std::vector<Candidate> all = {
       {"detector_offset", true,
@@ -54,28 +67,18 @@ std::vector<Candidate> make_candidates(const Eigen::Vector2d& nominal_pp, const 
   for (const auto& name : o.candidates) {
     auto it = std::find_if(all.begin(), all.end(), [&](const Candidate& c) { return c.name == name; });
     if (it == all.end()) throw std::invalid_argument("markerless refinement: unknown effect '" + name + "'");
+    if (one_row && unobservable_on_one_row(it->name)) continue;
     chosen.push_back(*it);
+    if (one_row)
+      std::erase_if(chosen.back().knobs, [](const Knob& k) { return unobservable_on_one_row(k.key); });
   }
   return chosen;
 }
 
+bool contains(const std::vector<std::string>& v, const std::string& x) { return std::find(v.begin(), v.end(), x) != v.end(); }
+
 double sum(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); }
 double rms(const std::vector<double>& mean_squares) { return std::sqrt(sum(mean_squares) / static_cast<double>(mean_squares.size())); }
-
-// Vertex of the least-squares parabola through (x_i, y_i); NaN when it opens downwards.
-double parabola_vertex(const std::vector<double>& x, const std::vector<double>& y) {
-  const double x0 = x[x.size() / 2];
-  Eigen::MatrixXd A(static_cast<Eigen::Index>(x.size()), 3);
-  Eigen::VectorXd b(static_cast<Eigen::Index>(x.size()));
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const double t = x[i] - x0;
-    A.row(static_cast<Eigen::Index>(i)) << t * t, t, 1.0;
-    b(static_cast<Eigen::Index>(i)) = y[i];
-  }
-  const Eigen::Vector3d c = A.colPivHouseholderQr().solve(b);
-  if (!(c(0) > 0)) return std::numeric_limits<double>::quiet_NaN();
-  return x0 - c(1) / (2 * c(0));
-}
 
 struct KnobFit {
   double value = 0;
@@ -83,37 +86,45 @@ struct KnobFit {
   bool at_edge = false;  // the cost kept falling to the end of the allowed range
 };
 
-// Scans one knob over five settings on the fit views, re-centring until the parabola's vertex
-// lies inside the scanned range (or the knob's range ends); the standard error is a jackknife over
-// the fit views.
+// Scans one knob over five settings on the fit views, moving the window (by at most its width)
+// until the cost's minimum lies inside it (or the knob's range ends); the value is the vertex of
+// the parabola through the five, the standard error a jackknife over the fit views.
 KnobFit fit_knob(const ConsistencyProbe& probe, State state, const Knob& knob) {
   const double span = 4 * knob.step;
   double first = std::clamp(knob.value(state) - 2 * knob.step, knob.lower, knob.upper - span);
   KnobFit out;
   bool symmetrised = false;
-  for (int scan = 0; scan < 5; ++scan) {
+  constexpr int kScans = 8;  // windows scanned at most (a window spans four steps)
+  for (int scan = 0; scan < kScans; ++scan) {
     std::vector<double> x;
     std::vector<std::vector<double>> per_view;
     for (int i = 0; i < 5; ++i) {
       x.push_back(first + i * knob.step);
       knob.value(state) = x.back();
-      per_view.push_back(probe.costs(state.geometry, state.model).fit);
+      per_view.push_back(probe.fit_costs(state.geometry, state.model));
     }
     std::vector<double> total;
     for (const auto& c : per_view) total.push_back(sum(c));
+    const auto lowest = static_cast<std::size_t>(std::min_element(total.begin(), total.end()) - total.begin());
     double vertex = parabola_vertex(x, total);
-    if (std::isnan(vertex)) vertex = x[static_cast<std::size_t>(std::min_element(total.begin(), total.end()) - total.begin())];
-    out.value = std::clamp(vertex, knob.lower, knob.upper);
-    out.at_edge = out.value <= knob.lower + 0.5 * knob.step || out.value >= knob.upper - 0.5 * knob.step;
-    const bool outside = vertex < x.front() || vertex > x.back();
-    if (outside && !out.at_edge && scan < 4) {
-      first = std::clamp(vertex - 2 * knob.step, knob.lower, knob.upper - span);
+    if (std::isnan(vertex)) vertex = x[lowest];
+    // The minimum lies beyond an end of the window when the cost falls towards that end.
+    const int beyond = lowest == 0 && vertex <= x.front() ? -1 : lowest + 1 == x.size() && vertex >= x.back() ? +1 : 0;
+    const bool window_at_bound = (beyond < 0 && x.front() <= knob.lower + 1e-12) || (beyond > 0 && x.back() >= knob.upper - 1e-12);
+    if (beyond != 0 && !window_at_bound && scan < kScans - 1) {
+      // Far from its minimum a cost is rarely a parabola (a misplaced axis doubles edges: the
+      // cost grows about linearly), so an extrapolated vertex may lie anywhere: move the window
+      // towards it by at most its own width.
+      const double towards = std::clamp(vertex, x.front() - span, x.back() + span);
+      first = std::clamp(towards - 2 * knob.step, knob.lower, knob.upper - span);
       continue;
     }
+    out.value = std::clamp(vertex, knob.lower, knob.upper);
+    out.at_edge = window_at_bound || out.value <= knob.lower + 0.5 * knob.step || out.value >= knob.upper - 0.5 * knob.step;
     // A parabola sampled lopsidedly about its vertex is biased where the cost is not exactly
     // quadratic: scan once more, centred on the vertex (once only: a weakly observable knob's
     // vertex wanders on a flat cost, and chasing it would walk it anywhere).
-    if (!symmetrised && !out.at_edge && std::abs(vertex - x[2]) > 0.25 * knob.step) {
+    if (!symmetrised && !out.at_edge && std::abs(vertex - x[2]) > 0.25 * knob.step && scan < kScans - 1) {
       symmetrised = true;
       first = std::clamp(vertex - 2 * knob.step, knob.lower, knob.upper - span);
       continue;
@@ -146,8 +157,10 @@ struct Trial {
   bool undetermined = false;  // the cost showed no minimum with positive curvature
 };
 
+// `starts`: where a knob's scan begins (reported units) while the model still has its nominal value.
 Trial try_candidate(const ConsistencyProbe& probe, const State& current, const std::vector<double>& judge_before,
-                    const Candidate& candidate, const std::function<void(const std::string&)>& log) {
+                    const Candidate& candidate, const std::map<std::string, double>& starts,
+                    const std::function<void(const std::string&)>& log) {
   Trial t;
   t.after = current;
   t.effect.name = candidate.name;
@@ -157,7 +170,10 @@ Trial try_candidate(const ConsistencyProbe& probe, const State& current, const s
   int measured = 0;
   std::string unmeasured;
   for (const Knob& knob : candidate.knobs) {
-    KnobFit f = fit_knob(probe, t.after, knob);
+    State start = t.after, nominal;
+    if (const auto it = starts.find(knob.key); it != starts.end() && knob.value(start) == knob.value(nominal))
+      knob.value(start) = std::clamp((it->second - knob.report_offset) / knob.report_scale, knob.lower, knob.upper);
+    KnobFit f = fit_knob(probe, start, knob);
     if (std::isnan(f.standard_error) && !f.at_edge) {
       f.value = knob.value(t.after);
       unmeasured += (unmeasured.empty() ? "" : ", ") + knob.key;
@@ -171,11 +187,11 @@ Trial try_candidate(const ConsistencyProbe& probe, const State& current, const s
   if (!unmeasured.empty())
     t.effect.note = "no well-curved minimum of the held-out cost in " + unmeasured +
                     (t.undetermined ? ": not a measurement, so not accepted" : ": not observable here, kept at its starting value");
-  if (candidate.name == "detector_offset")
+  if (candidate.name == "detector_offset" && candidate.knobs.size() > 1)
     t.effect.note += std::string(t.effect.note.empty() ? "" : "; ") +
                      "v0 (the central row) is weakly observable in a circular scan: its uncertainty is the view-to-view "
                      "scatter only and does not include the yardstick's systematic error";
-  t.judge_after = probe.costs(t.after.geometry, t.after.model).judge;
+  t.judge_after = probe.judge_costs(t.after.geometry, t.after.model);
   t.effect.heldout_rms_before = rms(judge_before);
   t.effect.heldout_rms_after = rms(t.judge_after);
   t.effect.z = paired_z(judge_before, t.judge_after);
@@ -226,7 +242,7 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
   state.model.prediction_smoothing = fit_knob(probe, state, smoothing).value;
   result.prediction_smoothing = state.model.prediction_smoothing;
   if (log) log("yardstick: prediction smoothing " + std::to_string(state.model.prediction_smoothing));
-  std::vector<double> judge = probe.costs(state.geometry, state.model).judge;
+  std::vector<double> judge = probe.judge_costs(state.geometry, state.model);
   result.heldout_rms_before = rms(judge);
   result.volume_before = probe.reconstruct_all(state.geometry, state.model, fine);
   double sharpness = edge_sharpness(result.volume_before);
@@ -237,12 +253,17 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
     log(s.str());
   }
 
-  std::vector<Candidate> remaining = make_candidates(probe.nominal_principal_point(), options);
+  const bool one_row = probe.detector().rows == 1;
+  if (one_row)
+    for (const auto& [what, why] : kUnobservableOnOneRow)
+      if (what == "v0_px" ? contains(options.candidates, "detector_offset") : contains(options.candidates, what))
+        result.not_observable.push_back({what, why});
+  std::vector<Candidate> remaining = make_candidates(probe.nominal_principal_point(), options, one_row);
   std::vector<RefinedEffect> rejected;
   for (int round = 1; round <= options.max_rounds && !remaining.empty(); ++round) {
     if (log) log("round " + std::to_string(round) + ": trying " + std::to_string(remaining.size()) + " effects");
     std::vector<Trial> trials;
-    for (const Candidate& c : remaining) trials.push_back(try_candidate(probe, state, judge, c, log));
+    for (const Candidate& c : remaining) trials.push_back(try_candidate(probe, state, judge, c, options.knob_starts, log));
     // The eligible candidate that lowers the held-out RMS most joins the model, unless it blurs
     // the reconstruction (beyond `sharpness_tolerance`): a true geometric correction does not,
     // one that compensates the yardstick's own errors may.
@@ -310,7 +331,7 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
   if (result.volume_after.data.empty()) result.volume_after = result.volume_before;
 
   ProjectionStack residuals;
-  probe.costs(state.geometry, state.model, &residuals);
+  probe.judge_costs(state.geometry, state.model, &residuals);
   const double pattern = fixed_pattern_statistic(residuals);
   result.structured = pattern > 2.0;
   std::ostringstream note;
@@ -340,12 +361,15 @@ nlohmann::json refinement_to_json(const RefinementResult& r) {
     if (!e.note.empty()) j["note"] = e.note;
     effects.push_back(j);
   }
+  json not_observable = json::array();
+  for (const auto& [what, why] : r.not_observable) not_observable.push_back({{"parameter", what}, {"reason", why}});
   return {{"format", "ctk-diagnosis/1"},
           {"mode", "markerless"},
           {"baseline", {{"views_ok", r.views}, {"heldout_projection_rms", r.heldout_rms_before}, {"sharpness_per_mm", r.sharpness_before}}},
           {"final", {{"heldout_projection_rms", r.heldout_rms_after}, {"sharpness_per_mm", r.sharpness_after}}},
           {"effects", effects},
           {"yardstick", {{"prediction_smoothing", r.prediction_smoothing}}},
+          {"not_observable", not_observable},
           {"criterion",
            "fitted on views 1 mod 4, judged on views 3 mod 4 of a reconstruction from the even views; accepted when the mean "
            "per-view held-out cost falls by more than z standard errors of the paired differences"},

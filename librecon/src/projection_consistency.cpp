@@ -63,13 +63,21 @@ Volume ConsistencyProbe::reconstruct(const std::vector<int>& views, const std::v
   return x;
 }
 
-ConsistencyCosts ConsistencyProbe::costs(const GlobalGeometry& geometry, const ForwardModel& model, ProjectionStack* judge_residuals) const {
+std::vector<double> ConsistencyProbe::fit_costs(const GlobalGeometry& geometry, const ForwardModel& model) const {
+  return costs(split_.fit, geometry, model, nullptr);
+}
+
+std::vector<double> ConsistencyProbe::judge_costs(const GlobalGeometry& geometry, const ForwardModel& model,
+                                                  ProjectionStack* judge_residuals) const {
+  return costs(split_.judge, geometry, model, judge_residuals);
+}
+
+std::vector<double> ConsistencyProbe::costs(const std::vector<int>& held_out, const GlobalGeometry& geometry, const ForwardModel& model,
+                                            ProjectionStack* residuals) const {
   const std::vector<ProjectionMatrix> matrices = apply_global_geometry(geometry, nominal_, orbit_);
   const Volume x = reconstruct(split_.reconstruct, matrices, model, layout_);
 
-  // Predict every held-out view (the mean over sub-views when the view integrates an arc).
-  std::vector<int> held_out = split_.fit;
-  held_out.insert(held_out.end(), split_.judge.begin(), split_.judge.end());
+  // Predict the held-out views (the mean over sub-views when the view integrates an arc).
   const int samples = model.blur_arc_rad > 0 ? std::max(model.blur_samples, 1) : 1;
   std::vector<ProjectionMatrix> sub_views;
   for (int v : held_out) {
@@ -83,12 +91,11 @@ ConsistencyCosts ConsistencyProbe::costs(const GlobalGeometry& geometry, const F
   ProjectionStack y(static_cast<int>(sub_views.size()), b_.rows, b_.cols);
   projector_.forward(x, sub_views, y);
 
-  ConsistencyCosts c;
-  if (judge_residuals) *judge_residuals = ProjectionStack(static_cast<int>(split_.judge.size()), b_.rows, b_.cols);
+  std::vector<double> c;
+  if (residuals) *residuals = ProjectionStack(static_cast<int>(held_out.size()), b_.rows, b_.cols);
   for (std::size_t i = 0; i < held_out.size(); ++i) {
     const float* measured = b_.view(held_out[i]);
-    const bool judge = i >= split_.fit.size();
-    float* residual = judge && judge_residuals ? judge_residuals->view(static_cast<int>(i - split_.fit.size())) : nullptr;
+    float* residual = residuals ? residuals->view(static_cast<int>(i)) : nullptr;
     std::vector<double> predicted(b_.pixels_per_view(), 0.0);
     for (int s = 0; s < samples; ++s) {
       const float* sub = y.view(static_cast<int>(i) * samples + s);
@@ -105,7 +112,7 @@ ConsistencyCosts ConsistencyProbe::costs(const GlobalGeometry& geometry, const F
       if (residual) residual[p] = static_cast<float>(r);
       sum += r * r;
     }
-    (judge ? c.judge : c.fit).push_back(sum / static_cast<double>(last - first));
+    c.push_back(sum / static_cast<double>(last - first));
   }
   return c;
 }

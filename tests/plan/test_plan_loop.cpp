@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -44,14 +45,19 @@ TEST(PlanLoop, ScoutAndWholeSphereNeverTakeTheOppositeOfAView) {
   EXPECT_GT(closest, 0.12);
 }
 
-TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
+// Thesis sample 1 in the reference holder, 360 x 360 pixels of 1.2 mm.
+ScanSimulation sample_1_lab(std::uint64_t seed) {
   ScanSimulation sim;
-  const Detector detector{360, 360, 1.2, 1.2};
-  sim.setup = reference_panda_setup(detector, 2150, 1360);
+  sim.setup = reference_panda_setup(Detector{360, 360, 1.2, 1.2}, 2150, 1360);
   sim.holder = reference_helix_holder();
   sim.sample = builtin_phantom("sample-1");
+  sim.seed = seed;
+  return sim;
+}
+
+TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
+  ScanSimulation sim = sample_1_lab(3);
   sim.spectrum = tube_spectrum(90, 2.0);
-  sim.seed = 3;
   SimulatedLab lab(sim);
   SimulatedAcquisition acquisition(lab);
   const PlanningSetup setup = planning_setup(sim);
@@ -143,12 +149,7 @@ class LabWithABlankFirstShot final : public Acquisition {
 // A view whose calibration fails never enters the trajectory with the robot's pose (a millimetre
 // off): it is kept as acquired but rejected, and the planner asks for another view in its place.
 TEST(PlanLoop, AViewThatCannotBeCalibratedIsLeftOutAndReplaced) {
-  ScanSimulation sim;
-  const Detector detector{360, 360, 1.2, 1.2};
-  sim.setup = reference_panda_setup(detector, 2150, 1360);
-  sim.holder = reference_helix_holder();
-  sim.sample = builtin_phantom("sample-1");
-  sim.seed = 5;
+  const ScanSimulation sim = sample_1_lab(5);
   SimulatedLab lab(sim);
   SimulatedAcquisition simulated(lab);
   const PlanningSetup setup = planning_setup(sim);

@@ -1,7 +1,7 @@
 #pragma once
 // Small statistics shared by the libraries: the median (for an even count, the upper of the two
-// middle values; 0 when there are none), and the paired z-score that judges an effect on
-// held-out views.
+// middle values; 0 when there are none), the paired z-score that judges an effect on held-out
+// views, and the vertex of a least-squares parabola (where a scanned cost is least).
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -41,5 +41,9 @@ inline double paired_z(const std::vector<double>& before, const std::vector<doub
   if (se > 0) return mean / se;
   return mean > 0 ? 1e9 : mean < 0 ? -1e9 : 0.0;
 }
+
+/// Vertex of the least-squares parabola through (x_i, y_i) (three or more points); NaN when it
+/// opens downwards or is flat.
+double parabola_vertex(const std::vector<double>& x, const std::vector<double>& y);
 
 }  // namespace ctk

@@ -10,7 +10,9 @@
 // (a coarse FDK from half the views has streaks and blur of its own); the last two rules keep
 // candidates that merely compensate it out. Report: ctk-diagnosis/1 (diagnosis-report.md).
 #include <functional>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -26,6 +28,10 @@ struct RefinementOptions {
                                          "magnification",   "angular_blur",  "beam_hardening"};
   double sharpness_tolerance = 0.01;  // an accepted effect may not lower the edge sharpness by more
   double nominal_blur_arc_deg = 0;  // the arc each view is known to integrate (scan log): the blur scan's upper range
+  /// Where to begin scanning a parameter (by its reported key, in reported units, e.g. "u0_px")
+  /// while the model still holds its nominal value: an estimate from elsewhere (conjugate rays)
+  /// saves the scan its walk; the fitted value is still the held-out cost's own minimum.
+  std::map<std::string, double> knob_starts;
 };
 
 struct RefinedEffect {
@@ -46,6 +52,9 @@ struct RefinementResult {
   double heldout_rms_before = 0, heldout_rms_after = 0, sharpness_before = 0, sharpness_after = 0;
   int views = 0;
   std::vector<RefinedEffect> effects;  // every candidate tried, accepted ones in order of acceptance
+  /// Parameters or effects asked for that the data cannot fix (a one-row detector sees no
+  /// height), with the reason; they are not fitted.
+  std::vector<std::pair<std::string, std::string>> not_observable;
   bool structured = false;
   std::string unexplained_note;
   Volume volume_before, volume_after;  // FDK from every view on the fine grid, nominal and refined model

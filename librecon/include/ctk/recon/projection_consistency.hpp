@@ -30,11 +30,6 @@ struct ForwardModel {
 double linearise_line_integral(double p, double c2);
 double measured_from_linear(double y, double c2);
 
-/// Mean squared residual per view, in measured line-integral units squared, over the detector
-/// rows except a tenth at the top and at the bottom (a long object's incomplete region).
-struct ConsistencyCosts {
-  std::vector<double> fit, judge;
-};
 
 class ConsistencyProbe {
  public:
@@ -44,11 +39,16 @@ class ConsistencyProbe {
   ConsistencyProbe(const ProjectionStack& b, std::vector<ProjectionMatrix> nominal, const Detector& detector,
                    const VolumeLayout& layout, ConsistencySplit split);
 
-  /// `judge_residuals` (optional) receives predicted - measured for the judge views.
-  ConsistencyCosts costs(const GlobalGeometry& geometry, const ForwardModel& model, ProjectionStack* judge_residuals = nullptr) const;
+  /// Mean squared residual per fit (or judge) view, in measured line-integral units squared, over
+  /// the detector rows except a tenth at the top and at the bottom (a long object's incomplete
+  /// region): the views not named are not predicted. `judge_residuals` (optional) receives
+  /// predicted - measured for the judge views.
+  std::vector<double> fit_costs(const GlobalGeometry& geometry, const ForwardModel& model) const;
+  std::vector<double> judge_costs(const GlobalGeometry& geometry, const ForwardModel& model, ProjectionStack* judge_residuals = nullptr) const;
   /// FDK from every view with the model's geometry and linearisation, on `layout`.
   Volume reconstruct_all(const GlobalGeometry& geometry, const ForwardModel& model, const VolumeLayout& layout) const;
   const CircularTrajectory& orbit() const { return orbit_; }
+  const Detector& detector() const { return detector_; }
   const ConsistencySplit& split() const { return split_; }
   /// Principal point of the first nominal view (the detector offsets are relative to it).
   Eigen::Vector2d nominal_principal_point() const;
@@ -56,6 +56,8 @@ class ConsistencyProbe {
  private:
   Volume reconstruct(const std::vector<int>& views, const std::vector<ProjectionMatrix>& matrices, const ForwardModel& model,
                      const VolumeLayout& layout) const;
+  std::vector<double> costs(const std::vector<int>& held_out, const GlobalGeometry& geometry, const ForwardModel& model,
+                            ProjectionStack* residuals) const;
 
   const ProjectionStack& b_;
   std::vector<ProjectionMatrix> nominal_;
