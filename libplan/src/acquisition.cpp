@@ -53,6 +53,11 @@ AcquisitionAnswer FileExchangeAcquisition::acquire(const AcquisitionRequest& r) 
            << "): run with the earlier run's settings, or give a folder without its answers";
       throw InputError(file.string(), "view", what.str());
     }
+  } else if (std::filesystem::exists(file)) {
+    // An answer whose request is gone cannot be told to answer this direction: it is stale.
+    throw InputError(file.string(), "view",
+                     "an answer without its request " + asked.filename().string() +
+                         " (left by another run?): remove it, or give a folder without it");
   } else {
     write_text_atomically(asked, request.dump(2) + "\n");
   }

@@ -240,7 +240,22 @@ TEST(LabExchange, RequestsAndAnswersThroughFiles) {
   }
   EXPECT_NEAR(read_request(request_file(dir, 2)).direction.x(), 2 / std::sqrt(5.0), 1e-12);  // left as the lab saw it
 
+  // An answer whose request is gone is stale (another run's): refused, never taken.
+  write_answer(dir, 4, AcquisitionAnswer{});
+  AcquisitionRequest r4;
+  r4.view = 4;
+  try {
+    exchange.acquire(r4);
+    FAIL() << "a stale answer was taken";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("without its request"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(request_file(dir, 4)));
+
   // A malformed answer names its key; a lab that never answers times out.
+  testing::write_text(request_file(dir, 3),
+                      R"({"format": "ctk-plan-request/1", "view": 3, "direction_holder": [0, 0, 1],
+                          "R_camera_holder": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "holder_origin_camera_mm": [0, 0, 0]})");
   write_answer(dir, 3, AcquisitionAnswer{});
   std::string text;
   {
