@@ -2,12 +2,14 @@
 // the ctk-diagnosis/1 report, a corrected scan file and pictures (diagnosis-report.md).
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "commands.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/calib/diagnosis.hpp"
 #include "ctk/calib/diagnosis_pictures.hpp"
+#include "ctk/calib/robot_prior.hpp"
 #include "ctk/geom/atomic_write.hpp"
 #include "progress.hpp"
 
@@ -21,7 +23,28 @@ struct DiagnoseOptions {
   fs::path scan, geometry, out = "diagnosis.json", corrected;
   DiagnosisOptions diagnosis;
   CalibrationOptions calibration;
+  std::optional<double> repeatability_mm, repeatability_deg;  // absent: measured on the scan
 };
+
+// The robot's repeatability as the scan shows it (the scatter of the image poses about the
+// robot's model, less the image's own share; maximum likelihood, as calibrate's robot prior
+// measures it), unless the user stated it: a robot worse than its datasheet would otherwise make
+// every scan look structured, and a better one hide small effects.
+void set_repeatability(const DiagnoseOptions& o, const ScanDescription& scan, const ScanCalibration& c, DiagnosisOptions& d) {
+  if (o.repeatability_mm) d.robot_sigma_mm = *o.repeatability_mm;
+  if (o.repeatability_deg) d.robot_sigma_deg = *o.repeatability_deg;
+  if ((o.repeatability_mm && o.repeatability_deg) || !scan.panda) return;
+  ScanCalibration copy = c;
+  const RobotPriorFit prior = combine_with_robot(scan, copy);
+  if (!prior.applied) {
+    std::cout << "robot repeatability not measured (" << prior.reason << "): assumed " << d.robot_sigma_mm << " mm, " << d.robot_sigma_deg
+              << " deg\n";
+    return;
+  }
+  if (!o.repeatability_mm) d.robot_sigma_mm = prior.sigma_mm;
+  if (!o.repeatability_deg) d.robot_sigma_deg = prior.sigma_deg;
+  std::cout << "robot repeatability measured on the scan: " << prior.sigma_mm << " mm, " << prior.sigma_deg << " deg (3-D RMS)\n";
+}
 
 void run_diagnose(const DiagnoseOptions& o) {
   const ScanDescription scan = read_scan(o.scan);
@@ -40,12 +63,14 @@ void run_diagnose(const DiagnoseOptions& o) {
   // The detections and matches behind the given calibration, each view started from its pose.
   Progress progress("detect", "views");
   const ScanCalibration c = recalibrate_scan(scan, geometry, o.calibration, std::ref(progress));
-  const ScanObservations observations = observe_scan(scan, c, o.diagnosis);
+  DiagnosisOptions diagnosis = o.diagnosis;
+  set_repeatability(o, scan, c, diagnosis);
+  const ScanObservations observations = observe_scan(scan, c, diagnosis);
   if (observations.views.size() < 10)
     throw InputError(o.geometry.string(), "views", "only " + std::to_string(observations.views.size()) +
                                                        " calibrated views; the diagnosis needs at least 10");
   std::cout << observations.views.size() << " views, detection noise " << observations.centre_sigma_px << " px per axis\n";
-  const Diagnosis d = diagnose(observations, o.diagnosis, [](const std::string& s) { std::cout << s << std::endl; });
+  const Diagnosis d = diagnose(observations, diagnosis, [](const std::string& s) { std::cout << s << std::endl; });
 
   nlohmann::json report = diagnosis_to_json(d, observations);
   report["scan"] = o.scan.string();
@@ -90,8 +115,10 @@ void register_diagnose(CLI::App& app) {
   cmd->add_option("--geometry", o->geometry, "Its calibrated geometry (ctk-geometry/1, from ctk calibrate)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "Report to write (ctk-diagnosis/1)")->capture_default_str();
   cmd->add_option("--corrected-scan", o->corrected, "Corrected scan to write (default: <out>.corrected-scan.json)");
-  cmd->add_option("--robot-repeatability-mm", o->diagnosis.robot_sigma_mm, "Robot repeatability (3-D RMS) the prior assumes")->check(positive_number)->capture_default_str();
-  cmd->add_option("--robot-repeatability-deg", o->diagnosis.robot_sigma_deg, "Same, rotation")->check(positive_number)->capture_default_str();
+  cmd->add_option("--robot-repeatability-mm", o->repeatability_mm,
+                  "Robot repeatability (3-D RMS) the prior assumes; default: measured on the scan")
+      ->check(positive_number);
+  cmd->add_option("--robot-repeatability-deg", o->repeatability_deg, "Same, rotation; default: measured on the scan")->check(positive_number);
   cmd->callback([o] { run_diagnose(*o); });
 }
 

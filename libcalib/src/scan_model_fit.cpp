@@ -334,10 +334,9 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
     co.algorithm_type = ceres::DENSE_SVD;
     co.null_space_rank = -1;  // the sphere gauge and confounded effects may leave directions unfixed
     co.num_threads = 2;
-    // Only the global blocks: the per-view poses make the full problem large, so the covariance of
-    // the globals is taken from a problem in which the poses are held at their optimum, which
-    // understates it slightly (poses and globals are correlated); good enough for significance.
-    for (auto& pose : poses) problem.SetParameterBlockConstant(pose.data());
+    // The globals' covariance with every per-view pose free (marginalised), not held at its
+    // optimum: a pose and a global effect trade off (a base offset against each view's depth), and
+    // holding the poses understated the globals' uncertainty (3 sigma errors in a population).
     ceres::Covariance covariance(co);
     if (static_cast<int>(blocks.size()) > 0 && covariance.Compute(blocks, &problem)) {
       out.covariance.resize(size, size);
