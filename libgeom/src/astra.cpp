@@ -44,6 +44,7 @@ ProjectionMatrix from_cone_vec(const ConeVec& vec, const Detector& detector, dou
 }
 
 std::vector<ConeVec> read_cone_vecs(const std::filesystem::path& file) {
+  require_regular_file(file);
   std::ifstream in(file);
   if (!in) throw InputError(file.string(), "", "cannot open the cone_vec file");
   std::vector<ConeVec> out;

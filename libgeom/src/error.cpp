@@ -13,4 +13,10 @@ std::string json_key(const std::string& path) { return "key '" + path + "'"; }
 InputError::InputError(std::string file, std::string where, const std::string& what)
     : std::runtime_error(compose_message(file, where, what)), file_(std::move(file)), where_(std::move(where)) {}
 
+void require_regular_file(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(file, ec)) return;
+  throw InputError(file.string(), "", std::filesystem::exists(file, ec) ? "not a regular file (a folder, a pipe or a device)" : "no such file");
+}
+
 }  // namespace ctk

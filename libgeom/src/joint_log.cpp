@@ -40,6 +40,7 @@ double parse_number(const std::string& cell, const std::string& file, const std:
 
 JointLog JointLog::read(const std::filesystem::path& path, int view_count) {
   const std::string file = path.string();
+  require_regular_file(path);
   std::ifstream in(path);
   if (!in) throw InputError(file, "", "cannot open the joint log");
   std::string line;

@@ -49,6 +49,7 @@ std::string type_name(const nlohmann::json& v) {
 }  // namespace
 
 nlohmann::json read_json_file(const std::filesystem::path& file) {
+  require_regular_file(file);
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string(), "", "cannot open the file");
   std::stringstream buffer;

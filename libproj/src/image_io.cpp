@@ -28,9 +28,7 @@ constexpr std::size_t kMostPixels = std::size_t{1} << 30;
 // Reads the pixels after the header's size has been checked against `expected` (when given), so a
 // header claiming 20000 x 20000 costs nothing. Only regular files: a FIFO or a device would hang.
 Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>>& expected) {
-  std::error_code ec;
-  if (!fs::is_regular_file(file, ec))
-    throw InputError(file.string(), "", fs::exists(file, ec) ? "not a regular file (a folder, a pipe or a device)" : "no such file");
+  require_regular_file(file);
   auto in = ImageInput::open(file.string());
   if (!in) throw InputError(file.string(), "", "cannot read the image: " + OIIO::geterror());
   const ImageSpec& spec = in->spec();

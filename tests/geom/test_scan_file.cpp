@@ -1,8 +1,12 @@
 // Reading scan.json and joints.csv: valid files round-trip; every kind of bad input is a clear
 // InputError that names the file and the key (or line).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <functional>
 
 #include "../test_support.hpp"
+#include "ctk/geom/astra.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/panda_setup.hpp"
 #include "ctk/geom/scan.hpp"
@@ -128,6 +132,24 @@ TEST(ScanFile, LongFilePatternsAreCheckedWithoutCrashing) {
   expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["files"] = std::string(30000, 'x') + ".tif"; },
                       "projections.files");
   expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["files"] = "proj_%4.tif"; }, "projections.files");
+}
+
+// Readers open only regular files: a pipe named as a scan, a joint log or a cone_vec file is
+// refused at once (it would wait for a writer forever), and so is a folder.
+TEST(ScanFile, OnlyRegularFilesAreRead) {
+  const auto dir = testing::scratch_dir();
+  ASSERT_EQ(::mkfifo((dir / "pipe").c_str(), 0600), 0);
+  for (const auto& read : std::vector<std::function<void(const std::filesystem::path&)>>{
+           [](const std::filesystem::path& f) { read_json_file(f); }, [](const std::filesystem::path& f) { JointLog::read(f, 3); },
+           [](const std::filesystem::path& f) { read_cone_vecs(f); }})
+    for (const auto& f : {dir / "pipe", dir}) {
+      try {
+        read(f);
+        ADD_FAILURE() << f << " was read";
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+      }
+    }
 }
 
 TEST(ScanFile, RotationMustBeARotation) {

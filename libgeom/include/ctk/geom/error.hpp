@@ -1,6 +1,7 @@
 #pragma once
 // Errors caused by a user's input: each names the file, the place in it (a key path such as
 // "detector.pixel_pitch_mm[1]" or a line such as "line 12"), and what was expected.
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -20,5 +21,9 @@ class InputError : public std::runtime_error {
   std::string file_;
   std::string where_;
 };
+
+/// Readers open only regular files: a pipe would wait for a writer forever and a device (/dev/zero)
+/// never ends. Throws InputError naming the file when it is missing or not a regular file.
+void require_regular_file(const std::filesystem::path& file);
 
 }  // namespace ctk
