@@ -316,9 +316,7 @@ void run_plan(const PlanCommandOptions& o) {
     if (o.setup.empty()) throw std::invalid_argument("lab mode needs --setup (the lab's ctk-scan/1 file)");
     const ScanDescription lab_scan = read_scan(o.setup);
     RunFiles files;
-    files.input("--setup", o.setup);
-    for (const std::string& f : lab_scan.projections.flat) files.input("--setup: projections.flat", lab_scan.resolve(f));
-    for (const std::string& d : lab_scan.projections.dark) files.input("--setup: projections.dark", lab_scan.resolve(d));
+    files.scan("--setup", o.setup, lab_scan);
     files.input_folder("--lab", o.lab);
     for (const char* name : {"scan.json", "joints.csv", "flat.tif", "dark.tif", "geometry.json", "trajectory.json", "plan-map.png",
                              "coarse.nrrd", "coarse.raw"})
