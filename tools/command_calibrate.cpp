@@ -1,21 +1,28 @@
 // ctk calibrate: every view's projection matrix from the helix spheres in its image, the robot's
 // forward kinematics (or given matrices) as the first guess; writes ctk-geometry/1 and a report.
+// Each finished view is journaled as it completes, so an interrupted run continues (--resume).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <iostream>
+#include <map>
+#include <memory>
 
 #include "commands.hpp"
+#include "ctk/geom/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/statistics.hpp"
+#include "ctk/calib/calibration_journal.hpp"
 #include "ctk/calib/calibration_pictures.hpp"
 #include "ctk/calib/robot_prior.hpp"
 #include "ctk/calib/scan_calibration.hpp"
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/projection_reading.hpp"
+#include "interruption.hpp"
 #include "progress.hpp"
 
 namespace ctk::tools {
@@ -28,7 +35,20 @@ struct CalibrateOptions {
   fs::path scan, out = "geometry.json", report;
   CalibrationOptions calibration;
   bool image_only = false;  // no robot prior
+  bool resume = false;
 };
+
+// What a journal's views belong to: the same scan (its content) and the options a view depends on.
+nlohmann::json calibration_run(const CalibrateOptions& o, const ScanDescription& scan) {
+  const CalibrationOptions& c = o.calibration;
+  return {{"scan", fs::absolute(o.scan).lexically_normal().string()},
+          {"scan_content", std::to_string(std::hash<std::string>{}(scan_to_json(scan).dump()))},
+          {"min_spheres", c.min_spheres},
+          {"max_rms_px", c.max_rms_px},
+          {"search_px", c.search_px},
+          {"robust_px", c.robust_px},
+          {"max_first_guess_error_deg", c.max_first_guess_error_deg}};
+}
 
 nlohmann::json robot_prior_json(const RobotPriorFit& p) {
   if (!p.applied) return {{"applied", false}, {"reason", p.reason}};
@@ -139,14 +159,40 @@ fs::path report_file(const CalibrateOptions& o) { return o.report.empty() ? fs::
 void run_calibrate(const CalibrateOptions& o) {
   const ScanDescription scan = read_scan(o.scan);
   RunFiles files;
+  require_projection_files(scan, o.scan.string(), "projections.count");
   files.scan("--scan", o.scan, scan);
   files.output("--out", o.out);
   files.output("--report", report_file(o));
+  const fs::path journal_file = fs::path(o.out).replace_extension(".journal");
+  files.output("the journal beside --out", journal_file);
   files.output_family("pictures beside --out", fs::path(o.out).replace_extension("").string() + ".", ".png");
   files.check();
+  OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
+  // Every finished view is journaled at once: Ctrl-C or a kill loses none, and --resume goes on.
+  const nlohmann::json run = calibration_run(o, scan);
+  std::unique_ptr<CalibrationJournal> journal;
+  if (o.resume) {
+    if (!fs::exists(journal_file)) throw InputError("--resume", "", "no calibration journal at " + journal_file.string() + " to continue");
+    journal = CalibrationJournal::resume(journal_file, run);
+    std::cout << "continuing: " << journal->done().size() << " views were calibrated by the interrupted run (" << journal_file.string()
+              << ")\n";
+  } else {
+    if (fs::exists(journal_file))
+      std::cout << "note: " << journal_file.string() << " holds an interrupted run's views; this run starts afresh (--resume continues it)\n";
+    journal = std::make_unique<CalibrationJournal>(journal_file, run);
+  }
+  const std::map<int, ViewCalibration> earlier = journal->done();
+  const InterruptionWatch watch;
+  BatchControl control;
+  control.done = &earlier;
+  control.on_view = [&](int view, const ViewCalibration& result) { journal->record(view, result); };
+  control.stop_requested = [] { return InterruptionWatch::requested(); };
   Progress progress("calibrate", "views");
-  ScanCalibration c = calibrate_scan(scan, o.calibration, std::ref(progress));
+  ScanCalibration c = calibrate_scan(scan, o.calibration, std::ref(progress), &control);
+  if (c.left_undone > 0)
+    throw Interrupted("stopped with " + std::to_string(c.left_undone) + " of " + std::to_string(scan.projections.count) +
+                      " views to go; the finished ones are in " + journal_file.string() + ": run the same command with --resume to continue");
   RobotPriorFit prior;
   prior.reason = "switched off (--image-only)";
   if (!o.image_only) {
@@ -161,6 +207,9 @@ void run_calibrate(const CalibrateOptions& o) {
   j["pictures"] = write_pictures(scan, c, o);
   write_text_atomically(report, j.dump(2) + "\n");
   const auto& s = j.at("summary");
+  outputs.publish();
+  journal->remove();
+  if (c.taken_over > 0) std::cout << c.taken_over << " views taken from the interrupted run, the others calibrated now\n";
   std::cout << "calibrated " << s.at("ok") << " of " << s.at("views") << " views (" << s.at("rejected") << " rejected, "
             << s.at("skipped") << " skipped) in " << c.seconds << " s (" << s.at("views_per_second").get<double>()
             << " views/s); median reprojection RMS " << s.at("median_rms_px").get<double>()
@@ -197,6 +246,9 @@ void register_calibrate(CLI::App& app) {
   cmd->add_flag("--image-only", o->image_only,
                  "Poses from the images alone (default: combined with the robot's prior, its base, mount and repeatability "
                  "measured on the scan)");
+  cmd->add_flag("--resume", o->resume,
+                "Continue an interrupted run: the views it finished (journaled beside --out, .journal) are taken as they are, "
+                "the others calibrated; same scan and options");
   cmd->callback([o] { run_calibrate(*o); });
 }
 

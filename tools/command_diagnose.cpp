@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "ctk/geom/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/calib/diagnosis.hpp"
@@ -51,12 +52,14 @@ void run_diagnose(const DiagnoseOptions& o) {
   const fs::path stem = fs::path(o.out).replace_extension("");
   const fs::path corrected_file = o.corrected.empty() ? fs::path(stem.string() + ".corrected-scan.json") : o.corrected;
   RunFiles files;
+  require_projection_files(scan, o.scan.string(), "projections.count");
   files.scan("--scan", o.scan, scan);
   files.input("--geometry", o.geometry);
   files.output("--out", o.out);
   files.output("--corrected-scan", corrected_file);
   files.output_family("pictures beside --out", stem.string() + ".", ".png");
   files.check();
+  OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   if (!scan.holder) throw InputError(o.scan.string(), "holder", "the diagnosis needs the holder's spheres (missing)");
   const Geometry geometry = read_geometry(o.geometry);
@@ -87,6 +90,7 @@ void run_diagnose(const DiagnoseOptions& o) {
   report["corrected_scan"] = corrected_file.string();
   write_text_atomically(o.out, report.dump(2) + "\n");
 
+  outputs.publish();
   std::cout << "baseline " << d.baseline.rms_px << " px RMS (held out " << d.baseline.heldout_rms_px << ")";
   if (observations.setup.robot) std::cout << ", robot prediction error " << d.baseline.fk_translation_rms_mm << " mm RMS";
   std::cout << "\n";

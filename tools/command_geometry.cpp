@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "ctk/geom/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "ctk/geom/astra.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
@@ -58,17 +59,20 @@ void run_geometry(const GeometryOptions& o) {
   files.output("--out", o.out);
   files.output("--astra", o.astra);
   files.check();
+  OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   const Geometry g = nominal_geometry(scan);
   write_geometry(g, o.out);
-  std::cout << "nominal geometry of " << o.scan.string() << " written to " << o.out.string() << "\n";
+  std::vector<ConeVec> vecs;
   if (!o.astra.empty()) {
-    std::vector<ConeVec> vecs;
     for (const auto& v : g.views)
       if (v.P) vecs.push_back(to_cone_vec(*v.P, g.detector));
     write_cone_vecs(vecs, o.astra);
-    std::cout << "ASTRA cone_vec rows (mm) of the " << vecs.size() << " posed views written to " << o.astra.string() << "\n";
   }
+  outputs.publish();
+  std::cout << "nominal geometry of " << o.scan.string() << " written to " << o.out.string() << "\n";
+  if (!o.astra.empty())
+    std::cout << "ASTRA cone_vec rows (mm) of the " << vecs.size() << " posed views written to " << o.astra.string() << "\n";
   report(scan, g);
 }
 

@@ -6,8 +6,10 @@
 #include <filesystem>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 
 #include "commands.hpp"
+#include "ctk/geom/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/error.hpp"
@@ -85,31 +87,19 @@ Detector described_detector(const ProjectionOptions& o, double pitch_u, double p
 
 // The images the scan names, checked before anything is written: a wrong pattern or a wrong
 // --detector would otherwise surface only at calibrate or reconstruct, view by view. Some missing
-// files are allowed (those views are rejected there, with the reason); none at all is not.
+// files are allowed (those views are rejected there, with the reason); none, or most, are not.
 void check_images(const ScanDescription& scan) {
-  int missing = 0;
-  fs::path first_missing, first_present;
-  for (int v = 0; v < scan.projections.count; ++v) {
-    // Lexically, as import_matrices made the names relative: the scan's folder may not exist yet.
-    const fs::path file = scan.projection_path(v).lexically_normal();
-    if (fs::exists(file)) {
-      if (first_present.empty()) first_present = file;
-    } else if (missing++ == 0) {
-      first_missing = file;
-    }
-  }
-  if (first_present.empty())
-    throw InputError("--files", "", "none of the " + std::to_string(scan.projections.count) + " projection files exists (the first would be " +
-                                        first_missing.string() + ")");
-  if (missing > 0)
-    std::cerr << "warning: " << missing << " of " << scan.projections.count << " projection files do not exist (the first is "
-              << first_missing.string() << "); calibrate and reconstruct will reject those views\n";
-  read_image(first_present, scan.detector.cols, scan.detector.rows);  // names the file and both sizes where they differ
+  const ProjectionCensus census = require_projection_files(scan, "--files", "");
+  if (census.missing > 0)
+    std::cerr << "warning: " << census.missing << " of " << scan.projections.count << " projection files do not exist (the first is "
+              << census.first_missing.string() << "); calibrate and reconstruct will reject those views\n";
+  read_image(census.first_present, scan.detector.cols, scan.detector.rows);  // names the file and both sizes where they differ
 }
 
 // `vectors`: the geometry file read, if any.
 void finish(const ImportedScan& imported, const fs::path& out, const fs::path& vectors = {}) {
   const ScanDescription& scan = imported.scan;
+  check_images(scan);
   RunFiles files;
   for (int v = 0; v < scan.projections.count; ++v) files.input("--files: projection " + std::to_string(v), scan.projection_path(v));
   for (const std::string& f : scan.projections.flat) files.input("--flat", scan.resolve(f));
@@ -118,8 +108,11 @@ void finish(const ImportedScan& imported, const fs::path& out, const fs::path& v
   files.output("--out", out);
   files.output("the matrices beside --out", scan.resolve(scan.matrices->file));
   files.check();
-  check_images(imported.scan);
-  write_imported_scan(imported, out);
+  {
+    OutputSet outputs;  // the matrices and the scan that names them, together
+    write_imported_scan(imported, out);
+    outputs.publish();
+  }
   const ScanDescription check = read_scan(out);  // what every other command will read
   for (const auto& w : check.warnings) std::cerr << "warning: " << w << "\n";
   std::cout << "wrote " << out.string() << " (" << check.projections.count << " views, detector " << check.detector.cols << " x "
@@ -161,8 +154,14 @@ void run_cone_vec(const ConeVecOptions& o) {
   for (int r : rows) {
     if (r < 0 || r >= static_cast<int>(all.size()))
       throw InputError(o.vectors.string(), "row " + std::to_string(r), "out of range: the file has " + std::to_string(all.size()) + " rows");
-    const ProjectionMatrix described_P = from_cone_vec(all[static_cast<std::size_t>(r)], described);
-    matrices.push_back(ProjectionMatrix(to_stored * described_P.matrix()));
+    try {
+      const ProjectionMatrix described_P = from_cone_vec(all[static_cast<std::size_t>(r)], described);
+      matrices.push_back(ProjectionMatrix(to_stored * described_P.matrix()));
+    } catch (const std::invalid_argument&) {
+      throw InputError(o.vectors.string(), "row " + std::to_string(r),
+                       "describes no cone-beam projection (the source in the detector's plane, a zero or repeated detector step, "
+                       "or numbers too large to multiply)");
+    }
   }
   finish(import_matrices(stored_detector(orientation, described), matrices, projections, o.out), o.out, o.vectors);
 }

@@ -153,7 +153,7 @@ Volume voxelised(const Phantom& phantom, const VolumeLayout& layout) {
 
 // The comparison's volume holds everything in the beam: the holder's tube (118 mm tall) and the
 // sample. What sticks out of a reconstruction volume is smeared into it by the views that look
-// along it, so a cube around the sample alone (80 mm, as before session 11) scored trajectories by
+// along it, so a cube around the sample alone (80 mm) scored trajectories by
 // how often they looked along the tube: on the walnut, random draws of 100 views ranged from
 // 0.0043 to 0.0049 in RMSE, the difference all in the 10 mm at each end of the cube.
 // --eval-size N asks for an N^3 cube instead.
@@ -319,7 +319,7 @@ void run_plan(const PlanCommandOptions& o) {
     files.scan("--setup", o.setup, lab_scan);
     files.input_folder("--lab", o.lab);
     for (const char* name : {"scan.json", "joints.csv", "flat.tif", "dark.tif", "geometry.json", "trajectory.json", "plan-map.png",
-                             "coarse.nrrd", "coarse.raw"})
+                             "coarse.nrrd"})
       files.output(std::string("--out: ") + name, o.out / name);
     files.check();
     const PlanningSetup setup = setup_from_scan(o.setup, lab_scan, o.sod_mm);

@@ -1,18 +1,24 @@
 // ctk reconstruct: a volume in the holder frame from a scan's projections and per-view matrices,
 // by weighted least squares (conjugate gradients), SIRT, or FDK for circular scans. Prints the memory plan first and
-// refuses a run that cannot fit; writes the volume (NRRD + raw), PNG previews of the three
-// central slices and a JSON log, all atomically.
+// refuses a run that cannot fit; writes the volume (one NRRD file), PNG previews of the three
+// central slices and a JSON log, published together. The solver's state is saved every few
+// iterations and on Ctrl-C, and --resume continues it.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "commands.hpp"
+#include "ctk/geom/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/error.hpp"
+#include "ctk/geom/json_access.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/image_io.hpp"
 #include "ctk/recon/default_volume.hpp"
@@ -20,8 +26,10 @@
 #include "ctk/recon/measurements.hpp"
 #include "ctk/recon/memory_plan.hpp"
 #include "ctk/recon/sirt.hpp"
+#include "ctk/recon/solver_state.hpp"
 #include "ctk/recon/wls_cg.hpp"
 #include "measurement_report.hpp"
+#include "interruption.hpp"
 #include "progress.hpp"
 
 namespace ctk::tools {
@@ -40,7 +48,31 @@ struct ReconstructOptions {
   bool as_measured = false;
   std::vector<int> size;
   double voxel_mm = 0;
+  bool resume = false;
+  int checkpoint_every = 10;
 };
+
+// A fingerprint of the data a run solves for: a continued run must see the same numbers.
+std::uint64_t fingerprint(const FloatBuffer& data) {
+  constexpr std::size_t kChunk = 1 << 20;
+  const std::size_t chunks = (data.size() + kChunk - 1) / kChunk;
+  std::vector<std::uint64_t> hashes(chunks);
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t c = 0; c < static_cast<std::ptrdiff_t>(chunks); ++c) {
+    const std::size_t begin = static_cast<std::size_t>(c) * kChunk, end = std::min(data.size(), begin + kChunk);
+    std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the bits of each value
+    for (std::size_t i = begin; i < end; ++i) {
+      std::uint32_t bits = 0;
+      std::memcpy(&bits, &data[i], sizeof bits);
+      h = (h ^ bits) * 1099511628211ull;
+    }
+    hashes[static_cast<std::size_t>(c)] = h;
+  }
+  std::uint64_t h = 1469598103934665603ull;
+  for (std::uint64_t part : hashes) h = (h ^ part) * 1099511628211ull;
+  return h;
+}
+
 
 VolumeLayout volume_layout(const ReconstructOptions& o, const ScanDescription& scan, const std::vector<ProjectionMatrix>& views) {
   VolumeLayout layout = default_volume_layout(scan, views, o.voxel_mm);
@@ -66,14 +98,17 @@ void run_reconstruct(const ReconstructOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const ScanDescription scan = read_scan(o.scan);
   RunFiles files;
+  require_projection_files(scan, o.scan.string(), "projections.count");
   files.scan("--scan", o.scan, scan);
   files.input("--geometry", o.geometry);
   files.output("--out", o.out);
-  files.output("the data beside --out", fs::path(o.out).replace_extension(".raw"));
   files.output("the log beside --out", fs::path(o.out).replace_extension(".log.json"));
+  const fs::path state_file = fs::path(o.out).replace_extension(".state");
+  files.output("the solver state beside --out", state_file);
   for (const char* slice : {"_axial.png", "_coronal.png", "_sagittal.png"})
     files.output(std::string("the preview beside --out"), preview_file(o.out, slice));
   files.check();
+  OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   const Geometry geometry = o.geometry.empty() ? nominal_geometry(scan) : read_geometry(o.geometry);
   const ReconstructionMethod method = o.method == "sirt"  ? ReconstructionMethod::sirt
@@ -114,6 +149,36 @@ void run_reconstruct(const ReconstructOptions& o) {
   if (m.clamped_pixels > 0) std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
   report_masked_and_left_out(m, o.geometry.empty() ? o.scan : o.geometry);
 
+  const nlohmann::json run = {
+      {"scan", fs::absolute(o.scan).lexically_normal().string()},
+      {"geometry", o.geometry.empty() ? std::string("nominal") : fs::absolute(o.geometry).lexically_normal().string()},
+      {"method", to_string(method)},
+      {"weights", weighted ? "poisson" : "unit"},
+      {"lambda", o.lambda},
+      {"regulariser", o.regulariser},
+      {"tolerance", o.tolerance},
+      {"volume", {{"size", layout.size}, {"voxel_mm", layout.voxel_mm.x()}}},
+      {"views_used", m.view_indices},
+      {"data_fingerprint", std::to_string(fingerprint(m.line_integrals.data)) + (weighted ? "/" + std::to_string(fingerprint(m.weights.data)) : "")}};
+  std::optional<SolverState> saved;
+  if (o.resume) {
+    if (method == ReconstructionMethod::fdk) throw InputError("--resume", "", "fdk is not iterative: there is nothing to continue");
+    if (!fs::exists(state_file)) throw InputError("--resume", "", "no saved state at " + state_file.string() + " to continue");
+    nlohmann::json saved_run;
+    saved = read_solver_state(state_file, saved_run);
+    // A saved state continues only the run that saved it: same data, geometry, volume and solver.
+    require_same_run(saved_run, run, state_file.string(), "run", "continue with the same inputs and options, or start afresh without --resume");
+    std::cout << "continuing " << to_string(method) << " after iteration " << saved->iteration << " (state " << state_file.string() << ")\n";
+  } else if (fs::exists(state_file) && method != ReconstructionMethod::fdk) {
+    std::cout << "note: " << state_file.string() << " holds the state of an interrupted run; this run starts afresh (--resume continues it)\n";
+  }
+  const InterruptionWatch watch;
+  Checkpointing checkpointing;
+  checkpointing.resume = saved ? &*saved : nullptr;
+  checkpointing.every = o.checkpoint_every;
+  checkpointing.save = [&](const SolverSnapshot& state) { write_solver_state(state, run, state_file); };
+  checkpointing.stop_requested = [] { return InterruptionWatch::requested(); };
+
   const JosephProjector A;
   Volume x(layout);
   const int iterations = o.iterations > 0 ? o.iterations : (method == ReconstructionMethod::sirt ? 100 : 30);
@@ -131,15 +196,18 @@ void run_reconstruct(const ReconstructOptions& o) {
     report.stop_reason = "FDK (Hann-windowed ramp)";
     report.iterations.push_back({});
   } else if (method == ReconstructionMethod::sirt) {
-    report = solve_sirt(A, m.matrices, m.line_integrals, x, {iterations, 1.0, true}, on_iteration);
+    report = solve_sirt(A, m.matrices, m.line_integrals, x, {iterations, 1.0, true}, on_iteration, &checkpointing);
   } else {
     WlsOptions w;
     w.iterations = iterations;
     w.tolerance = o.tolerance;
     w.lambda = o.lambda;
     w.regulariser = o.regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
-    report = solve_wls_cg(A, m.matrices, m.line_integrals, weighted ? &m.weights : nullptr, x, w, on_iteration);
+    report = solve_wls_cg(A, m.matrices, m.line_integrals, weighted ? &m.weights : nullptr, x, w, on_iteration, &checkpointing);
   }
+  if (report.stop_reason == kStoppedOnRequest)
+    throw Interrupted("stopped after iteration " + std::to_string(report.iterations.back().iteration) + "; the solver's state is in " +
+                      state_file.string() + ": run the same command with --resume to continue");
   if (method == ReconstructionMethod::fdk) std::cout << report.stop_reason << "\n";
   else std::cout << report.stop_reason << "; cost " << report.iterations.front().cost << " -> " << report.iterations.back().cost << "\n";
 
@@ -166,7 +234,10 @@ void run_reconstruct(const ReconstructOptions& o) {
   fs::path log_file = o.out;
   log_file.replace_extension(".log.json");
   write_text_atomically(log_file, log.dump(2) + "\n");
-  std::cout << "volume written to " << o.out.string() << " (+ .raw), previews *_axial/_coronal/_sagittal.png, log "
+  outputs.publish();
+  std::error_code ignored;
+  fs::remove(state_file, ignored);  // the run is complete: nothing left to continue
+  std::cout << "volume written to " << o.out.string() << ", previews *_axial/_coronal/_sagittal.png, log "
             << log_file.string() << "\n";
 }
 
@@ -178,7 +249,7 @@ void register_reconstruct(CLI::App& app) {
   cmd->add_option("--scan", o->scan, "scan.json (ctk-scan/1)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--geometry", o->geometry, "Per-view matrices (ctk-geometry/1); default: the scan's nominal geometry")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--out", o->out, "Volume to write (.nrrd, with .raw beside it)")->required();
+  cmd->add_option("--out", o->out, "Volume to write (.nrrd: header and data in one file)")->required();
   cmd->add_option("--method", o->method, "wls-cg, sirt or fdk (circular scans only)")->check(CLI::IsMember({"wls-cg", "sirt", "fdk"}))->capture_default_str();
   cmd->add_option("--iterations", o->iterations, "Iterations (default: 30 for wls-cg, 100 for sirt)")->check(CLI::Range(1, 100000));
   cmd->add_option("--lambda", o->lambda, "Regularisation weight")->check(non_negative_number)->capture_default_str();
@@ -194,6 +265,13 @@ void register_reconstruct(CLI::App& app) {
       ->expected(1, 3)
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--voxel", o->voxel_mm, "Voxel size in mm (default: a pixel seen at the holder origin)")->check(positive_number);
+  cmd->add_flag("--resume", o->resume,
+                "Continue an interrupted run (Ctrl-C or a kill) from the solver state saved beside --out (.state); same inputs and "
+                "options, --iterations may grow");
+  cmd->add_option("--checkpoint-every", o->checkpoint_every,
+                  "Save the solver's state every N iterations (0: only on Ctrl-C); removed when the run completes")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
   cmd->callback([o] { run_reconstruct(*o); });
 }
 

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "ctk/geom/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/atomic_write.hpp"
@@ -71,12 +72,14 @@ void run_refine(const RefineOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const ScanDescription scan = read_scan(o.scan);
   RunFiles files;
+  require_projection_files(scan, o.scan.string(), "projections.count");
   files.scan("--scan", o.scan, scan);
   files.input("--geometry", o.geometry);
   files.output("--out", o.out);
   for (const char* suffix : {".geometry.json", ".scan.json", ".before.png", ".after.png"})
     files.output(std::string("beside --out: ") + suffix, beside(o.out, suffix));
   files.check();
+  OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   Geometry geometry = o.geometry.empty() ? nominal_geometry(scan) : read_geometry(o.geometry);
   Progress reading("reading projections", "views");
@@ -149,6 +152,7 @@ void run_refine(const RefineOptions& o) {
   write_central_slice(r.volume_before, high, beside(o.out, ".before.png"));
   write_central_slice(r.volume_after, high, beside(o.out, ".after.png"));
 
+  outputs.publish();
   std::cout << "held-out projection RMS " << r.heldout_rms_before << " -> " << r.heldout_rms_after << "; sharpness "
             << r.sharpness_before << " -> " << r.sharpness_after << " per mm\n";
   for (const auto& e : r.effects)

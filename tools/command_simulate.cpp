@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "ctk/geom/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/geom/error.hpp"
@@ -86,10 +87,15 @@ void run_simulate(const SimulateOptions& o) {
   for (const std::string& name : o.phantoms)
     if (std::filesystem::path(name).extension() == ".json") files.input("--phantom", name);
   files.input("--poses", o.poses);
-  for (const char* name : {"scan.json", "truth.json", "truth-geometry.json", "joints.csv", "poses.json", "flat.tif", "dark.tif"})
-    files.output(std::string("--out: ") + name, o.out / name);
+  const std::vector<std::string> written = {"scan.json", "truth.json", "truth-geometry.json", "joints.csv", "poses.json", "flat.tif",
+                                             "dark.tif", "projections"};
+  for (const std::string& name : written)
+    if (name != "projections") files.output("--out: " + name, o.out / name);
   files.output_folder("--out: projections", o.out / "projections");
   files.check();
+  // The scan is written whole into a hidden folder beside --out and swapped in at the end: an
+  // interrupted run leaves the earlier scan as it was, never new projections under an old truth.
+  StagedFolder folder(o.out, written);
   const Detector detector{o.cols, o.rows, o.pitch_mm, o.pitch_mm};
   ScanSimulation sim;
   sim.setup = reference_panda_setup(detector, o.sdd_mm, o.sod_mm);
@@ -126,7 +132,8 @@ void run_simulate(const SimulateOptions& o) {
   sim.seed = o.seed;
 
   Progress progress("simulate", "views");
-  const SimulationReport r = simulate_scan(sim, o.out, std::ref(progress));
+  const SimulationReport r = simulate_scan(sim, folder.path(), std::ref(progress));
+  folder.commit();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cout << "simulated scan written to " << (o.out / "scan.json").string() << ": " << r.views << " views ("
             << r.views_acquired << " acquired, " << r.views - r.views_acquired << " unreachable), " << o.cols << " x "

@@ -7,6 +7,7 @@
 
 #include "commands.hpp"
 #include "ctk/geom/error.hpp"
+#include "interruption.hpp"
 
 int main(int argc, char** argv) {
   // Every view passes through a few image-sized buffers (2 MB at 720 x 720). By default glibc maps
@@ -50,6 +51,9 @@ int main(int argc, char** argv) {
     // CLI11 prints the message (or the help); a malformed command line is bad input like any
     // other, so it exits 2 rather than with CLI11's own codes (105 for a missing file, ...).
     return app.exit(e) == 0 ? 0 : 2;
+  } catch (const ctk::tools::Interrupted& e) {
+    std::cerr << "ctk: " << e.what() << "\n";
+    return 130;
   } catch (const ctk::InputError& e) {
     std::cerr << "ctk: input error: " << e.what() << "\n";
     return 2;

@@ -1,5 +1,7 @@
 #include "ctk/calib/scan_calibration.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 
 #include "ctk/geom/error.hpp"
@@ -18,7 +20,7 @@ struct FirstGuess {
 };
 
 ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<FirstGuess>& guesses, const CalibrationOptions& options,
-                                const std::function<void(int, int)>& progress) {
+                                const std::function<void(int, int)>& progress, const BatchControl* control) {
   const auto start = std::chrono::steady_clock::now();
   if (!scan.holder) throw InputError("scan", "holder", "calibration needs the holder's spheres (missing)");
   if (static_cast<int>(scan.holder->spheres_mm.size()) < options.min_spheres)
@@ -31,9 +33,24 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
   ScanCalibration result;
   result.views.resize(static_cast<std::size_t>(n));
   int done = 0;
+  std::atomic<int> left_undone{0};
+  std::vector<char> finished(static_cast<std::size_t>(n), 0);
   parallel_for_dynamic(n, [&](int v) {
     ViewCalibration& out = result.views[static_cast<std::size_t>(v)];
     const FirstGuess& guess = guesses[static_cast<std::size_t>(v)];
+    if (control && control->done) {
+      if (const auto earlier = control->done->find(v); earlier != control->done->end()) {
+        out = earlier->second;
+        finished[static_cast<std::size_t>(v)] = 2;
+#pragma omp critical(ctk_calibration_progress)
+        if (progress) progress(++done, n);
+        return;
+      }
+    }
+    if (control && control->stop_requested && control->stop_requested()) {
+      ++left_undone;
+      return;
+    }
     if (!guess.T_camera_holder) {
       out.status = ViewStatus::skipped;
       out.reason = "no pose: " + guess.reason;
@@ -55,9 +72,15 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
         out.reason = std::string("calibration failed: ") + e.what();
       }
     }
+    finished[static_cast<std::size_t>(v)] = 1;
 #pragma omp critical(ctk_calibration_progress)
-    if (progress) progress(++done, n);
+    {
+      if (control && control->on_view) control->on_view(v, out);
+      if (progress) progress(++done, n);
+    }
   });
+  result.left_undone = left_undone;
+  result.taken_over = static_cast<int>(std::count(finished.begin(), finished.end(), 2));
 
   result.geometry.detector = scan.detector;
   for (int v = 0; v < n; ++v) {
@@ -91,14 +114,14 @@ ViewCamera view_camera(const ScanDescription& scan, int view) {
 }
 
 ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
-                               const std::function<void(int, int)>& progress) {
+                               const std::function<void(int, int)>& progress, const BatchControl* control) {
   std::vector<FirstGuess> guesses;
   for (const NominalView& nominal : nominal_views(scan)) {
     FirstGuess g{nominal.T_camera_holder, nominal.reason};
     if (!g.T_camera_holder && nominal.P) g.T_camera_holder = nominal.P->decompose().T_camera_frame;
     guesses.push_back(g);
   }
-  return calibrate_views(scan, guesses, options, progress);
+  return calibrate_views(scan, guesses, options, progress, control);
 }
 
 ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& calibrated, const CalibrationOptions& options,
@@ -114,7 +137,7 @@ ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& ca
     else g.reason = "not calibrated in the given geometry" + (v.reason.empty() ? std::string() : ": " + v.reason);
     guesses.push_back(g);
   }
-  return calibrate_views(scan, guesses, options, progress);
+  return calibrate_views(scan, guesses, options, progress, nullptr);
 }
 
 }  // namespace ctk

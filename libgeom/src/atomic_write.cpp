@@ -2,31 +2,22 @@
 
 #include <fstream>
 #include <stdexcept>
-#include <unistd.h>
+
+#include "ctk/geom/output_set.hpp"
 
 namespace ctk {
 
 namespace fs = std::filesystem;
-
-static fs::path temporary_beside(const fs::path& path) {
-  // Same folder (so rename is atomic), same extension (so format-by-extension writers work).
-  // Appended piece by piece: GCC 12 misreads "." + std::string as an overlapping copy (-Wrestrict).
-  std::string name = ".";
-  name += path.stem().string();
-  name += ".tmp";
-  name += std::to_string(::getpid());
-  name += path.extension().string();
-  fs::path tmp = path;
-  tmp.replace_filename(name);
-  return tmp;
-}
 
 void write_path_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
   if (path.has_parent_path()) fs::create_directories(path.parent_path());
   const fs::path tmp = temporary_beside(path);
   try {
     write(tmp);
-    fs::rename(tmp, path);
+    if (OutputSet* set = OutputSet::active())
+      set->add(tmp, path);  // renamed with the rest of the run's outputs
+    else
+      fs::rename(tmp, path);
   } catch (...) {
     std::error_code ignored;
     fs::remove(tmp, ignored);

@@ -10,6 +10,13 @@ namespace ctk {
 
 namespace {
 
+// A number as a reader wrote it (1e-300, not 0.000000; 1e+308, not 310 digits).
+std::string shortest(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
 // The last "key": before byte `offset`, to tell the user where a syntax error sits.
 std::string key_before(const std::string& text, std::size_t offset) {
   offset = std::min(offset, text.size());
@@ -126,19 +133,35 @@ std::size_t JsonNode::size() const {
 double JsonNode::number() const {
   if (!value_->is_number()) fail("expected a number, got " + type_name(*value_));
   const double v = value_->get<double>();
-  if (!std::isfinite(v)) fail("expected a finite number, got " + std::to_string(v));
+  if (!std::isfinite(v)) fail("expected a finite number, got " + shortest(v));
   return v;
+}
+
+void require_same_run(const nlohmann::json& saved, const nlohmann::json& now, const std::string& file, const std::string& prefix,
+                      const std::string& advice) {
+  for (const auto& [key, value] : now.items())
+    if (!saved.is_object() || !saved.contains(key) || saved.at(key) != value)
+      throw InputError(file, json_key(prefix + "." + key),
+                       "was " + (saved.is_object() && saved.contains(key) ? saved.at(key).dump() : std::string("absent")) +
+                           " in the saved run; this run has " + value.dump() + ": " + advice);
 }
 
 double JsonNode::positive_number() const {
   const double v = number();
-  if (!(v > 0)) fail("expected a positive number, got " + std::to_string(v));
+  if (!(v > 0)) fail("expected a positive number, got " + shortest(v));
+  return v;
+}
+
+double JsonNode::length_mm() const {
+  const double v = positive_number();
+  if (v < kShortestLengthMm || v > kLongestLengthMm)
+    fail("expected a length between " + shortest(kShortestLengthMm) + " and " + shortest(kLongestLengthMm) + " mm, got " + shortest(v));
   return v;
 }
 
 int JsonNode::integer() const {
   const double v = number();
-  if (v != std::floor(v) || std::abs(v) > 2e9) fail("expected an integer, got " + std::to_string(v));
+  if (v != std::floor(v) || std::abs(v) > 2e9) fail("expected an integer, got " + shortest(v));
   return static_cast<int>(v);
 }
 
@@ -174,6 +197,13 @@ Eigen::Matrix3d JsonNode::matrix3() const {
 Eigen::Vector3d JsonNode::vector3() const {
   const auto v = numbers(3);
   return {v[0], v[1], v[2]};
+}
+
+Eigen::Vector3d JsonNode::position_mm() const {
+  const Eigen::Vector3d p = vector3();
+  if (p.cwiseAbs().maxCoeff() > kLongestLengthMm)
+    fail("expected coordinates within " + shortest(kLongestLengthMm) + " mm of the origin, got " + shortest(p.cwiseAbs().maxCoeff()));
+  return p;
 }
 
 void JsonNode::warn_unknown_keys(std::initializer_list<std::string_view> known) const {

@@ -40,7 +40,7 @@ Rigid rigid_from_json(const JsonNode& node) {
   const Eigen::Matrix3d R = node.at("R").matrix3();
   if (!is_rotation(R, 1e-6))
     node.at("R").fail("not a rotation matrix (must be orthonormal with determinant +1 to 1e-6)");
-  return make_rigid(R, node.at("t_mm").vector3());
+  return make_rigid(R, node.at("t_mm").position_mm());
 }
 
 nlohmann::json rigid_to_json(const Rigid& T) {

@@ -1,5 +1,6 @@
 #include "ctk/geom/scan.hpp"
 
+#include <cmath>
 #include <cstdio>
 
 #include "ctk/geom/atomic_write.hpp"
@@ -62,12 +63,16 @@ Detector read_detector(const JsonNode& node, Eigen::Vector2d* principal_point) {
   d.rows = node.at("rows").integer();
   if (d.cols <= 0) node.at("cols").fail("expected a positive integer");
   if (d.rows <= 0) node.at("rows").fail("expected a positive integer");
-  const auto pitch = node.at("pixel_pitch_mm").numbers(2);
-  if (!(pitch[0] > 0 && pitch[1] > 0)) node.at("pixel_pitch_mm").fail("expected two positive pitches");
+  const JsonNode pitches = node.at("pixel_pitch_mm");
+  if (pitches.size() != 2) pitches.fail("expected two pitches (columns, rows), got " + std::to_string(pitches.size()));
+  const double pitch[2] = {pitches.at(0).length_mm(), pitches.at(1).length_mm()};
   d.pitch_u_mm = pitch[0];
   d.pitch_v_mm = pitch[1];
   if (principal_point) {
     const auto pp = node.at("principal_point_px").numbers(2);
+    // Off the detector is possible (an offset detector); a kilometre off is a damaged number.
+    if (std::abs(pp[0] * d.pitch_u_mm) > JsonNode::kLongestLengthMm || std::abs(pp[1] * d.pitch_v_mm) > JsonNode::kLongestLengthMm)
+      node.at("principal_point_px").fail("expected a point within 1e+06 mm of the detector's first pixel");
     *principal_point = {pp[0], pp[1]};
   }
   return d;
@@ -109,17 +114,17 @@ Holder read_holder(const JsonNode& node) {
   Holder h;
   const JsonNode helix = node.at("helix");
   helix.warn_unknown_keys({"radius_mm", "rho_rad_per_mm", "phase_rad"});
-  h.helix.radius_mm = helix.at("radius_mm").positive_number();
+  h.helix.radius_mm = helix.at("radius_mm").length_mm();
   h.helix.rho_rad_per_mm = helix.at("rho_rad_per_mm").number();
   h.helix.phase_rad = helix.at("phase_rad").number();
-  h.sphere_diameter_mm = node.at("sphere_diameter_mm").positive_number();
+  h.sphere_diameter_mm = node.at("sphere_diameter_mm").length_mm();
   const JsonNode spheres = node.at("spheres_mm");
-  for (std::size_t i = 0; i < spheres.size(); ++i) h.spheres_mm.push_back(spheres.at(i).vector3());
+  for (std::size_t i = 0; i < spheres.size(); ++i) h.spheres_mm.push_back(spheres.at(i).position_mm());
   if (h.spheres_mm.empty()) spheres.fail("expected at least one sphere centre");
   if (node.has("wall")) {
     const JsonNode wall = node.at("wall");
     wall.warn_unknown_keys({"inner_radius_mm", "outer_radius_mm"});
-    h.wall = HolderWall{wall.at("inner_radius_mm").positive_number(), wall.at("outer_radius_mm").positive_number()};
+    h.wall = HolderWall{wall.at("inner_radius_mm").length_mm(), wall.at("outer_radius_mm").length_mm()};
     if (!(h.wall->outer_radius_mm > h.wall->inner_radius_mm))
       wall.at("outer_radius_mm").fail("expected more than inner_radius_mm");
   }
@@ -140,6 +145,33 @@ fs::path ScanDescription::resolve(const std::string& name) const {
   return p.is_absolute() ? p : folder / p;
 }
 
+ProjectionCensus take_projection_census(const ScanDescription& scan) {
+  ProjectionCensus census;
+  for (int v = 0; v < scan.projections.count; ++v) {
+    const fs::path file = scan.projection_path(v).lexically_normal();
+    std::error_code ec;
+    if (fs::exists(file, ec)) {
+      if (census.first_present.empty()) census.first_present = file;
+    } else if (census.missing++ == 0) {
+      census.first_missing = file;
+    }
+  }
+  return census;
+}
+
+ProjectionCensus require_projection_files(const ScanDescription& scan, const std::string& file, const std::string& key) {
+  const ProjectionCensus census = take_projection_census(scan);
+  const int count = scan.projections.count;
+  if (census.first_present.empty())
+    throw InputError(file, key, "none of the " + std::to_string(count) + " projection files exists (the first would be " +
+                                    census.first_missing.string() + ")");
+  if (census.missing > count / 2)
+    throw InputError(file, key, std::to_string(census.missing) + " of the " + std::to_string(count) +
+                                    " projection files do not exist (the first is " + census.first_missing.string() +
+                                    "): is the count or the file pattern wrong?");
+  return census;
+}
+
 ScanDescription read_scan(const fs::path& file) {
   ScanDescription scan;
   scan.folder = file.has_parent_path() ? file.parent_path() : fs::path(".");
@@ -147,7 +179,7 @@ ScanDescription read_scan(const fs::path& file) {
   const JsonNode top(root, file.string(), "", &scan.warnings);
   if (!root.is_object()) top.fail("expected a JSON object");
   top.warn_unknown_keys({"format", "detector", "source_to_detector_mm", "projections", "pose_source", "holder",
-                         "source_drift_mm_per_100_views"});
+                         "source_drift_mm_per_100_views", "written_by"});
   const std::string format = top.at("format").string();
   if (format != kFormat) top.at("format").fail("expected \"" + std::string(kFormat) + "\", got \"" + format + "\"");
 
@@ -157,12 +189,16 @@ ScanDescription read_scan(const fs::path& file) {
     const auto c = rd->at("center_px").numbers(2);
     scan.distortion = RadialDistortion{rd->at("k1_per_px2").number(), {c[0], c[1]}};
   }
-  scan.source_to_detector_mm = top.at("source_to_detector_mm").positive_number();
+  scan.source_to_detector_mm = top.at("source_to_detector_mm").length_mm();
   if (auto drift = top.find("source_drift_mm_per_100_views")) {
     const auto d = drift->numbers(2);
     scan.source_drift_mm_per_100_views = {d[0], d[1]};
   }
   scan.projections = read_projections(top.at("projections"), scan);
+  if (auto by = top.find("written_by")) {
+    by->warn_unknown_keys({"run"});
+    scan.written_by_run = by->at("run").string();
+  }
 
   const JsonNode pose = top.at("pose_source");
   const std::string kind = pose.at("kind").string();
@@ -202,6 +238,7 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
   using nlohmann::json;
   json j;
   j["format"] = kFormat;
+  if (!scan.written_by_run.empty()) j["written_by"] = {{"run", scan.written_by_run}};
   j["detector"] = {{"cols", scan.detector.cols},
                    {"rows", scan.detector.rows},
                    {"pixel_pitch_mm", {scan.detector.pitch_u_mm, scan.detector.pitch_v_mm}},

@@ -11,6 +11,7 @@
 
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/error.hpp"
+#include "ctk/geom/output_set.hpp"
 
 namespace ctk {
 
@@ -22,12 +23,15 @@ using OIIO::TypeDesc;
 
 namespace {
 
+// Every image ctk writes says which run wrote it, so that a folder mixing two runs is told.
+constexpr const char* kWrittenBy = "ctk run ";
+
 // Larger than any detector (4 GB of floats): a header claiming more is damaged or hostile.
 constexpr std::size_t kMostPixels = std::size_t{1} << 30;
 
 // Reads the pixels after the header's size has been checked against `expected` (when given), so a
 // header claiming 20000 x 20000 costs nothing. Only regular files: a FIFO or a device would hang.
-Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>>& expected) {
+Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>>& expected, std::string* written_by) {
   require_regular_file(file);
   auto in = ImageInput::open(file.string());
   if (!in) throw InputError(file.string(), "", "cannot read the image: " + OIIO::geterror());
@@ -42,6 +46,10 @@ Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>
                                             (spec.depth > 1 ? " x " + std::to_string(spec.depth) : "") +
                                             " pixels: not a projection (damaged header?)");
   Image image;
+  if (written_by) {
+    const std::string said = spec.get_string_attribute("ImageDescription");
+    *written_by = said.rfind(kWrittenBy, 0) == 0 ? said.substr(std::string_view(kWrittenBy).size()) : std::string();
+  }
   image.cols = spec.width;
   image.rows = spec.height;
   image.pixels.resize(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height));
@@ -60,9 +68,11 @@ Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>
 
 }  // namespace
 
-Image read_image(const fs::path& file) { return read_checked(file, std::nullopt); }
+Image read_image(const fs::path& file) { return read_checked(file, std::nullopt, nullptr); }
 
-Image read_image(const fs::path& file, int cols, int rows) { return read_checked(file, std::make_pair(cols, rows)); }
+Image read_image(const fs::path& file, int cols, int rows, std::string* written_by) {
+  return read_checked(file, std::make_pair(cols, rows), written_by);
+}
 
 namespace {
 
@@ -70,7 +80,8 @@ void write_single_image(int cols, int rows, TypeDesc type, const void* pixels, c
   write_path_atomically(file, [&](const fs::path& tmp) {
     auto out = ImageOutput::create(file.string());
     if (!out) throw std::runtime_error(file.string() + ": no writer for this format: " + OIIO::geterror());
-    const ImageSpec spec(cols, rows, 1, type);
+    ImageSpec spec(cols, rows, 1, type);
+    spec.attribute("ImageDescription", kWrittenBy + this_run_id());
     if (!out->open(tmp.string(), spec) || !out->write_image(type, pixels) || !out->close())
       throw std::runtime_error(file.string() + ": write failed: " + out->geterror());
   });
@@ -91,20 +102,21 @@ void write_image_uint16(const Image& counts, const fs::path& file) {
 }
 
 void write_volume_nrrd(const Volume& v, const fs::path& nrrd_file) {
-  fs::path raw = nrrd_file;
-  raw.replace_extension(".raw");
-  write_file_atomically(raw, [&](std::ostream& out) {
-    out.write(reinterpret_cast<const char*>(v.data.data()), static_cast<std::streamsize>(v.data.size() * sizeof(float)));
-  });
+  // Header and data in one file (NRRD's attached form): the file is written whole or not at all,
+  // never a header over another run's data.
   const auto& l = v.layout;
   std::ostringstream h;
   h.precision(17);
-  h << "NRRD0004\n# written by ctk: holder frame, millimetres\ntype: float\ndimension: 3\nspace: right-anterior-superior\n"
+  h << "NRRD0004\n# written by ctk (run " << this_run_id() << "): holder frame, millimetres\ntype: float\ndimension: 3\n"
+    << "space: right-anterior-superior\n"
     << "sizes: " << l.size[0] << " " << l.size[1] << " " << l.size[2] << "\n"
     << "space directions: (" << l.voxel_mm.x() << ",0,0) (0," << l.voxel_mm.y() << ",0) (0,0," << l.voxel_mm.z() << ")\n"
     << "space origin: (" << l.origin_mm.x() << "," << l.origin_mm.y() << "," << l.origin_mm.z() << ")\n"
-    << "kinds: domain domain domain\nendian: little\nencoding: raw\ndata file: " << raw.filename().string() << "\n";
-  write_text_atomically(nrrd_file, h.str());
+    << "kinds: domain domain domain\nendian: little\nencoding: raw\n\n";
+  write_file_atomically(nrrd_file, [&](std::ostream& out) {
+    out << h.str();
+    out.write(reinterpret_cast<const char*>(v.data.data()), static_cast<std::streamsize>(v.data.size() * sizeof(float)));
+  });
 }
 
 void write_volume_tiff(const Volume& v, const fs::path& file) {

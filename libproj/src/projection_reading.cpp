@@ -5,16 +5,31 @@
 #include <stdexcept>
 #include <vector>
 
+#include "ctk/geom/error.hpp"
+
 namespace ctk {
+
+namespace {
+
+// A scan written at once with its images (ctk simulate) takes only images of its own run.
+Image read_scan_image(const ScanDescription& scan, const std::filesystem::path& file) {
+  std::string written_by;
+  Image image = read_image(file, scan.detector.cols, scan.detector.rows, &written_by);
+  if (!scan.written_by_run.empty() && !written_by.empty() && written_by != scan.written_by_run)
+    throw InputError(file.string(), "", "was written by ctk run " + written_by + ", the scan by run " + scan.written_by_run +
+                                            ": the folder mixes two runs' files");
+  return image;
+}
+
+}  // namespace
 
 std::optional<FlatDark> read_flat_dark(const ScanDescription& scan) {
   if (scan.projections.kind != ProjectionKind::counts) return std::nullopt;
-  const Detector& d = scan.detector;
   // Several frames (flats before and after the scan, say) are averaged pixel by pixel.
   auto mean_of = [&](const std::vector<std::string>& names) {
-    Image mean = read_image(scan.resolve(names.front()), d.cols, d.rows);
+    Image mean = read_scan_image(scan, scan.resolve(names.front()));
     for (std::size_t f = 1; f < names.size(); ++f) {
-      const Image next = read_image(scan.resolve(names[f]), d.cols, d.rows);
+      const Image next = read_scan_image(scan, scan.resolve(names[f]));
       for (std::size_t i = 0; i < mean.pixels.size(); ++i) mean.pixels[i] += next.pixels[i];
     }
     for (float& x : mean.pixels) x /= static_cast<float>(names.size());
@@ -67,7 +82,7 @@ std::size_t mask_non_finite(Image& image, float* weights) {
 
 Image read_line_integrals(const ScanDescription& scan, int view, const std::optional<FlatDark>& flat_dark, float* weights,
                           std::size_t* clamped, std::size_t* non_finite) {
-  Image image = read_image(scan.projection_path(view), scan.detector.cols, scan.detector.rows);
+  Image image = read_scan_image(scan, scan.projection_path(view));
   if (scan.projections.kind == ProjectionKind::counts) {
     if (!flat_dark) throw std::invalid_argument("read_line_integrals: a counts scan needs its flat and dark");
     std::size_t count = 0;

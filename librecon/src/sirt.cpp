@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <utility>
 
 #include "vector_ops.hpp"
 
@@ -16,7 +17,7 @@ void invert_nonzero(FloatBuffer& v) {
 }  // namespace
 
 SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
-                        Volume& x, const SirtOptions& o, const IterationCallback& on_iteration) {
+                        Volume& x, const SirtOptions& o, const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
   auto start = std::chrono::steady_clock::now();
   ProjectionStack row_weight(b.views, b.rows, b.cols), residual(b.views, b.rows, b.cols);
   Volume column_weight(x.layout), update(x.layout);
@@ -31,9 +32,16 @@ SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMa
   invert_nonzero(column_weight.data);
 
   SolverReport report;
+  int first = 0;
+  if (checkpointing && checkpointing->resume) {
+    check_solver_state(*checkpointing->resume, "sirt", {}, 0, x.layout);
+    x.data = std::move(checkpointing->resume->x.data);
+    report.iterations = checkpointing->resume->log;
+    first = checkpointing->resume->iteration;
+  }
   const std::ptrdiff_t n_rays = static_cast<std::ptrdiff_t>(b.data.size());
   const std::ptrdiff_t n_voxels = static_cast<std::ptrdiff_t>(x.data.size());
-  for (int it = 0; it <= o.iterations; ++it) {
+  for (int it = first; it <= o.iterations; ++it) {
     A.forward(x, views, residual);  // residual = b - A x
 #pragma omp parallel for schedule(static)
     for (std::ptrdiff_t i = 0; i < n_rays; ++i) {
@@ -58,6 +66,15 @@ SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMa
       const std::size_t k = static_cast<std::size_t>(i);
       float v = x.data[k] + relax * column_weight.data[k] * update.data[k];
       x.data[k] = o.non_negative ? std::max(v, 0.0f) : v;
+    }
+    if (checkpointing) {  // it + 1 updates done
+      const bool stop = checkpointing->stop_requested && checkpointing->stop_requested();
+      if (stop || (checkpointing->every > 0 && (it + 1) % checkpointing->every == 0 && it + 1 < o.iterations))
+        checkpointing->save({"sirt", it + 1, report.iterations, x, {}, {}});
+      if (stop) {
+        report.stop_reason = kStoppedOnRequest;
+        return report;
+      }
     }
   }
   report.stop_reason = "iteration limit (" + std::to_string(o.iterations) + ") reached";

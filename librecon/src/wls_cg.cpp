@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <utility>
 #include <cmath>
 #include <stdexcept>
 
@@ -22,17 +23,19 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 
 SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
                           const ProjectionStack* weights, Volume& x, const WlsOptions& o,
-                          const IterationCallback& on_iteration) {
+                          const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
   ProjectionStack residual(b.views, b.rows, b.cols);
-  const bool cold = std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; });
-  if (!cold) A.forward(x, views, residual);
-  axpy(-1.0, b.data, residual.data);
-  return solve_wls_cg(A, views, b, weights, x, residual, o, on_iteration);
+  if (!(checkpointing && checkpointing->resume)) {  // a continued run takes its residual from the state
+    const bool cold = std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; });
+    if (!cold) A.forward(x, views, residual);
+    axpy(-1.0, b.data, residual.data);
+  }
+  return solve_wls_cg(A, views, b, weights, x, residual, o, on_iteration, checkpointing);
 }
 
 SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
                           const ProjectionStack* weights, Volume& x, ProjectionStack& residual, const WlsOptions& o,
-                          const IterationCallback& on_iteration) {
+                          const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
   if (weights && weights->data.size() != b.data.size())
     throw std::invalid_argument("solve_wls_cg: weights and line integrals differ in size");
   if (residual.data.size() != b.data.size())
@@ -43,9 +46,12 @@ SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<Projection
 
   ProjectionStack scratch(b.views, b.rows, b.cols);  // W r, then A d, then W A d
   Volume gradient(x.layout), direction(x.layout), H_direction(x.layout);
-  detail::weighted_copy(residual.data, w, scratch.data);
-  A.back(scratch, views, gradient);
-  add_regulariser_normal(o.regulariser, o.lambda, x, gradient);
+  SolverState* resume = checkpointing ? checkpointing->resume : nullptr;
+  if (!resume) {
+    detail::weighted_copy(residual.data, w, scratch.data);
+    A.back(scratch, views, gradient);
+    add_regulariser_normal(o.regulariser, o.lambda, x, gradient);
+  }
 
   auto log_point = [&](int iteration, double g_norm, double g0_norm) {
     IterationLog log;
@@ -61,16 +67,30 @@ SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<Projection
   };
 
   SolverReport report;
-  double gg = dot(gradient.data, gradient.data);
-  const double g0 = std::sqrt(gg);
-  report.iterations.push_back(log_point(0, g0, g0));
-  if (gg == 0) {
-    report.stop_reason = "zero gradient at the start (nothing to fit)";
-    return report;
+  double gg = 0, g0 = 0;
+  int first = 1;
+  if (resume) {
+    check_solver_state(*resume, "wls-cg", {residual.data.size(), gradient.data.size(), direction.data.size()}, 2, x.layout);
+    x.data = std::move(resume->x.data);
+    residual.data = std::move(resume->vectors[0]);
+    gradient.data = std::move(resume->vectors[1]);
+    direction.data = std::move(resume->vectors[2]);
+    gg = resume->scalars[0];
+    g0 = resume->scalars[1];
+    report.iterations = resume->log;
+    first = resume->iteration + 1;
+  } else {
+    gg = dot(gradient.data, gradient.data);
+    g0 = std::sqrt(gg);
+    report.iterations.push_back(log_point(0, g0, g0));
+    if (gg == 0) {
+      report.stop_reason = "zero gradient at the start (nothing to fit)";
+      return report;
+    }
+    for (std::size_t i = 0; i < direction.data.size(); ++i) direction.data[i] = -gradient.data[i];
   }
-  for (std::size_t i = 0; i < direction.data.size(); ++i) direction.data[i] = -gradient.data[i];
 
-  for (int it = 1; it <= o.iterations; ++it) {
+  for (int it = first; it <= o.iterations; ++it) {
     // Scratch holds A d for the residual update; H d = A' W A d + lambda G'G d.
     A.forward(direction, views, scratch);
     const double dHd_data = detail::weighted_square_sum(scratch.data, w);
@@ -106,6 +126,15 @@ SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<Projection
     for (std::ptrdiff_t i = 0; i < n; ++i) {
       const std::size_t k = static_cast<std::size_t>(i);
       direction.data[k] = static_cast<float>(-gradient.data[k] + beta * direction.data[k]);
+    }
+    if (checkpointing) {
+      const bool stop = checkpointing->stop_requested && checkpointing->stop_requested();
+      if (stop || (checkpointing->every > 0 && it % checkpointing->every == 0 && it < o.iterations))
+        checkpointing->save({"wls-cg", it, report.iterations, x, {&residual.data, &gradient.data, &direction.data}, {gg, g0}});
+      if (stop) {
+        report.stop_reason = kStoppedOnRequest;
+        return report;
+      }
     }
   }
   if (report.stop_reason.empty()) report.stop_reason = "iteration limit (" + std::to_string(o.iterations) + ") reached";

@@ -4,6 +4,7 @@
 #include <random>
 
 #include "ctk/geom/atomic_write.hpp"
+#include "ctk/geom/output_set.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/render.hpp"
@@ -17,6 +18,7 @@ namespace {
 
 ScanDescription declared_scan(const ScanSimulation& sim, const fs::path& folder, int view_count) {
   ScanDescription scan;
+  scan.written_by_run = this_run_id();
   scan.folder = folder;
   scan.detector = sim.setup.detector;
   scan.principal_point_px = sim.setup.principal_point_px;

@@ -78,6 +78,40 @@ TEST(ScanFile, WrongTypeIsNamed) {
   expect_error_naming(file, [](nlohmann::json& j) { j["detector"]["pixel_pitch_mm"] = {0.6}; }, "detector.pixel_pitch_mm");
 }
 
+// Lengths no CT setup has (they overflow or make the matrices singular downstream) are refused
+// where they are read, naming the key; so are positions beyond a kilometre.
+TEST(ScanFile, LengthsBeyondAnySetupAreNamed) {
+  const auto dir = testing::scratch_dir();
+  const auto file = [&] { return write_valid_scan(dir); };  // each edit on a valid file
+  expect_error_naming(file(), [](nlohmann::json& j) { j["source_to_detector_mm"] = 1e-300; }, "source_to_detector_mm");
+  expect_error_naming(file(), [](nlohmann::json& j) { j["detector"]["pixel_pitch_mm"] = {1e300, 0.6}; }, "detector.pixel_pitch_mm[0]");
+  expect_error_naming(file(), [](nlohmann::json& j) { j["holder"]["sphere_diameter_mm"] = 1e-9; }, "holder.sphere_diameter_mm");
+  expect_error_naming(file(), [](nlohmann::json& j) { j["pose_source"]["T_camera_base"]["t_mm"] = {0, 1e300, 0}; },
+                      "pose_source.T_camera_base.t_mm");
+  expect_error_naming(file(), [](nlohmann::json& j) { j["holder"]["spheres_mm"][3] = {0, 0, -2e6}; }, "holder.spheres_mm[3]");
+}
+
+// A declared count that outnumbers the files on disk two to one is refused before any list of
+// views is built; a few missing files are left to each view's rejection.
+TEST(ScanFile, ACountThatOutnumbersItsFilesIsRefused) {
+  const auto dir = testing::scratch_dir();
+  const auto file = write_valid_scan(dir, 12);
+  for (int v = 0; v < 10; ++v) testing::write_text(dir / ("proj_" + std::string(v < 10 ? "000" : "00") + std::to_string(v) + ".tif"), "x");
+  const ScanDescription scan = read_scan(file);
+  const ProjectionCensus census = require_projection_files(scan, file.string(), "projections.count");
+  EXPECT_EQ(census.missing, 2);
+  EXPECT_EQ(census.first_missing.filename(), "proj_0010.tif");
+  nlohmann::json j = read_json_file(file);
+  j["projections"]["count"] = 1000000;
+  testing::write_text(file, j.dump(2));
+  try {
+    require_projection_files(read_scan(file), file.string(), "projections.count");
+    FAIL() << "a count of a million over ten files was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("999990 of the 1000000 projection files do not exist"), std::string::npos) << e.what();
+  }
+}
+
 // Writes `text` as scan.json and returns read_scan's error message ("" if it was accepted).
 std::string error_reading(const std::filesystem::path& file, const std::string& text) {
   testing::write_text(file, text);

@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 
 #include "../test_support.hpp"
@@ -120,11 +121,18 @@ TEST(ImageIo, VolumeOutputs) {
   Volume v(VolumeLayout::centred({5, 4, 3}, {0.5, 0.5, 0.75}));
   for (std::size_t i = 0; i < v.data.size(); ++i) v.data[i] = static_cast<float>(i);
   write_volume_nrrd(v, dir / "vol.nrrd");
-  EXPECT_EQ(std::filesystem::file_size(dir / "vol.raw"), 60u * sizeof(float));
-  std::ifstream header(dir / "vol.nrrd");
-  const std::string text((std::istreambuf_iterator<char>(header)), {});
-  EXPECT_NE(text.find("sizes: 5 4 3"), std::string::npos);
-  EXPECT_NE(text.find("space origin: (-1,-0.75,-0.75)"), std::string::npos) << text;
+  EXPECT_FALSE(std::filesystem::exists(dir / "vol.raw"));  // one file: header and data
+  std::ifstream file(dir / "vol.nrrd", std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(file)), {});
+  const std::size_t data = text.find("\n\n") + 2;
+  ASSERT_EQ(text.size() - data, 60u * sizeof(float));
+  const std::string header = text.substr(0, data);
+  EXPECT_NE(header.find("sizes: 5 4 3"), std::string::npos);
+  EXPECT_NE(header.find("space origin: (-1,-0.75,-0.75)"), std::string::npos) << header;
+  EXPECT_EQ(header.find("data file"), std::string::npos);
+  float last = 0;
+  std::memcpy(&last, text.data() + text.size() - sizeof(float), sizeof(float));
+  EXPECT_EQ(last, 59.0f);
 
   write_volume_tiff(v, dir / "vol.tif");
   auto in = OIIO::ImageInput::open((dir / "vol.tif").string());

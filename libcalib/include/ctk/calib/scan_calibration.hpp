@@ -3,6 +3,7 @@
 // predicts (robot FK, or given matrices); a view that fails never stops the batch, it is
 // rejected or skipped with its reason (no pose, unreadable image, too few spheres, residual).
 #include <functional>
+#include <map>
 #include <vector>
 
 #include "ctk/calib/view_calibration.hpp"
@@ -14,6 +15,15 @@ struct ScanCalibration {
   Geometry geometry;                    // ctk-geometry/1, one entry per projection
   std::vector<ViewCalibration> views;   // details, same order
   double seconds = 0;
+  int taken_over = 0;                   // views an earlier run had finished (BatchControl::done)
+  int left_undone = 0;                  // views not started when a stop was asked for
+};
+
+/// What a batch takes from an earlier, interrupted run, and hands on as it goes.
+struct BatchControl {
+  const std::map<int, ViewCalibration>* done = nullptr;  // views an earlier run finished: taken as they are
+  std::function<void(int, const ViewCalibration&)> on_view;  // each view this run finishes (calls serialised)
+  std::function<bool()> stop_requested;                      // true: the views not yet started are left undone
 };
 
 /// How one view is seen: a declared source drift moves the focal spot, i.e. the principal point
@@ -29,7 +39,7 @@ ViewCamera view_camera(const ScanDescription& scan, int view);
 /// (`ctk calibrate` does, unless --image-only). Throws InputError for problems of the scan as a whole (no holder, fewer than 6 spheres,
 /// unreadable flat or dark); per-view problems end up in the views.
 ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
-                               const std::function<void(int, int)>& progress = {});
+                               const std::function<void(int, int)>& progress = {}, const BatchControl* control = nullptr);
 
 /// Same, starting each view from a calibrated geometry's pose instead of the robot's (views not
 /// ok there are skipped): the detections and matches behind an existing calibration.

@@ -16,6 +16,12 @@ namespace ctk {
 /// Parses a JSON file; a syntax error is reported with line, column and the nearest key.
 nlohmann::json read_json_file(const std::filesystem::path& file);
 
+/// A saved run's description against this run's: the first key of `now` that `saved` does not
+/// hold with the same value is refused (InputError on `file`, key `prefix.key`, both values and
+/// `advice`). For state that only the run that saved it may continue.
+void require_same_run(const nlohmann::json& saved, const nlohmann::json& now, const std::string& file, const std::string& prefix,
+                      const std::string& advice);
+
 class JsonNode {
  public:
   /// `warnings` (optional) collects notes about unknown keys.
@@ -30,12 +36,17 @@ class JsonNode {
 
   double number() const;  // finite number
   double positive_number() const;
+  /// A positive length no CT setup leaves: between a nanometre and a kilometre. Beyond it the
+  /// matrices built from it overflow or become singular.
+  double length_mm() const;
+  static constexpr double kShortestLengthMm = 1e-6, kLongestLengthMm = 1e6;
   int integer() const;
   std::string string() const;
   bool boolean() const;
   std::vector<double> numbers(std::optional<std::size_t> expected_size = std::nullopt) const;
   Eigen::Matrix3d matrix3() const;  // [[a,b,c],[d,e,f],[g,h,i]]
   Eigen::Vector3d vector3() const;
+  Eigen::Vector3d position_mm() const;  // each coordinate within kLongestLengthMm
 
   /// Adds a warning for every key of this object not in `known`.
   void warn_unknown_keys(std::initializer_list<std::string_view> known) const;

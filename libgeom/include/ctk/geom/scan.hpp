@@ -59,6 +59,9 @@ struct ScanDescription {
   /// Optional key `source_drift_mm_per_100_views` [x, y] (an extension of ctk-scan/1): the focal
   /// spot moves linearly with the view index, in camera x and y, the detector staying put.
   Eigen::Vector2d source_drift_mm_per_100_views{0, 0};
+  /// Optional key `written_by` {"run": id} (an extension of ctk-scan/1): the ctk run that wrote the
+  /// scan and its images at once (ctk simulate). Images that name another run are refused.
+  std::string written_by_run;
   std::vector<std::string> warnings;          // unknown keys and other non-fatal findings
 
   Intrinsics intrinsics() const { return Intrinsics::from_setup(source_to_detector_mm, detector, principal_point_px); }
@@ -74,6 +77,18 @@ struct ScanDescription {
 /// a referenced file (joints, flat, dark, matrices) that cannot be read.
 ScanDescription read_scan(const std::filesystem::path& file);
 nlohmann::json scan_to_json(const ScanDescription& scan);
+
+/// Which of a scan's projection files exist (paths taken lexically: the scan's folder may not exist
+/// yet when a scan is being imported).
+struct ProjectionCensus {
+  int missing = 0;
+  std::filesystem::path first_missing, first_present;
+};
+ProjectionCensus take_projection_census(const ScanDescription& scan);
+/// Refuses (InputError on `file`, `key`) a scan none of whose projection files exists, or more
+/// than half: a count that outnumbers the files on disk two to one is a wrong count or pattern, and
+/// would otherwise become a million rejected views. A few missing files are each view's rejection.
+ProjectionCensus require_projection_files(const ScanDescription& scan, const std::string& file, const std::string& key);
 /// Writes atomically. Paths stay as written (relative to the scan's folder).
 void write_scan(const ScanDescription& scan, const std::filesystem::path& file);
 

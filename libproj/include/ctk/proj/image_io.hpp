@@ -3,6 +3,7 @@
 // volumes out as NRRD (detached header + raw, opens in 3D Slicer), multi-page float TIFF
 // (ImageJ/Fiji) and single slices as PNG. Every output is written atomically.
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "ctk/proj/projection_stack.hpp"
@@ -19,13 +20,15 @@ struct Image {
 /// Throws InputError naming the file when it is missing, truncated or not an image.
 Image read_image(const std::filesystem::path& file);
 /// Same, and the size must be cols x rows (InputError otherwise).
-Image read_image(const std::filesystem::path& file, int cols, int rows);
+/// `written_by` (optional) receives the ctk run that wrote the file (every image ctk writes names
+/// its run in its ImageDescription), or "" when no ctk run did.
+Image read_image(const std::filesystem::path& file, int cols, int rows, std::string* written_by = nullptr);
 
 void write_image_float(const Image& image, const std::filesystem::path& file);  // TIFF/EXR by extension
 /// Detector counts as a 16-bit TIFF: values rounded and clamped to 0 .. 65535.
 void write_image_uint16(const Image& counts, const std::filesystem::path& file);
 
-/// `name.nrrd` (header) and `name.raw` (little-endian float32, x fastest), spacing and origin in mm.
+/// One `.nrrd` file, header and data (little-endian float32, x fastest) together; spacing and origin in mm.
 void write_volume_nrrd(const Volume& volume, const std::filesystem::path& nrrd_file);
 /// One float32 page per z slice.
 void write_volume_tiff(const Volume& volume, const std::filesystem::path& file);

@@ -5,6 +5,7 @@
 
 #include "ctk/proj/joseph_projector.hpp"
 #include "ctk/recon/iteration_log.hpp"
+#include "ctk/recon/solver_state.hpp"
 
 namespace ctk {
 
@@ -15,6 +16,7 @@ struct SirtOptions {
 };
 
 SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
-                        Volume& x, const SirtOptions& options, const IterationCallback& on_iteration = {});
+                        Volume& x, const SirtOptions& options, const IterationCallback& on_iteration = {},
+                        const Checkpointing* checkpointing = nullptr);
 
 }  // namespace ctk

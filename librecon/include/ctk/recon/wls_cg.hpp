@@ -4,12 +4,14 @@
 // by conjugate gradients on the normal equations (A'WA + lambda G'G) x = A'W b: one forward and
 // one back projection per iteration. The objective falls at every iteration (CG minimises it over
 // a growing Krylov space); the run stops after `iterations` or when the gradient has fallen by
-// `tolerance` relative to the start.
+// `tolerance` relative to the start. With `checkpointing` it saves its state (iterate, residual,
+// gradient, direction) as asked and continues a saved one exactly.
 #include <vector>
 
 #include "ctk/proj/joseph_projector.hpp"
 #include "ctk/recon/iteration_log.hpp"
 #include "ctk/recon/regulariser.hpp"
+#include "ctk/recon/solver_state.hpp"
 
 namespace ctk {
 
@@ -27,13 +29,15 @@ struct WlsOptions {
 /// null (unit weights); otherwise the same shape as `b`.
 SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views,
                           const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
-                          const WlsOptions& options, const IterationCallback& on_iteration = {});
+                          const WlsOptions& options, const IterationCallback& on_iteration = {},
+                          const Checkpointing* checkpointing = nullptr);
 
 /// The same for a caller that keeps the residual A x - b between calls (an incremental
 /// reconstruction that adds views): `residual` holds it on entry and on return, so the start
 /// costs no forward projection.
 SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views,
                           const ProjectionStack& b, const ProjectionStack* weights, Volume& x, ProjectionStack& residual,
-                          const WlsOptions& options, const IterationCallback& on_iteration = {});
+                          const WlsOptions& options, const IterationCallback& on_iteration = {},
+                          const Checkpointing* checkpointing = nullptr);
 
 }  // namespace ctk

@@ -1,0 +1,132 @@
+#include "ctk/geom/output_set.hpp"
+
+#include <fcntl.h>
+#include <stdio.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <ctime>
+#include <random>
+#include <stdexcept>
+
+namespace ctk {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::atomic<OutputSet*> active_set{nullptr};
+
+std::string make_run_id() {
+  char host[256] = "host";
+  ::gethostname(host, sizeof host - 1);
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  ::gmtime_r(&now, &utc);
+  char when[32];
+  std::strftime(when, sizeof when, "%Y%m%dT%H%M%S", &utc);
+  std::random_device entropy;
+  const unsigned random = entropy();
+  char tail[16];
+  std::snprintf(tail, sizeof tail, "%08x", random);
+  std::string id = host;
+  for (char& c : id)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-') c = '-';
+  return id + "-" + std::to_string(::getpid()) + "-" + when + "-" + tail;
+}
+
+}  // namespace
+
+const std::string& this_run_id() {
+  static const std::string id = make_run_id();
+  return id;
+}
+
+fs::path temporary_beside(const fs::path& path) {
+  static std::atomic<unsigned> counter{0};
+  // Appended piece by piece: GCC 12 misreads "." + std::string as an overlapping copy (-Wrestrict).
+  std::string name = ".";
+  name += path.stem().string();
+  name += ".";
+  name += this_run_id();
+  name += "-";
+  name += std::to_string(counter++);
+  name += path.extension().string();
+  fs::path tmp = path;
+  tmp.replace_filename(name);
+  return tmp;
+}
+
+OutputSet::OutputSet() {
+  OutputSet* none = nullptr;
+  if (!active_set.compare_exchange_strong(none, this)) throw std::logic_error("OutputSet: another set is active");
+}
+
+OutputSet::~OutputSet() {
+  active_set = nullptr;
+  std::error_code ignored;
+  for (const auto& [temporary, target] : waiting_) fs::remove(temporary, ignored);
+}
+
+OutputSet* OutputSet::active() { return active_set.load(); }
+
+OutputSet::Outside::Outside() : held_(active_set.exchange(nullptr)) {}
+OutputSet::Outside::~Outside() { active_set = held_; }
+
+void OutputSet::add(fs::path temporary, fs::path target) {
+  const std::lock_guard lock(mutex_);
+  // A file written again replaces its earlier version in the queue, at its new place in the order.
+  const auto earlier = std::find_if(waiting_.begin(), waiting_.end(), [&](const auto& w) { return w.second == target; });
+  if (earlier != waiting_.end()) {
+    std::error_code ignored;
+    fs::remove(earlier->first, ignored);
+    waiting_.erase(earlier);
+  }
+  waiting_.emplace_back(std::move(temporary), std::move(target));
+}
+
+void OutputSet::publish() {
+  const std::lock_guard lock(mutex_);
+  for (auto it = waiting_.begin(); it != waiting_.end(); it = waiting_.erase(it)) fs::rename(it->first, it->second);
+}
+
+StagedFolder::StagedFolder(fs::path target, std::vector<std::string> owned) : target_(std::move(target)), owned_(std::move(owned)) {
+  const fs::path absolute = fs::absolute(target_).lexically_normal();
+  const fs::path parent = (absolute.filename().empty() ? absolute.parent_path() : absolute).parent_path();
+  fs::create_directories(parent);
+  staging_ = temporary_beside(parent / (absolute.filename().empty() ? absolute.parent_path().filename() : absolute.filename()));
+  fs::create_directory(staging_);
+}
+
+StagedFolder::~StagedFolder() {
+  std::error_code ignored;
+  if (!committed_) fs::remove_all(staging_, ignored);
+}
+
+void StagedFolder::commit() {
+  const fs::path target = fs::absolute(target_).lexically_normal();
+  if (!fs::exists(target)) {
+    fs::rename(staging_, target);
+    committed_ = true;
+    return;
+  }
+  if (!fs::is_directory(target)) throw std::runtime_error(target_.string() + ": exists and is not a folder");
+  // One step: readers see the old folder or the new one, never a mixture.
+  if (::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, target.c_str(), RENAME_EXCHANGE) != 0)
+    throw std::runtime_error(target_.string() + ": cannot put the new folder in place: " + std::strerror(errno));
+  committed_ = true;
+  const fs::path old = staging_;  // now holds the earlier folder
+  for (const fs::directory_entry& entry : fs::directory_iterator(old)) {
+    const std::string name = entry.path().filename().string();
+    if (std::find(owned_.begin(), owned_.end(), name) != owned_.end() || fs::exists(target / name)) continue;
+    fs::rename(entry.path(), target / name);
+  }
+  fs::remove_all(old);
+}
+
+}  // namespace ctk
