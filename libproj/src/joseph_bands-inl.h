@@ -27,12 +27,12 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 // The scatter into the volume adds two pairs of floats per sample (rows c and c + 1), and on the
-// Zen 5 each 8-byte store costs about a cycle (session 36): the stores bound it. A band stores
+// Zen 5 each 8-byte store costs about a cycle (benchmarks/paired.py): the stores bound it. A band stores
 // every row pair (c, c + 1) of its box interleaved, float by float, so that a sample's corners
 // (b, c), (b, c + 1), (b + 1, c), (b + 1, c + 1) are four consecutive floats. As c may be even
 // or odd, it holds two such copies: parity 0 interleaves rows (2j, 2j + 1), parity 1 rows
 // (2j - 1, 2j) (its row 0 is half outside the box and stays zero). A voxel is in both, once in
-// each, and add_band sums them. In a scratch loop over cached data (session 39) the quads' pass
+// each, and add_band sums them. In a scratch loop over cached data (benchmarks/paired.py) the quads' pass
 // took 1.25-1.6 cycles per sample, the pairs' 2.3-2.9.
 struct QuadBand {
   int k0 = 0, slices = 0;  // slices k0 .. k0 + slices - 1 of the bundles' axis
@@ -77,15 +77,15 @@ struct QuadBand {
 // Bands larger than this many floats (1 MB, each thread's own) are not used; their bundles
 // scatter as before. In circular views some bands along x are 20-32 rows of z tall (16 slices,
 // up to about 150 k floats): with 96 k, 164 of 512 groups of a half-scale run went strip by strip,
-// and the standard problem's back projection gained 1.10x instead of 1.24x (session 39). With
+// and the standard problem's back projection gained 1.10x instead of 1.24x (benchmarks/paired.py). With
 // spherical views in slab order (slab_lines.hpp), bands along y and z of 40-55 rows (8 slices,
 // the whole width: 170-230 k floats) gather 1.1-2.2 samples per voxel; 256 k rather than 160 k
 // made the spherical back projection 1.06-1.07x faster, circular 1.00x (192 k 1.035x, 384 k
-// 1.06x; in-process, session 41).
+// 1.06x; in-process, benchmarks/paired.py).
 inline constexpr std::size_t kMaxBandFloats = 256 * 1024;
 // Nor bands with fewer samples than voxels: zeroing a band and adding it back cost about what a
 // voxel's samples save. Without this limit spherical views lost 5 %; with 0.5, 1 or 2 samples per
-// voxel, in-process: circular 1.30, 1.31, 1.24x, spherical 0.97, 0.98, 0.98x (session 39).
+// voxel, in-process: circular 1.30, 1.31, 1.24x, spherical 0.97, 0.98, 0.98x (benchmarks/paired.py).
 inline constexpr double kMinSamplesPerVoxel = 1.0;
 
 enum class BandFit { nothing, fits, no };
@@ -225,7 +225,7 @@ HWY_INLINE void scatter_into_band(DF df, const RayTable& t, const Bundle* bundle
 class BundleGroups {
  public:
   // Sorts bundles[0, count) by key(bundle), an int. The keys span a few groups, so they are
-  // counted (std::sort of the pairs took 1.8 % of a spherical back projection, session 42).
+  // counted (std::sort of the pairs took 1.8 % of a spherical back projection, benchmarks/paired.py).
   template <class Key>
   void sort(const Bundle* bundles, std::size_t count, Key&& key) {
     key_.resize(count);

@@ -58,8 +58,7 @@ HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_
 // every target, the masked ones (on the rim, or with lanes of other axes) through
 // scatter_add_rim_slices. (AVX-512 had a row window for them, placing the lanes' weights by expand and
 // permutes and updating the rows whole, one slice at a time: on the Zen 4 it took 1.12-1.3x
-// longer than this scatter, with or without its rows asked for ahead; benchmarks/README.md,
-// session 30.)
+// longer than this scatter, with or without its rows asked for ahead; benchmarks/paired.py.)
 template <class DF>
 HWY_INLINE void march_back(DF df, const RayTable& t, const Bundle& b, hn::Vec<DF> value, hn::Mask<DF> lanes, int k_lo,
                            int k_hi, float* HWY_RESTRICT volume, Rows fetch) {
@@ -97,7 +96,7 @@ struct XStrip {
 // which needs them too; address_tile sets the grid; weights and values are read from `t`). In a
 // tile every corner of a lane in its range is there, so a lane's interior range is its range. One
 // vector per array: copying all seventeen arrays with std::copy_n, once per slab task, was 5 % of
-// a circular back projection in memmove calls on the Zen 5 (session 34).
+// a circular back projection in memmove calls on the Zen 5 (benchmarks/paired.py).
 template <class DF, class VI = hn::Vec<hn::RebindToSigned<DF>>>
 HWY_INLINE void copy_rays(DF df, const RayTable& t, std::size_t r, VI first, VI last, RayTable& local, std::size_t to) {
   const hn::RebindToSigned<DF> di;
@@ -144,7 +143,7 @@ struct StripWorkspace {
   std::vector<float> tile_data;
   // Kept from call to call (each thread's own and each target's, thread_local below, so `lanes`
   // never changes): shaping the copies and sizing the tile (value-initialising 384 kB) on every
-  // call cost 1-2 % of each projection (session 39).
+  // call cost 1-2 % of each projection (benchmarks/paired.py).
   void reserve(int rows, int lanes) {
     const int bundles = std::min(rows * kStripColumns, XStrip::kMaxBundles);
     if (local.rows != bundles) local.shape(1, bundles, lanes);
@@ -185,9 +184,9 @@ HWY_INLINE void for_each_chunk(int k_lo, int k_hi, int k_begin, int k_end, F&& f
 // several lines while they are still in L1/L2; one bundle at a time, the rows a line shared with
 // the one before had been evicted by then (slices along z are 256 kB apart in a 256^3 volume, so
 // no prefetcher foresees the next). Per-bundle state stays in registers over a chunk; one slice
-// at a time it did not (25 % slower). Measured on Zen 3, benchmarks/README.md (session 21).
+// at a time it did not (25 % slower). Measured on Zen 3, benchmarks/README.md (benchmarks/paired.py).
 // The forward projection takes 16: each bundle's call then makes one full pass of
-// add_window_samples, whose set-up costs about 300 instructions (1.01-1.13x over 8, session 25);
+// add_window_samples, whose set-up costs about 300 instructions (1.01-1.13x over 8, benchmarks/paired.py);
 // the back projection measured no better with 16 (0.97-1.01) and keeps 8.
 constexpr int kForwardChunkSlices = 16;
 constexpr int kBackChunkSlices = 8;
@@ -211,7 +210,7 @@ HWY_INLINE TileFit start_chunk(DF df, const RayTable& t, int axis, int k0, int k
 // drift across y and z about as far as they advance along x, in oblique views), its first half
 // and then the rest, halving down to kMinTileSlices before the bundles march in the volume
 // itself (gathers, and on the back projection a scatter across rows and planes; 12 % of the
-// tile chunks of spherical views did, benchmarks/README.md session 24). f(k_lo, k_hi, fit,
+// tile chunks of spherical views did, benchmarks/paired.py). f(k_lo, k_hi, fit,
 // in_volume) for each part in slice order, its tile (or in_volume) ready; parts where no lane
 // has a sample are skipped.
 constexpr int kMinTileSlices = 4;
@@ -244,7 +243,7 @@ HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRIC
   // A chunk's sums, carried from tile to tile when the chunk takes several (each lane then adds
   // its samples in the same order as through one tile). Summing straight into `sums` instead
   // saves this buffer and 0.5 % of instructions but measured 0.94 to 0.99 on circular views
-  // (1.03 spherical; session 24), so the buffer stays.
+  // (1.03 spherical; benchmarks/paired.py), so the buffer stays.
   HWY_ALIGN float chunk_sums[XStrip::kMaxBundles * kMaxLanes];
   TileDrift drift;
   for_each_chunk(s.k_lo, s.k_hi, 0, 1 << 30, [&](int k0, int k1) {
@@ -309,7 +308,7 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
 // others; those go to `one` in groups of kGroupColumns bundles of every row, the order in which
 // neighbouring lines share rows of the volume (kForwardChunkSlices). Strips are twice as wide as
 // the groups, so fewer voxels are copied into tiles (views mostly along x 1.1x faster); walking
-// the other bundles in groups that wide made views along y and z 6 % slower (session 26).
+// the other bundles in groups that wide made views along y and z 6 % slower (benchmarks/paired.py).
 // runs_along_x(r) says whether the bundle at entry r goes along x (along_x).
 constexpr int kGroupColumns = 4;
 template <class DF, class AlongX, class One, class Strip>
@@ -408,7 +407,7 @@ struct BackWorkspace {
 constexpr bool kBands = HWY_TARGET != HWY_SCALAR;
 // Rows that bundles along y or z share a band by, where the table's band would not pay: the
 // standard problem's spherical back projection 1.02-1.04x faster with 16 to 48 rows (8 rows
-// 1.04x, 12 1.03x; in-process, session 42).
+// 1.04x, 12 1.03x; in-process, benchmarks/paired.py).
 constexpr float kBandRows = 32.0f;
 #if HWY_TARGET != HWY_SCALAR
 // Bundles along x of the slab [k_begin, k_end), through bands: groups of bundles of every view
@@ -485,7 +484,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
   std::vector<Bundle>& in_volume = w.in_volume;
   // along_x from the bundles the fillers prepared (RayTable::bundles), without loading the lanes'
   // axes and ranges for the many bundles whose lanes share one axis: walking the table in every
-  // slab task took 5-9 % of a spherical back projection (session 42).
+  // slab task took 5-9 % of a spherical back projection (benchmarks/paired.py).
   const auto runs_along_x = [&](std::size_t r) {
     const Bundle& b = t.bundles[r / static_cast<std::size_t>(N)];
     return b.axis == -2 ? along_x(df, t, r) : b.axis == 0 && b.k_lo <= b.k_hi;
@@ -526,7 +525,7 @@ void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RE
   // A bundle's interior chunk is added only after the next bundle's corners are found and its
   // rows asked for: those rows then have a bundle's additions to arrive instead of none (the
   // first rows of a chunk had been asked for right before their loads). Each voxel still
-  // receives the bundles in order. Spherical 1.02-1.035x, circular 0.97-1.01x (session 38);
+  // receives the bundles in order. Spherical 1.02-1.035x, circular 0.97-1.01x (benchmarks/paired.py);
   // asking two or three bundles ahead gained nothing more.
   static_assert(kBackChunkSlices <= kInteriorBatch, "a bundle's chunk is one batch");
   InteriorScatter<hn::ScalableTag<float>> scatter[2];

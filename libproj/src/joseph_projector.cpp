@@ -18,7 +18,7 @@ namespace {
 // Rays per shared back-projection table (about 4.5 MB; there are two). With the views in slab
 // order, a table of more views gathers more samples per band voxel: 65536 rather than 32768 made
 // the spherical back projection 1.054x faster and the circular one 1.026x (49152: 1.032x,
-// 98304: 1.036x spherical; in-process, session 41).
+// 98304: 1.036x spherical; in-process, benchmarks/paired.py).
 constexpr int kBackTableRays = 65536;
 }  // namespace
 
@@ -31,7 +31,7 @@ JosephProjector::JosephProjector(ProjectorOptions options) : options_(options) {
 // rows of the lines plus the rows its rays drift across. Where the rays run within 0.2 voxel
 // per slice of the rows (circular trajectories about an axis of the volume), 8 lines are best;
 // where they cross rows faster (spherical trajectories), a taller table touches fewer rows per
-// sample. The standard problem on the Zen 5 (session 37): 24 lines made spherical views 1.06-1.16x
+// sample. The standard problem on the Zen 5 (benchmarks/paired.py): 24 lines made spherical views 1.06-1.16x
 // faster each way and circular ones 0.94-0.99x forward (benchmarks/README.md).
 int JosephProjector::default_rows_per_block(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout) {
   constexpr int kLinesAlongRows = 8;
@@ -170,7 +170,7 @@ struct alignas(64) AxisSamples {
 // The first slice of slab s of `slabs` along `axis` (n slices). Along x, where slabs are at least
 // a tile chunk wide, on multiples of kTileSlices, where the tiles' chunks start: an edge inside a
 // chunk left two partial tiles, one per thread. Back projection with the edges moved, in-process
-// (session 38): 200^3 voxels (8 slabs of 25) 1.10x circular and 1.05x spherical, 300^3 1.07x and
+// (benchmarks/paired.py): 200^3 voxels (8 slabs of 25) 1.10x circular and 1.05x spherical, 300^3 1.07x and
 // 1.04x; 256^3 had them there already. Narrower slabs keep their even edges: at 80^3, rounded
 // edges left 5 slabs of 16 for 2 threads (0.96x).
 int slab_edge(int s, int slabs, int n, int axis) {

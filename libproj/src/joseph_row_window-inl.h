@@ -120,7 +120,7 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
 // the row window where it applies (Bundle::window), else pair_corners_at's two pairs. Two
 // passes, as add_window_samples: first every slice's pairs, their lines asked for with
 // Rows::fetch_ahead, then the loads. One slice at a time, each sample's gathers waited for
-// their lines: 19 % of ForwardRays' time in spherical views on the Zen 4 (session 31).
+// their lines: 19 % of ForwardRays' time in spherical views on the Zen 4 (benchmarks/paired.py).
 template <class DF>
 HWY_INLINE hn::Vec<DF> add_rim_samples(DF df, const RayTable& t, const float* HWY_RESTRICT volume, const Bundle& b, int k_lo,
                                        int k_hi, hn::Vec<DF> sum, Rows fetch) {
@@ -188,7 +188,7 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
       __m256 fbi, fci;
       position.at(kf, ib, ic, fbi, fci);
       // x0 and c0 as window_origin finds them, kept in vectors (no lane extractions and scalar
-      // clamps on the way to the rows: 4-8 % of a view's forward instructions, session 33).
+      // clamps on the way to the rows: 4-8 % of a view's forward instructions, benchmarks/paired.py).
       const __m256i x0 = _mm256_min_epi32(
           _mm256_max_epi32(_mm256_min_epi32(_mm256_broadcastd_epi32(_mm256_castsi256_si128(ib)), _mm256_permutevar8x32_epi32(ib, last_lane)),
                            _mm256_setzero_si256()),
@@ -256,7 +256,7 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
 // to kWindowBatch slices: first every slice's window (origin, lanes' places, fractions), then
 // the loads. A sample's chain from the table to its rows is long; in one pass the processor had
 // fewer than two samples in flight, each waiting for its rows almost alone (10-15 % faster on
-// the Zen 3, benchmarks/README.md, session 23). With Rows::fetch_ahead, the first pass also asks
+// the Zen 3, benchmarks/README.md, benchmarks/paired.py). With Rows::fetch_ahead, the first pass also asks
 // for the rows (prefetch_span).
 template <class DF>
 HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r,

@@ -48,7 +48,7 @@ struct SamplePosition {
 // take a voxel), far below 2^22; other lanes' indices are never used (masked paths give them
 // voxel 0 and weight zero). It replaces ConvertTo, whose fix-up for overflow cost four more
 // instructions per vector on AVX-512, twice per sample: forward 1.04-1.08x, back 1.01-1.02x on
-// the Zen 5, indices bit for bit the same (session 34).
+// the Zen 5, indices bit for bit the same (benchmarks/paired.py).
 template <class DF>
 class WholeToInt {
  public:
@@ -409,7 +409,7 @@ HWY_INLINE void add_pair(float* HWY_RESTRICT v, const float* HWY_RESTRICT w) {
 // a[0], b[0], a[1], b[1], ... at `out` (aligned), as StoreInterleaved2 stores them: the weights of
 // corners b and b + 1 side by side for the scatters' pairs. On AVX-512 two permutes across the
 // whole vector, where Highway 1.0 takes six shuffles (unpacks within 128-bit blocks, then the
-// blocks reordered): back projection 1.01-1.03x on the Zen 5 (session 34).
+// blocks reordered): back projection 1.01-1.03x on the Zen 5 (benchmarks/paired.py).
 template <class DF>
 HWY_INLINE void store_interleaved(DF df, hn::Vec<DF> a, hn::Vec<DF> b, float* HWY_RESTRICT out) {
 #if HWY_TARGET <= HWY_AVX3
@@ -433,9 +433,9 @@ enum class Rows { fetch_ahead, cached };
 // those voxels are mostly outside L2 (each view reads the whole volume, and the next view shares
 // little of it), and without asking, the second pass met the misses about one slice at a time
 // (spherical views 1.05-1.2x faster each way on the Zen 3, circular ones unchanged;
-// benchmarks/README.md, session 29). Not for tiles: they were just filled. The width is a
+// benchmarks/README.md, benchmarks/paired.py). Not for tiles: they were just filled. The width is a
 // constant so that this is straight-line code: as a loop over a run-time width it took 5-13 % of
-// a view's forward instructions on AVX2 (session 33).
+// a view's forward instructions on AVX2 (benchmarks/paired.py).
 template <int kFloats>
 HWY_INLINE void prefetch_span(const float* first) {
   for (int i = 0; i < kFloats - 1; i += 16) hwy::Prefetch(first + i);  // 16 floats: a 64-byte line
@@ -480,7 +480,7 @@ HWY_INLINE std::uint32_t lane_bits(DF df, hn::Mask<DF> m) {
 // as scatter_add_interior_slices (and for the same reasons): every slice's corners first, their
 // lines asked for with Rows::fetch_ahead, then the additions. Slice by slice, testing each
 // corner's weight, the additions waited for their lines: 15 % of BackRays' time in spherical
-// views on the Zen 4 (session 31). (A gather, add and scatter per corner was tried: 1.7x slower
+// views on the Zen 4 (benchmarks/paired.py). (A gather, add and scatter per corner was tried: 1.7x slower
 // on Zen 5, the next corner's gather waiting for the scatter's stores.)
 template <class DF>
 HWY_INLINE void scatter_add_rim_slices(DF df, const RayTable& t, const Bundle& b, int k_lo, int k_hi, hn::Mask<DF> lanes,
@@ -594,13 +594,13 @@ HWY_INLINE void interior_corners_avx2(const RayTable& t, std::size_t r, int k0, 
 // scatter_add_rim_slices (above) but where every lane is on the slab's axis and every corner
 // inside the volume: no masks, and corners 1 to 3 are offsets of corner 0. Two passes over up to
 // kInteriorBatch slices: every slice's corners first, then the scatters (as the forward
-// projection's add_window_samples; 6-14 % faster on the Zen 3, session 23). The scatters go lane
+// projection's add_window_samples; 6-14 % faster on the Zen 3, benchmarks/paired.py). The scatters go lane
 // by lane, each lane through every slice: neighbouring lanes share voxels, and a lane's stores
 // to them are then slices of work ahead of the next lane's loads instead of just before them
-// (1.05-1.06x, session 26); on AVX-512 pairs go slice by slice, even lanes before odd ones
+// (1.05-1.06x, benchmarks/paired.py); on AVX-512 pairs go slice by slice, even lanes before odd ones
 // (below). Where b is the contiguous axis (all but rays along x outside tiles), corners b and
 // b + 1 are added as one pair of floats, their weights stored interleaved: half the loads and
-// stores (1.04-1.13x, session 26). A voxel receives each lane by its own float addition, as on
+// stores (1.04-1.13x, benchmarks/paired.py). A voxel receives each lane by its own float addition, as on
 // the masked path (in lane order, except AVX-512's pairs: an odd lane after the even lane
 // above it). With Rows::fetch_ahead, the pairs' lines are asked for between the passes
 // (prefetch_span, above).

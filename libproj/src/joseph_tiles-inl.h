@@ -31,14 +31,14 @@ namespace hn = hwy::HWY_NAMESPACE;
 // kTileMaxWidth floats (384 kB).
 // Bundles of this many neighbouring columns (and every row of the table) share a tile: 64
 // pixels of a line, whatever the lanes. Wider tiles copy each voxel fewer times (a tile's width
-// is its lanes' span plus the rays' drift): 64 pixels rather than 32 on AVX2 since session 26
-// (spherical views 1.04x each way). But 128 pixels span about 137 voxels in the standard
+// is its lanes' span plus the rays' drift): 64 pixels rather than 32 on AVX2
+// (spherical views 1.04x each way, benchmarks/paired.py). But 128 pixels span about 137 voxels in the standard
 // problem, more than kTileMaxWidth: with 8 bundles of 16 lanes, AVX-512 sent nearly every ray
-// along x to the gathers (until session 30; 64 pixels made the Zen 4's circular forward 1.4x
+// along x to the gathers (64 pixels made the Zen 4's circular forward 1.4x
 // and back 1.28x faster, 96 pixels or 256-voxel tiles less so).
 constexpr int kStripColumns = 64 / static_cast<int>(HWY_LANES(float));
 // Tables of 24 lines (JosephProjector::default_rows_per_block, spherical views) span about 26
-// rows along z plus the drift of oblique rays: 48 rather than 24 (session 37).
+// rows along z plus the drift of oblique rays: 48 rather than 24 (benchmarks/paired.py).
 constexpr int kTileMaxWidth = 128, kTileMaxHeight = 48;
 
 struct Tile {
@@ -136,12 +136,12 @@ HWY_INLINE void for_each_block8(const TileLike& tile, F&& f) {
 // is read gives it a whole chunk's march to arrive: in spherical views, which read the whole
 // volume, the fill's loads waited on memory (in `perf`, the first load of each 16 x 16 block held
 // 12 % of a strip's samples). Forward 1.09-1.12x spherical, 0.98-1.04x circular; back, with
-// add_tile's unmasked whole lines, 1.04-1.05x on AVX-512 and 1.00-1.01x on AVX2 (Zen 5, session
-// 35). Asking for the next chunk's whole box at once, at its start, gained nothing: a burst of a
+// add_tile's unmasked whole lines, 1.04-1.05x on AVX-512 and 1.00-1.01x on AVX2 (Zen 5,
+// benchmarks/paired.py). Asking for the next chunk's whole box at once, at its start, gained nothing: a burst of a
 // thousand requests the current loads queued behind. The rays are straight, so the next chunk's
 // box lies about as far on (in y and z) from this chunk's as this one's from the last: the line
 // asked for is (y, z) moved by that much, not (y, z) itself (oblique spherical views drift by
-// several rows a chunk; forward 1.06x spherical, 1.01x circular, session 36). The back
+// several rows a chunk; forward 1.06x spherical, 1.01x circular, benchmarks/paired.py). The back
 // projection keeps (y, z) itself: its drift measured 0.98-1.00. Asking for the next box's own
 // lines, found by tile_box and dealt out a share per row of this one, measured no better.
 struct NextChunk {

@@ -42,7 +42,7 @@ struct Bundle {
 // written; pixels outside the footprint are in no line (their rays miss the volume).
 // One path per view, for the dominant axis at the detector's centre. In a view between two axes
 // the other axis's lanes then spread over several rows and gather; a path per axis removed
-// those gathers but measured no faster (benchmarks/README.md, session 27).
+// those gathers but measured no faster (benchmarks/README.md, benchmarks/paired.py).
 struct LanePath {
   Eigen::Vector3d central_ray = Eigen::Vector3d::UnitZ();  // the ray through the detector's centre
   int axis = 2;                   // its dominant axis, the one the path is chosen for

@@ -125,8 +125,8 @@ void PrepareRays(const ViewRays& rays, const VolumeLayout& layout, int grid_orig
 // LanePath::pixel of lanes lane + min(l, count - 1), l < kMaxLanes, in doubles, with the same
 // operations (so the same values), stored as PrepareRays loads them. Found one lane at a time in
 // RayTable::fill, the compiler's pairs of scalar results were reloaded as vectors before their
-// stores had left, and that stall was most of the fill (3 % of a circular back projection, session
-// 38); a vector store that the same vector load reads back is forwarded.
+// stores had left, and that stall was most of the fill (3 % of a circular back projection in
+// perf); a vector store that the same vector load reads back is forwarded.
 void LanePixels(const LanePath& path, int line, int lane, int count, double* u, double* v) {
   const hn::ScalableTag<double> d;
   const hn::Rebind<std::int32_t, decltype(d)> di;
@@ -144,7 +144,7 @@ void LanePixels(const LanePath& path, int line, int lane, int count, double* u, 
 // Entries [first, first + count) of t from p, SIMD across rays: floats rounded from the doubles
 // as static_cast rounds them, the integers exact, each axis's strides and sizes picked per lane.
 // (One entry at a time, with its axis looked up, this took most of RayTable::fill: 4 % of a
-// spherical back projection on the Zen 4, session 32.)
+// spherical back projection on the Zen 4, benchmarks/paired.py.)
 void StoreRays(const PreparedRays& p, const VolumeLayout& layout, int count, RayTable& t, std::size_t first) {
   const hn::ScalableTag<double> d;
   const hn::Rebind<float, decltype(d)> df;

@@ -53,7 +53,7 @@ constexpr double kSameTilt = 1e-3;  // radians
 // The views by dominant axis, then tilt, then heading; or as given where that is as coherent:
 // circular trajectories, whose views share their slabs whatever the axis, are best taken in
 // their order of heading across axes (sorted by axis, each axis's views come in two arcs, and a
-// table spanning the jump between them measured 1.03-1.07x slower, session 41). Coherence is
+// table spanning the jump between them measured 1.03-1.07x slower, benchmarks/paired.py). Coherence is
 // the path length of the slabs' normals from view to view, plus a hundredth of the central rays'.
 std::vector<int> slab_order(const std::vector<LinePlanes>& planes) {
   std::vector<int> given(planes.size());

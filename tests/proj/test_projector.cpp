@@ -408,10 +408,10 @@ RandomCase random_case(std::uint64_t seed) {
   return c;
 }
 
-// Before session 16, 15 % of these cases failed on AVX-512 (back projection 0.3 to 7 % off):
+// A staircase bug once failed 15 % of these cases on AVX-512 (back projection 0.3 to 7 % off):
 // with rays closer than a voxel, a staircase zigzagging across a row boundary put two lanes on
 // one voxel with a lane of the other row between them, and the AVX-512 back projection's row
-// window (removed in session 30) lost one.
+// window (since removed) lost one.
 TEST(JosephProjector, RandomGeometriesAgreeWithTheReference) {
   for (std::uint64_t seed = 0; seed < 60; ++seed) {
     const RandomCase c = random_case(seed);

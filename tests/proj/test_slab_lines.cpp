@@ -91,7 +91,7 @@ TEST(SlabLines, CircularViewsComeInTheirOrderWithTheSameLines) {
 TEST(SlabLines, SphericalViewsAreOrderedSoThatNeighboursShareSlabs) {
   const Dealt d(StandardTrajectory::spherical, 360, 24);
   // In the given order (random directions) consecutive views' central planes turn by 0.79 rad on
-  // average (session 41); in slab order, by about the spacing of 360 views over the sphere or less.
+  // average (benchmarks/paired.py); in slab order, by about the spacing of 360 views over the sphere or less.
   const double turn = mean_turn_within_slabs(d);
   EXPECT_LT(turn, 0.1) << "mean turn " << turn << " rad";
   // The lines of one slab lie in it: for views along one axis (whose slabs are planes of one
