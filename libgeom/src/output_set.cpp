@@ -1,6 +1,7 @@
 #include "ctk/geom/output_set.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <stdio.h>
 #include <unistd.h>
 
@@ -9,6 +10,7 @@
 #include <cctype>
 #include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <random>
@@ -22,9 +24,37 @@ namespace {
 
 std::atomic<OutputSet*> active_set{nullptr};
 
-std::string make_run_id() {
+// This host's name as run ids carry it.
+std::string host_name() {
   char host[256] = "host";
   ::gethostname(host, sizeof host - 1);
+  std::string id = host;
+  for (char& c : id)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-') c = '-';
+  return id;
+}
+
+// Temporaries beside `target` left by runs of this host that were killed (their process is gone):
+// a kill -9 runs no clean-up, so the next run writing the same target does it.
+void remove_stale_temporaries(const fs::path& target) {
+  const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::string prefix = ".";  // piece by piece: GCC 12 misreads "." + std::string (-Wrestrict)
+  prefix += target.stem().string();
+  prefix += ".";
+  prefix += host_name();
+  prefix += "-";
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    const long pid = std::strtol(name.c_str() + prefix.size(), nullptr, 10);
+    if (pid <= 0 || pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;
+    std::error_code ignored;
+    fs::remove_all(entry.path(), ignored);
+  }
+}
+
+std::string make_run_id() {
   const std::time_t now = std::time(nullptr);
   std::tm utc{};
   ::gmtime_r(&now, &utc);
@@ -34,10 +64,7 @@ std::string make_run_id() {
   const unsigned random = entropy();
   char tail[16];
   std::snprintf(tail, sizeof tail, "%08x", random);
-  std::string id = host;
-  for (char& c : id)
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-') c = '-';
-  return id + "-" + std::to_string(::getpid()) + "-" + when + "-" + tail;
+  return host_name() + "-" + std::to_string(::getpid()) + "-" + when + "-" + tail;
 }
 
 }  // namespace
@@ -92,14 +119,19 @@ void OutputSet::add(fs::path temporary, fs::path target) {
 
 void OutputSet::publish() {
   const std::lock_guard lock(mutex_);
-  for (auto it = waiting_.begin(); it != waiting_.end(); it = waiting_.erase(it)) fs::rename(it->first, it->second);
+  for (auto it = waiting_.begin(); it != waiting_.end(); it = waiting_.erase(it)) {
+    fs::rename(it->first, it->second);
+    remove_stale_temporaries(it->second);
+  }
 }
 
 StagedFolder::StagedFolder(fs::path target, std::vector<std::string> owned) : target_(std::move(target)), owned_(std::move(owned)) {
   const fs::path absolute = fs::absolute(target_).lexically_normal();
   const fs::path parent = (absolute.filename().empty() ? absolute.parent_path() : absolute).parent_path();
   fs::create_directories(parent);
-  staging_ = temporary_beside(parent / (absolute.filename().empty() ? absolute.parent_path().filename() : absolute.filename()));
+  const fs::path place = parent / (absolute.filename().empty() ? absolute.parent_path().filename() : absolute.filename());
+  remove_stale_temporaries(place);
+  staging_ = temporary_beside(place);
   fs::create_directory(staging_);
 }
 

@@ -3,7 +3,8 @@
 # folder of an earlier one leaves that scan exactly as it was (no new projections under the old
 # truth), and a reconstruction killed while iterating leaves the earlier volume, its previews and
 # its log as they were. A finished simulation replaces the earlier scan as a whole (no stale
-# projections of a longer run) and keeps the files it does not own; a projection of another run
+# projections of a longer run), keeps the files it does not own and removes what the killed one
+# left; a projection of another run
 # copied into a scan's folder is refused by the readers. Usage: outputs_published_together.sh CTK
 set -u
 . "$(dirname "$0")/signals.sh"
@@ -30,6 +31,7 @@ grep -q "wls-cg: [1-9][0-9]* / " recon.log || fail "the reconstruction was not c
 [ "$(cat s/v.nrrd s/v.log.json s/v_axial.png | md5sum)" = "$before" ] || fail "a reconstruction killed while iterating changed the earlier outputs"
 
 "$ctk" simulate --out s --views 3 --cols 48 --rows 48 --pitch 9 >/dev/null 2>&1 || fail "the second simulation failed"
+ls -a | grep -q '^\.s\.' && fail "the hidden folder of the killed simulation is still there: $(ls -a | grep '^\.s\.')"
 [ "$(ls s/projections | wc -l)" -eq 3 ] || fail "stale projections of the earlier scan: $(ls s/projections | tr '\n' ' ')"
 [ "$(cat s/notes.txt 2>/dev/null)" = "the user's note" ] || fail "the user's note was not kept"
 [ -s s/v.nrrd ] || fail "the earlier reconstruction beside the scan was not kept"

@@ -7,7 +7,8 @@
 // writes into a hidden folder beside the target, which is swapped in at once.
 //
 // Temporary names carry the run's identity (host, process, start time, random), so two runs on
-// two hosts writing into one shared folder never write into each other's temporaries.
+// two hosts writing into one shared folder never write into each other's temporaries; those a
+// killed run of this host left are removed by the next run that writes the same target.
 #include <filesystem>
 #include <mutex>
 #include <string>
