@@ -126,12 +126,14 @@ void OutputSet::publish() {
 }
 
 StagedFolder::StagedFolder(fs::path target, std::vector<std::string> owned) : target_(std::move(target)), owned_(std::move(owned)) {
-  const fs::path absolute = fs::absolute(target_).lexically_normal();
+  // A target that is a symbolic link to a folder: the folder is replaced (beside it, on its file
+  // system), the link stays.
+  const fs::path absolute = fs::weakly_canonical(fs::absolute(target_));
   const fs::path parent = (absolute.filename().empty() ? absolute.parent_path() : absolute).parent_path();
   fs::create_directories(parent);
-  const fs::path place = parent / (absolute.filename().empty() ? absolute.parent_path().filename() : absolute.filename());
-  remove_stale_temporaries(place);
-  staging_ = temporary_beside(place);
+  place_ = parent / (absolute.filename().empty() ? absolute.parent_path().filename() : absolute.filename());
+  remove_stale_temporaries(place_);
+  staging_ = temporary_beside(place_);
   fs::create_directory(staging_);
 }
 
@@ -141,7 +143,7 @@ StagedFolder::~StagedFolder() {
 }
 
 void StagedFolder::commit() {
-  const fs::path target = fs::absolute(target_).lexically_normal();
+  const fs::path& target = place_;
   if (!fs::exists(target)) {
     fs::rename(staging_, target);
     committed_ = true;

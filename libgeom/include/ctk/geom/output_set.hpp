@@ -73,7 +73,7 @@ class StagedFolder {
   void commit();
 
  private:
-  std::filesystem::path target_, staging_;
+  std::filesystem::path target_, place_, staging_;  // as given; resolved; the hidden folder
   std::vector<std::string> owned_;
   bool committed_ = false;
 };
