@@ -9,7 +9,7 @@
 #include <algorithm>
 
 #include "ctk/phantoms/builtin_phantoms.hpp"
-#include "ctk/phantoms/simulated_acquisition.hpp"
+#include "ctk/plan/simulated_acquisition.hpp"
 #include "ctk/plan/plan_trajectory.hpp"
 
 namespace ctk {

@@ -14,7 +14,7 @@
 #include "ctk/geom/scan.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
-#include "ctk/phantoms/simulated_acquisition.hpp"
+#include "ctk/plan/simulated_acquisition.hpp"
 #include "ctk/plan/plan_pictures.hpp"
 #include "ctk/plan/planned_scan.hpp"
 #include "ctk/proj/parallel.hpp"

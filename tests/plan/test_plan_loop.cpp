@@ -12,7 +12,7 @@
 #include "ctk/geom/error.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
-#include "ctk/phantoms/simulated_acquisition.hpp"
+#include "ctk/plan/simulated_acquisition.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/plan/plan_trajectory.hpp"
 #include "ctk/plan/planned_scan.hpp"

@@ -1,4 +1,4 @@
-#include "ctk/phantoms/simulated_acquisition.hpp"
+#include "ctk/plan/simulated_acquisition.hpp"
 
 #include <cstdio>
 

@@ -1,6 +1,6 @@
 #pragma once
-// The simulated lab as the view planner's acquisition side (target ctk::phantoms_plan, which
-// joins the simulator and libplan so neither depends on the other): each request becomes a shot;
+// The simulated lab as the view planner's acquisition side (target ctk::plan_simulated, the only
+// part of libplan that knows the simulator): each request becomes a shot;
 // its counts are written as a TIFF in `folder` (when given) under the name the planned scan will
 // use, and its true matrix is kept for whoever checks the calibration.
 #include <filesystem>
