@@ -1,9 +1,11 @@
 #pragma once
-// Helpers shared by the test suites: a fresh scratch folder per test, and small file writers.
+// Helpers shared by the test suites: a fresh scratch folder per test, small file writers, and the
+// check of an options struct refusing a field out of range.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 #include <string>
 
 namespace ctk::testing {
@@ -23,5 +25,18 @@ inline void write_text(const std::filesystem::path& file, const std::string& tex
 }
 
 inline std::filesystem::path shared_data_dir() { return CTK_SHARED_DATA_DIR; }
+
+/// `options` spoiled by `spoil` must fail its validate() with a message naming `field`
+/// ("SirtOptions.relaxation: expected ...").
+template <typename Options, typename Spoil>
+void expect_option_refused(Options options, Spoil spoil, const std::string& field) {
+  spoil(options);
+  try {
+    options.validate();
+    ADD_FAILURE() << field << " out of range was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(field + ": expected"), std::string::npos) << e.what();
+  }
+}
 
 }  // namespace ctk::testing

@@ -256,7 +256,9 @@ void register_reconstruct(CLI::App& app) {
   cmd->add_option("--regulariser", o->regulariser, "identity (Tikhonov) or gradient")
       ->check(CLI::IsMember({"identity", "gradient"}))
       ->capture_default_str();
-  cmd->add_option("--tolerance", o->tolerance, "Stop when the gradient has fallen by this factor")->check(non_negative_number)->capture_default_str();
+  cmd->add_option("--tolerance", o->tolerance, "Stop when the gradient has fallen by this factor (0 <= tolerance < 1)")
+      ->check(fraction_below_one)
+      ->capture_default_str();
   cmd->add_flag("--unweighted", o->unweighted, "Unit weights even for counts (plain least squares)");
   cmd->add_flag("--as-measured", o->as_measured,
                 "Use the images as measured even when the scan declares a detector distortion (by default they are "

@@ -22,6 +22,15 @@ inline CLI::Validator finite_number_from_zero(bool strictly) {
 }
 
 inline const CLI::Validator positive_number = finite_number_from_zero(true);
+
+// A number in [0, 1): a factor a quantity must fall by.
+inline const CLI::Validator fraction_below_one(
+    [](std::string& input) -> std::string {
+      double value = 0;
+      if (!CLI::detail::lexical_cast(input, value) || !(value >= 0 && value < 1)) return "expected a number in [0, 1), got " + input;
+      return {};
+    },
+    "[0, 1)", "fraction below one");
 inline const CLI::Validator non_negative_number = finite_number_from_zero(false);
 
 }  // namespace ctk::tools

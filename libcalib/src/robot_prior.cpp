@@ -5,6 +5,7 @@
 
 #include <ceres/ceres.h>
 
+#include "ctk/geom/error.hpp"
 #include "ctk/calib/scan_model_fit.hpp"
 #include "ctk/geom/statistics.hpp"
 #include "small_problem.hpp"
@@ -165,7 +166,14 @@ EffectParameters fit_robot_model(const ScanObservations& o, const std::vector<st
 
 }  // namespace
 
+void RobotPriorOptions::validate() const {
+  require_option(min_views >= 12, "RobotPriorOptions.min_views", "at least 12 (the model has 12 offsets)", min_views);
+  require_option(start_sigma_mm > 0, "RobotPriorOptions.start_sigma_mm", "a number above 0", start_sigma_mm);
+  require_option(start_sigma_deg > 0, "RobotPriorOptions.start_sigma_deg", "a number above 0", start_sigma_deg);
+}
+
 RobotPriorFit combine_with_robot(const ScanDescription& scan, ScanCalibration& c, const RobotPriorOptions& options) {
+  options.validate();
   RobotPriorFit result;
   if (!scan.panda) {
     result.reason = "the poses do not come from a robot";

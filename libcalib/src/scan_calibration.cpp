@@ -22,6 +22,7 @@ struct FirstGuess {
 ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<FirstGuess>& guesses, const CalibrationOptions& options,
                                 const std::function<void(int, int)>& progress, const BatchControl* control) {
   const auto start = std::chrono::steady_clock::now();
+  options.validate();
   if (!scan.holder) throw InputError("scan", "holder", "calibration needs the holder's spheres (missing)");
   if (static_cast<int>(scan.holder->spheres_mm.size()) < options.min_spheres)
     throw InputError("scan", "holder.spheres_mm",

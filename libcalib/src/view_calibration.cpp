@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "ctk/geom/error.hpp"
 #include "ctk/calib/pose_fit.hpp"
 #include "ctk/calib/sphere_profile_fit.hpp"
 #include "ctk/calib/sphere_matching.hpp"
@@ -117,8 +118,18 @@ void recover_missed_spheres(const Image& image, const Prediction& p, double radi
 
 }  // namespace
 
+void CalibrationOptions::validate() const {
+  require_option(min_spheres >= 6, "CalibrationOptions.min_spheres", "at least 6 (a pose has 6 parameters)", min_spheres);
+  require_option(max_rms_px > 0, "CalibrationOptions.max_rms_px", "a number above 0", max_rms_px);
+  require_option(search_px > 0, "CalibrationOptions.search_px", "a number above 0", search_px);
+  require_option(robust_px > 0, "CalibrationOptions.robust_px", "a number above 0", robust_px);
+  require_option(max_first_guess_error_deg > 0 && max_first_guess_error_deg <= 180, "CalibrationOptions.max_first_guess_error_deg",
+                 "a number in (0, 180]", max_first_guess_error_deg);
+}
+
 ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, const Rigid& initial, const Holder& holder,
                                const Detector& detector, const CalibrationOptions& o, const std::optional<RadialDistortion>& distortion) {
+  o.validate();
   ViewCalibration out;
   // Projected sphere radius at the holder's depth.
   const double depth = (K.row(2) * initial.translation())(0);

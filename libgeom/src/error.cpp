@@ -1,5 +1,7 @@
 #include "ctk/geom/error.hpp"
 
+#include <sstream>
+
 namespace ctk {
 
 static std::string compose_message(const std::string& file, const std::string& where, const std::string& what) {
@@ -9,6 +11,13 @@ static std::string compose_message(const std::string& file, const std::string& w
 }
 
 std::string json_key(const std::string& path) { return "key '" + path + "'"; }
+
+void require_option(bool ok, const char* field, const char* expected, double value) {
+  if (ok) return;
+  std::ostringstream message;
+  message << field << ": expected " << expected << ", got " << value;
+  throw std::invalid_argument(message.str());
+}
 
 InputError::InputError(std::string file, std::string where, const std::string& what)
     : std::runtime_error(compose_message(file, where, what)), file_(std::move(file)), where_(std::move(where)) {}

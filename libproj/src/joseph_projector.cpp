@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "ctk/geom/error.hpp"
 #include "slab_lines.hpp"
 #include "ray_table.hpp"
 
@@ -22,10 +23,12 @@ namespace {
 constexpr int kBackTableRays = 65536;
 }  // namespace
 
-JosephProjector::JosephProjector(ProjectorOptions options) : options_(options) {
-  if (options_.rows_per_block < 0)
-    throw std::invalid_argument("ProjectorOptions: rows_per_block must not be negative (0: the default for the views)");
+void ProjectorOptions::validate() const {
+  require_option(threads >= 0, "ProjectorOptions.threads", "at least 0 (0: all OpenMP threads)", threads);
+  require_option(rows_per_block >= 0, "ProjectorOptions.rows_per_block", "at least 0 (0: the default for the views)", rows_per_block);
 }
+
+JosephProjector::JosephProjector(ProjectorOptions options) : options_(options) { options_.validate(); }
 
 // A chunk of slices (16 along x through tiles, 8 or 16 elsewhere) of a table's lines touches the
 // rows of the lines plus the rows its rays drift across. Where the rays run within 0.2 voxel

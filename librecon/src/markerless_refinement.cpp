@@ -9,6 +9,7 @@
 #include <optional>
 #include <sstream>
 
+#include "ctk/geom/error.hpp"
 #include "ctk/geom/statistics.hpp"
 
 namespace ctk {
@@ -232,8 +233,17 @@ double fixed_pattern_statistic(const ProjectionStack& r) {
 
 }  // namespace
 
+void RefinementOptions::validate() const {
+  require_option(z_accept > 0, "RefinementOptions.z_accept", "a number above 0", z_accept);
+  require_option(max_rounds >= 1, "RefinementOptions.max_rounds", "at least 1", max_rounds);
+  require_option(sharpness_tolerance >= 0 && sharpness_tolerance < 1, "RefinementOptions.sharpness_tolerance", "a number in [0, 1)",
+                 sharpness_tolerance);
+  require_option(nominal_blur_arc_deg >= 0, "RefinementOptions.nominal_blur_arc_deg", "at least 0", nominal_blur_arc_deg);
+}
+
 RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLayout& fine, const RefinementOptions& options,
                                    const std::function<void(const std::string&)>& log) {
+  options.validate();
   RefinementResult result;
   result.views = static_cast<int>(probe.split().reconstruct.size() + probe.split().fit.size() + probe.split().judge.size());
   State state;

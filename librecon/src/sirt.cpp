@@ -4,6 +4,7 @@
 #include <chrono>
 #include <utility>
 
+#include "ctk/geom/error.hpp"
 #include "vector_ops.hpp"
 
 namespace ctk {
@@ -16,8 +17,14 @@ void invert_nonzero(FloatBuffer& v) {
 
 }  // namespace
 
+void SirtOptions::validate() const {
+  require_option(iterations >= 0, "SirtOptions.iterations", "at least 0", iterations);
+  require_option(relaxation > 0 && relaxation < 2, "SirtOptions.relaxation", "a number in (0, 2)", relaxation);
+}
+
 SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
                         Volume& x, const SirtOptions& o, const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
+  o.validate();
   auto start = std::chrono::steady_clock::now();
   ProjectionStack row_weight(b.views, b.rows, b.cols), residual(b.views, b.rows, b.cols);
   Volume column_weight(x.layout), update(x.layout);

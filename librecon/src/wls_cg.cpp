@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "ctk/geom/error.hpp"
 #include "vector_ops.hpp"
 
 namespace ctk {
@@ -20,6 +21,12 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 }
 
 }  // namespace
+
+void WlsOptions::validate() const {
+  require_option(iterations >= 0, "WlsOptions.iterations", "at least 0", iterations);
+  require_option(tolerance >= 0 && tolerance < 1, "WlsOptions.tolerance", "a number in [0, 1)", tolerance);
+  require_option(lambda >= 0 && std::isfinite(lambda), "WlsOptions.lambda", "a finite number of at least 0", lambda);
+}
 
 SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
                           const ProjectionStack* weights, Volume& x, const WlsOptions& o,
@@ -36,6 +43,7 @@ SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<Projection
 SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
                           const ProjectionStack* weights, Volume& x, ProjectionStack& residual, const WlsOptions& o,
                           const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
+  o.validate();
   if (weights && weights->data.size() != b.data.size())
     throw std::invalid_argument("solve_wls_cg: weights and line integrals differ in size");
   if (residual.data.size() != b.data.size())

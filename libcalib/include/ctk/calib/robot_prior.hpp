@@ -21,6 +21,7 @@ struct RobotPriorOptions {
   int min_views = 12;            // fewer calibrated robot views: no prior (the model has 12 offsets)
   double start_sigma_mm = 0.1;   // repeatability the first fit assumes (3-D RMS) ...
   double start_sigma_deg = 0.02; // ... before it is measured
+  void validate() const;  // std::invalid_argument naming the field
 };
 
 struct RobotPriorFit {

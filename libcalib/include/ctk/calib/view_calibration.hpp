@@ -18,6 +18,7 @@ struct CalibrationOptions {
   double search_px = 40;      // how far the first guess may put the pattern (5 mm / 3 deg here)
   double robust_px = 1.0;     // Cauchy scale of the pose fit
   double max_first_guess_error_deg = 6.0;  // a fitted pose turned further from the guess is refused
+  void validate() const;  // std::invalid_argument naming the field
 };
 
 struct ViewCalibration {

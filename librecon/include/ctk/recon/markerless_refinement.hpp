@@ -32,6 +32,7 @@ struct RefinementOptions {
   /// while the model still holds its nominal value: an estimate from elsewhere (conjugate rays)
   /// saves the scan its walk; the fitted value is still the held-out cost's own minimum.
   std::map<std::string, double> knob_starts;
+  void validate() const;  // std::invalid_argument naming the field (or the unknown candidate)
 };
 
 struct RefinedEffect {

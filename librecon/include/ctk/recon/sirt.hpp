@@ -13,6 +13,7 @@ struct SirtOptions {
   int iterations = 100;
   double relaxation = 1.0;  // in (0, 2)
   bool non_negative = true;
+  void validate() const;  // std::invalid_argument naming the field
 };
 
 SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,

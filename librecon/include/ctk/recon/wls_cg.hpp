@@ -23,6 +23,7 @@ struct WlsOptions {
   /// false: the gradient after the last iteration is not computed (one back projection less; the
   /// last log entry then repeats the previous relative gradient). For callers that only want x.
   bool gradient_after_last = true;
+  void validate() const;  // std::invalid_argument naming the field
 };
 
 /// `x` is the starting point (zeros for a cold start) and receives the result. `weights` may be

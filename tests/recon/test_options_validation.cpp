@@ -1,0 +1,52 @@
+// The options structs of libproj and librecon check themselves: the defaults pass; each field out
+// of its range is refused, naming the struct and the field, before any work.
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <string>
+
+#include "../test_support.hpp"
+#include "ctk/proj/joseph_projector.hpp"
+#include "ctk/recon/markerless_refinement.hpp"
+#include "ctk/recon/sirt.hpp"
+#include "ctk/recon/wls_cg.hpp"
+
+namespace ctk {
+namespace {
+
+TEST(OptionsValidation, SirtOptions) {
+  EXPECT_NO_THROW(SirtOptions{}.validate());
+  testing::expect_option_refused(SirtOptions{}, [](auto& o) { o.relaxation = 2.0; }, "SirtOptions.relaxation");
+  testing::expect_option_refused(SirtOptions{}, [](auto& o) { o.relaxation = 0.0; }, "SirtOptions.relaxation");
+  testing::expect_option_refused(SirtOptions{}, [](auto& o) { o.iterations = -1; }, "SirtOptions.iterations");
+  // The solver checks before any work.
+  Volume x(VolumeLayout::centred({4, 4, 4}, Eigen::Vector3d::Ones()));
+  EXPECT_THROW(solve_sirt(JosephProjector(), {}, ProjectionStack(), x, {10, 2.5, true}), std::invalid_argument);
+}
+
+TEST(OptionsValidation, WlsOptions) {
+  EXPECT_NO_THROW(WlsOptions{}.validate());
+  testing::expect_option_refused(WlsOptions{}, [](auto& o) { o.iterations = -3; }, "WlsOptions.iterations");
+  testing::expect_option_refused(WlsOptions{}, [](auto& o) { o.tolerance = -1e-4; }, "WlsOptions.tolerance");
+  testing::expect_option_refused(WlsOptions{}, [](auto& o) { o.tolerance = 1.0; }, "WlsOptions.tolerance");
+  testing::expect_option_refused(WlsOptions{}, [](auto& o) { o.lambda = -0.5; }, "WlsOptions.lambda");
+  testing::expect_option_refused(WlsOptions{}, [](auto& o) { o.lambda = std::numeric_limits<double>::infinity(); }, "WlsOptions.lambda");
+}
+
+TEST(OptionsValidation, ProjectorOptions) {
+  EXPECT_NO_THROW(ProjectorOptions{}.validate());
+  testing::expect_option_refused(ProjectorOptions{}, [](auto& o) { o.threads = -2; }, "ProjectorOptions.threads");
+  testing::expect_option_refused(ProjectorOptions{}, [](auto& o) { o.rows_per_block = -1; }, "ProjectorOptions.rows_per_block");
+  EXPECT_THROW(JosephProjector(ProjectorOptions{0, -8}), std::invalid_argument);
+}
+
+TEST(OptionsValidation, RefinementOptions) {
+  EXPECT_NO_THROW(RefinementOptions{}.validate());
+  testing::expect_option_refused(RefinementOptions{}, [](auto& o) { o.z_accept = 0; }, "RefinementOptions.z_accept");
+  testing::expect_option_refused(RefinementOptions{}, [](auto& o) { o.max_rounds = 0; }, "RefinementOptions.max_rounds");
+  testing::expect_option_refused(RefinementOptions{}, [](auto& o) { o.sharpness_tolerance = 1.5; }, "RefinementOptions.sharpness_tolerance");
+  testing::expect_option_refused(RefinementOptions{}, [](auto& o) { o.nominal_blur_arc_deg = -1; }, "RefinementOptions.nominal_blur_arc_deg");
+}
+
+}  // namespace
+}  // namespace ctk
