@@ -117,7 +117,7 @@ std::vector<bool> misplaced_spheres(const ScanObservations& o, const std::vector
 
 // The robot's prediction under `model` against reference poses: the best estimate of where the
 // holder was (image and robot repeatability combined under the final model). An image-only pose
-// would add its own depth noise (~0.15 mm per view at the setup) to every figure.
+// would add its own depth noise (~0.15 mm per view at the reference setup) to every figure.
 void fk_error(const ScanObservations& o, const std::vector<Rigid>& reference, const EffectParameters& model, ModelError& e) {
   if (!o.setup.robot) return;
   double t2 = 0, r2 = 0;

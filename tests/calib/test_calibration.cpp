@@ -1,4 +1,4 @@
-// Calibration on simulated scans of the issue's setup (720 x 720 at 0.6 mm, SDD 2150 mm,
+// Calibration on simulated scans of the reference setup (720 x 720 at 0.6 mm, SDD 2150 mm,
 // SOD 1360 mm, 2 mm spheres, 10^4 counts, robot noise on; the holder alone in the beam):
 // recovered poses against the truth,
 // robustness to a poor first guess, false blobs and blur, and bad input.
@@ -18,7 +18,7 @@
 namespace ctk {
 namespace {
 
-ScanSimulation issue_scan(int views) {
+ScanSimulation reference_scan(int views) {
   ScanSimulation sim;
   sim.setup = reference_panda_setup({720, 720, 0.6, 0.6}, 2150, 1360);
   sim.holder = reference_helix_holder();
@@ -81,7 +81,7 @@ double median_rms_of_all_ok(const ScanCalibration& c) {
 
 TEST(Calibration, RecoversEveryPoseToMicrometresAcrossTheBeam) {
   const auto dir = testing::scratch_dir();
-  simulate_scan(issue_scan(24), dir);
+  simulate_scan(reference_scan(24), dir);
   const ScanDescription scan = read_scan(dir / "scan.json");
   const ScanCalibration c = calibrate_scan(scan, {});
   const double median_rms = median_rms_of_all_ok(c);
@@ -95,7 +95,7 @@ TEST(Calibration, RecoversEveryPoseToMicrometresAcrossTheBeam) {
   // The declared wall lets the spheres on its silhouette be used, and touching pairs are fitted
   // together: nearly all 50 (without both, about 31 were).
   const double used = mean_spheres_used(c);
-  // The issue asks 0.01 deg. At 10^4 counts a 2 mm aluminium sphere's centre scatters by 0.043 px
+  // The target is 0.01 deg. At 10^4 counts a 2 mm aluminium sphere's centre scatters by 0.043 px
   // per axis (the profile fit's test; the photons' own limit for this profile); with all 50
   // spheres that bounds any unbiased estimate near 0.011 deg. The fit must come close to it.
   const double bound = rotation_bound_deg(c, dir, scan.holder.value(), 0.043);
@@ -119,7 +119,7 @@ TEST(Calibration, RotationReachesAHundredthOfADegreeWhenPhotonsAllow) {
   // Six times the flat-field counts (near the 16-bit ceiling): the centres' scatter falls by ~sqrt(6), and the rotation
   // error with it, down to the model's own floor.
   const auto dir = testing::scratch_dir();
-  ScanSimulation sim = issue_scan(24);
+  ScanSimulation sim = reference_scan(24);
   sim.counts.flat_counts = 6e4;
   simulate_scan(sim, dir);
   const ScanCalibration c = calibrate_scan(read_scan(dir / "scan.json"), {});
@@ -132,7 +132,7 @@ TEST(Calibration, RotationReachesAHundredthOfADegreeWhenPhotonsAllow) {
 
 TEST(Calibration, SurvivesAPoorFirstGuessFalseBlobsAndBlur) {
   const auto dir = testing::scratch_dir();
-  ScanSimulation sim = issue_scan(100);
+  ScanSimulation sim = reference_scan(100);
   // The robot's base is 5 mm and 3 deg away from where the scan file says.
   sim.effects.robot_base_frame = RigidOffset{{3.0, -4.0, 0.0}, {0.0, 0.0, 3.0}};
   sim.effects.false_blobs_per_view = 10;
@@ -155,7 +155,7 @@ TEST(Calibration, KeepsItsAccuracyWithASampleInTheBeam) {
   // Thesis sample 1 (plastic block with aluminium parts) inside the holder: spheres seen through
   // its edges sit on a background that is not planar; the profile fit and the outlier drop cope.
   const auto dir = testing::scratch_dir();
-  ScanSimulation sim = issue_scan(24);
+  ScanSimulation sim = reference_scan(24);
   sim.sample = builtin_phantom("sample-1");
   simulate_scan(sim, dir);
   const ScanCalibration c = calibrate_scan(read_scan(dir / "scan.json"), {});
@@ -175,7 +175,7 @@ TEST(Calibration, KeepsItsAccuracyWithASampleInTheBeam) {
 // be rejected, but only as one whose spheres cannot be found.
 TEST(Calibration, CalibratesViewsAlongTheHolderAxisWallDeclaredOrNot) {
   const auto dir = testing::scratch_dir();
-  ScanSimulation sim = issue_scan(1);
+  ScanSimulation sim = reference_scan(1);
   std::vector<Eigen::Vector3d> directions;
   std::vector<double> polar_deg;
   int k = 0;
@@ -220,7 +220,7 @@ TEST(Calibration, CalibratesViewsAlongTheHolderAxisWallDeclaredOrNot) {
 
 TEST(Calibration, BadInputIsARejectionOrAClearError) {
   const auto dir = testing::scratch_dir();
-  ScanSimulation sim = issue_scan(4);
+  ScanSimulation sim = reference_scan(4);
   sim.setup = reference_panda_setup({180, 180, 2.4, 2.4}, 2150, 1360);
   sim.trajectory = circular_robot_trajectory(sim.setup, 4);
   simulate_scan(sim, dir);

@@ -1,5 +1,5 @@
 // Each view's pose from its spheres and the robot's prior together (libcalib/robot_prior.hpp), on
-// simulated scans of the issue's setup whose robot base is not where the scan file says: poses
+// simulated scans of the reference setup whose robot base is not where the scan file says: poses
 // against the truth, the repeatability the scan measures, and a robot worse than its model.
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 namespace ctk {
 namespace {
 
-ScanSimulation issue_scan(std::vector<PlannedView> trajectory, const PandaSetup& setup) {
+ScanSimulation reference_scan(std::vector<PlannedView> trajectory, const PandaSetup& setup) {
   ScanSimulation sim;
   sim.setup = setup;
   sim.holder = reference_helix_holder();
@@ -35,7 +35,7 @@ double median_rms(const ScanCalibration& c) {
 TEST(RobotPrior, CombinedPosesReachAHundredthOfADegree) {
   const auto dir = testing::scratch_dir();
   const PandaSetup setup = reference_panda_setup({720, 720, 0.6, 0.6}, 2150, 1360);
-  simulate_scan(issue_scan(circular_robot_trajectory(setup, 24), setup), dir);
+  simulate_scan(reference_scan(circular_robot_trajectory(setup, 24), setup), dir);
   const ScanDescription scan = read_scan(dir / "scan.json");
   const ScanCalibration image_only = calibrate_scan(scan, {});
   ScanCalibration c = image_only;
@@ -92,7 +92,7 @@ struct Outcome {
 Outcome spherical_scan(double sag_deg) {
   const auto dir = testing::scratch_dir();
   const PandaSetup setup = reference_panda_setup({720, 720, 0.6, 0.6}, 2150, 1360);
-  ScanSimulation sim = issue_scan(spherical_robot_trajectory(setup, random_directions(24, 11)), setup);
+  ScanSimulation sim = reference_scan(spherical_robot_trajectory(setup, random_directions(24, 11)), setup);
   if (sag_deg > 0) sim.effects.holder_sag_deg = sag_deg;
   simulate_scan(sim, dir);
   const ScanDescription scan = read_scan(dir / "scan.json");

@@ -1,6 +1,6 @@
 // The profile fit against the centroid on synthetic sphere images: a ball's chord profile drawn
 // with 8 x 8 rays per pixel (not the fit's own 3 x 3) on a sloping background, at random
-// sub-pixel centres, with and without noise of the level (10^4 counts: ~0.01 per pixel);
+// sub-pixel centres, with and without noise of the reference level (10^4 counts: ~0.01 per pixel);
 // a ball on a tube wall's silhouette, and two touching balls.
 #include <gtest/gtest.h>
 
@@ -13,7 +13,7 @@
 namespace ctk {
 namespace {
 
-constexpr double kRadius = 2.6;  // px, the 2 mm spheres at magnification 1.58, 0.6 mm pixels
+constexpr double kRadius = 2.6;  // px, the reference holder's 2 mm spheres at magnification 1.58, 0.6 mm pixels
 
 // The wall background of the plain tests: a sloping plane.
 double sloping_wall(double u, double v) { return 0.4 + 0.01 * u - 0.004 * v; }

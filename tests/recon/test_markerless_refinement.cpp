@@ -87,7 +87,7 @@ TEST(MarkerlessRefinement, PepperAxisColumnFromTheDetectorCentre) {
   const auto dir = testing::shared_data_dir() / "flexray-pepper-cone";
   CircularOrbit orbit;
   orbit.detector = {239, 190, 0.5984, 0.5984};
-  orbit.principal_point_px = orbit.detector.centre_px();  // (119, 94.5): the start the issue names
+  orbit.principal_point_px = orbit.detector.centre_px();  // (119, 94.5): the detector centre, where the loop starts
   orbit.source_to_axis_mm = 1001.305645;
   orbit.source_to_detector_mm = 1098.0;
   for (int k = 0; k < 225; ++k) orbit.angles_rad.push_back((0.7 + 1.6 * k) * M_PI / 180);

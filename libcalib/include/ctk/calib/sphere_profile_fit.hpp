@@ -3,7 +3,7 @@
 // disc's chord lengths, 2 A sqrt(R^2 - r^2), sitting on the (locally planar) background of the
 // holder wall. Fitting that model by least squares weighs every pixel by how much it says about
 // the centre (the steep rim most), where the centroid weighs the flat middle most; with the
-// image noise of the scans that halves the centre's scatter. Where the background is
+// image noise of the reference scans that halves the centre's scatter. Where the background is
 // known not to be planar (a sphere on the silhouette of the holder's wall), its known shape is
 // added to the plane with a fitted scale.
 #include <functional>
