@@ -26,6 +26,7 @@ struct SimulateOptions {
   std::vector<std::string> phantoms{"helix-holder"};
   std::string trajectory = "circular";
   int views = 360, nside = 3;
+  std::vector<double> cap_deg{5.0, 90.0};
   std::filesystem::path poses;
   int cols = 720, rows = 720;
   double pitch_mm = 0.6, sdd_mm = 2150.0, sod_mm = 1360.0;
@@ -45,6 +46,8 @@ struct SimulateOptions {
   std::vector<double> base_translation_mm, base_rotation_deg, mount_translation_mm, mount_rotation_deg, joint_offsets_deg,
       source_drift_mm;
   std::optional<double> holder_sag_deg;
+  std::vector<double> source_wobble_mm;
+  std::optional<double> moving_sphere_mm;
   std::optional<double> blur_fraction;
   double blur_sigma_px = 2.0;
   std::optional<int> false_blobs;
@@ -72,6 +75,8 @@ SimulationEffects effects_from(const SimulateOptions& o, const PandaSetup& setup
   }
   if (!o.source_drift_mm.empty()) e.source_drift_mm_per_100_views = vec2(o.source_drift_mm);
   if (o.holder_sag_deg) e.holder_sag_deg = *o.holder_sag_deg;
+  if (!o.source_wobble_mm.empty()) e.source_wobble_mm = vec2(o.source_wobble_mm);
+  if (o.moving_sphere_mm) e.moving_sphere_mm = *o.moving_sphere_mm;
   if (o.blur_fraction) e.blurred_views = BlurredViews{*o.blur_fraction, o.blur_sigma_px};
   if (o.false_blobs) e.false_blobs_per_view = *o.false_blobs;
   return e;
@@ -120,8 +125,14 @@ void run_simulate(const SimulateOptions& o) {
   } else if (o.trajectory == "circular") {
     sim.trajectory = circular_robot_trajectory(sim.setup, o.views);
   } else {
-    std::cerr << "planning " << HealpixSphere(o.nside).size() << " spherical views (numerical IK) ...\n";
-    sim.trajectory = spherical_robot_trajectory(sim.setup, HealpixSphere(o.nside).directions());
+    std::vector<Eigen::Vector3d> directions;
+    if (o.trajectory == "spherical") directions = HealpixSphere(o.nside).directions();
+    else if (o.trajectory == "cap" && o.cap_deg[0] > o.cap_deg[1])
+      throw InputError("--cap-deg", "", "expected the least angle first, got " + std::to_string(o.cap_deg[0]) + " before " + std::to_string(o.cap_deg[1]));
+    else if (o.trajectory == "cap") directions = spinning_cap_directions(o.views, o.cap_deg[0] * kDegree, o.cap_deg[1] * kDegree);
+    else directions = random_directions(o.views, o.seed);
+    std::cerr << "planning " << directions.size() << " " << o.trajectory << " views (numerical IK) ...\n";
+    sim.trajectory = spherical_robot_trajectory(sim.setup, directions);
   }
   sim.supersampling = o.supersampling;
   if (o.kvp) sim.spectrum = tube_spectrum(*o.kvp, o.filter_al_mm);
@@ -155,11 +166,17 @@ void register_simulate(CLI::App& app) {
       ->capture_default_str();
   auto* poses = cmd->add_option("--poses", o->poses, "Per-view matrices (ctk-geometry/1) instead of a robot trajectory")
                     ->check(CLI::ExistingFile);
-  cmd->add_option("--trajectory", o->trajectory, "Robot trajectory")
-      ->check(CLI::IsMember({"circular", "spherical"}))
+  cmd->add_option("--trajectory", o->trajectory,
+                  "Robot trajectory: circular (joint 7 orbit), spherical (HEALPix directions), cap (--cap-deg band of directions "
+                  "about the holder axis while it spins), random (uniform directions from --seed)")
+      ->check(CLI::IsMember({"circular", "spherical", "cap", "random"}))
       ->capture_default_str()
       ->excludes(poses);
-  cmd->add_option("--views", o->views, "Views of a circular trajectory")->check(CLI::Range(1, 100000))->capture_default_str();
+  cmd->add_option("--views", o->views, "Views of a circular, cap or random trajectory")->check(CLI::Range(1, 100000))->capture_default_str();
+  cmd->add_option("--cap-deg", o->cap_deg, "A cap trajectory's band: least and greatest angle between beam and holder axis")
+      ->expected(2)
+      ->check(CLI::Range(0.0, 180.0))
+      ->capture_default_str();
   cmd->add_option("--nside", o->nside, "HEALPix resolution of a spherical trajectory (12 nside^2 directions)")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
@@ -199,6 +216,14 @@ void register_simulate(CLI::App& app) {
   cmd->add_option("--source-drift-mm", o->source_drift_mm, "Focal-spot drift per 100 views (camera x, y)")->expected(2)->group(effects);
   cmd->add_option("--holder-sag-deg", o->holder_sag_deg,
                   "Outside the diagnosis' vocabulary: the holder turns towards gravity by this much times the sine of its axis' angle to it")
+      ->group(effects);
+  cmd->add_option("--source-wobble-mm", o->source_wobble_mm,
+                  "Outside the vocabulary: the focal spot wanders by this amplitude * cos(4 pi view / views) (camera x, y)")
+      ->expected(2)
+      ->group(effects);
+  cmd->add_option("--moving-sphere-mm", o->moving_sphere_mm,
+                  "Outside the vocabulary: one sphere moves this far (random direction) from the first view to the last")
+      ->check(positive_number)
       ->group(effects);
   cmd->add_option("--blur-fraction", o->blur_fraction, "Fraction of views blurred")->check(CLI::Range(0.0, 1.0))->group(effects);
   cmd->add_option("--blur-sigma-px", o->blur_sigma_px, "Blur of those views")->check(positive_number)->capture_default_str()->group(effects);

@@ -78,6 +78,23 @@ std::vector<Eigen::Vector3d> random_directions(int count, std::uint64_t seed) {
   return out;
 }
 
+std::vector<Eigen::Vector3d> spinning_cap_directions(int count, double min_polar_rad, double max_polar_rad) {
+  if (count <= 0) throw std::invalid_argument("spinning_cap_directions: count must be positive");
+  if (!(0 <= min_polar_rad && min_polar_rad <= max_polar_rad && max_polar_rad <= M_PI))
+    throw std::invalid_argument("spinning_cap_directions: polar angles must satisfy 0 <= min <= max <= pi");
+  const double golden_angle = M_PI * (3.0 - std::sqrt(5.0));
+  const double c0 = std::cos(min_polar_rad), c1 = std::cos(max_polar_rad);
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(static_cast<std::size_t>(count));
+  for (int k = 0; k < count; ++k) {
+    // Cell centres of equal-area bands, from the axis outwards.
+    const double c = c0 + (c1 - c0) * (k + 0.5) / count;
+    const double s = std::sqrt(std::max(0.0, 1 - c * c)), phi = golden_angle * k;
+    out.emplace_back(s * std::cos(phi), s * std::sin(phi), c);
+  }
+  return out;
+}
+
 double angular_distance_rad(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   // atan2 of |a x b| and a.b: accurate for small and large angles alike.
   return std::atan2(a.cross(b).norm(), a.dot(b));

@@ -1,6 +1,7 @@
 #include "ctk/phantoms/scan_simulation.hpp"
 
 #include <atomic>
+#include <optional>
 #include <random>
 
 #include "ctk/geom/atomic_write.hpp"
@@ -88,9 +89,9 @@ OpenBeamFrames open_beam_frames(const ScanSimulation& sim) {
           Image{d.cols, d.rows, std::vector<float>(n, static_cast<float>(sim.counts.dark_counts))}};
 }
 
-Phantom simulated_phantom(const ScanSimulation& sim, const TrueScan& truth) {
+Phantom simulated_phantom(const ScanSimulation& sim, const Holder& holder) {
   Phantom phantom{sim.with_holder ? "helix-holder + " + sim.sample.name : sim.sample.name, {}};
-  if (sim.with_holder) phantom.add(helix_holder_phantom(truth.holder));
+  if (sim.with_holder) phantom.add(helix_holder_phantom(holder));
   phantom.add(sim.sample);
   return phantom;
 }
@@ -107,7 +108,7 @@ SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder
   std::vector<std::string> names;
   for (int v = 0; v < view_count; ++v) names.push_back(scan.projections.file_name(v));
 
-  const Phantom phantom = simulated_phantom(sim, truth);
+  const Phantom phantom = simulated_phantom(sim, truth.holder);
   const RenderOptions render = simulated_render_options(sim);
 
   fs::create_directories(folder / "projections");
@@ -119,7 +120,9 @@ SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder
   std::atomic<std::size_t> saturated_total{0};
   parallel_for_dynamic(total, [&](int i) {
     const TrueView& view = truth.views[static_cast<std::size_t>(acquired[static_cast<std::size_t>(i)])];
-    saturated_total += write_projection(sim, phantom, view, render, scan.projection_path(view.index));
+    std::optional<Phantom> moved;  // this view's own holder when a sphere moves during the scan
+    if (view.holder) moved = simulated_phantom(sim, *view.holder);
+    saturated_total += write_projection(sim, moved ? *moved : phantom, view, render, scan.projection_path(view.index));
     const int finished = ++done;
 #pragma omp critical(ctk_simulation_progress)
     if (progress) progress(finished, total);

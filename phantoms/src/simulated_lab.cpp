@@ -12,7 +12,7 @@ SimulatedLab::SimulatedLab(ScanSimulation simulation) : sim_(std::move(simulatio
   // The truth that does not change from shot to shot (holder, detector): one view's worth.
   ScanSimulation probe = sim_;
   probe.trajectory = {PlannedView{}};
-  phantom_ = simulated_phantom(sim_, make_true_scan(probe));
+  phantom_ = simulated_phantom(sim_, make_true_scan(probe).holder);
   render_ = simulated_render_options(sim_);
 }
 

@@ -41,7 +41,7 @@ nlohmann::json json2(const Eigen::Vector2d& v) { return {v.x(), v.y()}; }
 
 bool has_pose_effects(const SimulationEffects& e) {
   return e.detector_intrinsics || e.sphere_positions || e.robot_base_frame || e.holder_mount || e.joint_offsets_rad ||
-         e.source_drift_mm_per_100_views || e.holder_sag_deg;
+         e.source_drift_mm_per_100_views || e.holder_sag_deg || e.source_wobble_mm || e.moving_sphere_mm;
 }
 
 void draw_true_holder(const ScanSimulation& sim, TrueScan& truth, std::mt19937_64& rng) {
@@ -50,6 +50,21 @@ void draw_true_holder(const ScanSimulation& sim, TrueScan& truth, std::mt19937_6
   const auto& d = *sim.effects.sphere_positions;
   for (int k : choose(static_cast<int>(sim.holder.spheres_mm.size()), d.count, rng))
     truth.holder.spheres_mm[static_cast<std::size_t>(k)] += d.magnitude_mm * random_unit_vector(rng);
+}
+
+// A sphere that comes loose: drawn after the displaced ones, so adding it leaves their draw alone.
+void draw_moving_sphere(const ScanSimulation& sim, TrueScan& truth, std::mt19937_64& rng) {
+  if (!sim.effects.moving_sphere_mm) return;
+  truth.moving_sphere = choose(static_cast<int>(sim.holder.spheres_mm.size()), 1, rng).front();
+  truth.moving_sphere_end_mm = *sim.effects.moving_sphere_mm * random_unit_vector(rng);
+}
+
+// The holder at view v of n when a sphere moves: its offset grows linearly with the view index.
+void place_moving_sphere(TrueScan& truth, TrueView& view, std::size_t v, std::size_t n) {
+  if (truth.moving_sphere < 0) return;
+  view.holder = truth.holder;
+  const double progress = n > 1 ? static_cast<double>(v) / static_cast<double>(n - 1) : 0.0;
+  view.holder->spheres_mm[static_cast<std::size_t>(truth.moving_sphere)] += progress * truth.moving_sphere_end_mm;
 }
 
 void draw_true_detector(const ScanSimulation& sim, TrueScan& truth, double& true_sdd) {
@@ -97,6 +112,10 @@ void draw_robot_views(const ScanSimulation& sim, TrueScan& truth, double true_sd
     view.T_camera_holder = truth.T_camera_base * T_base_flange * noise * sag * truth.T_flange_holder;
     if (e.source_drift_mm_per_100_views)
       view.source_offset_mm.head<2>() = *e.source_drift_mm_per_100_views * (static_cast<double>(v) / 100.0);
+    if (e.source_wobble_mm)
+      view.source_offset_mm.head<2>() +=
+          *e.source_wobble_mm * std::cos(4 * M_PI * static_cast<double>(v) / static_cast<double>(sim.trajectory.size()));
+    place_moving_sphere(truth, view, v, sim.trajectory.size());
     Rigid shift = Rigid::Identity();
     shift.translation() = -view.source_offset_mm;
     view.P = ProjectionMatrix::compose(detector_matrix_for_source_at(truth.detector_matrix, true_sdd, view.source_offset_mm),
@@ -143,6 +162,7 @@ TrueScan make_true_scan(const ScanSimulation& sim) {
   std::mt19937_64 rng(sim.seed);
   TrueScan truth;
   draw_true_holder(sim, truth, rng);
+  draw_moving_sphere(sim, truth, rng);
   double true_sdd = 0;
   draw_true_detector(sim, truth, true_sdd);
   if (sim.poses) {
@@ -206,6 +226,9 @@ nlohmann::json truth_to_json(const ScanSimulation& sim, const TrueScan& truth, c
                                 {mm.x() / sim.setup.detector.pitch_u_mm, mm.y() / sim.setup.detector.pitch_v_mm}}};
   }
   if (e.holder_sag_deg) effects["holder_sag"] = {{"max_deg", *e.holder_sag_deg}};
+  if (e.source_wobble_mm) effects["source_wobble"] = {{"amplitude_mm", json2(*e.source_wobble_mm)}};
+  if (truth.moving_sphere >= 0)
+    effects["moving_sphere"] = {{"index", truth.moving_sphere}, {"offset_at_last_view_mm", json3(truth.moving_sphere_end_mm)}};
   if (e.blurred_views) {
     nlohmann::json views = nlohmann::json::array();
     for (const TrueView& v : truth.views)
@@ -242,7 +265,9 @@ nlohmann::json truth_to_json(const ScanSimulation& sim, const TrueScan& truth, c
             {"source_drift", "focal spot at view v displaced by v / 100 * drift in camera x, y; detector fixed"},
             {"detector_distortion", "ideal projection x is measured at x + k1 |x - c|^2 (x - c)"},
             {"robot_noise", "per view, between FK(joints) and the flange: Gaussian, each axis value / sqrt(3)"},
-            {"holder_sag", "the holder turns about the flange origin by max_deg * (axis x gravity), flange coordinates, gravity -z of the base"}}},
+            {"holder_sag", "the holder turns about the flange origin by max_deg * (axis x gravity), flange coordinates, gravity -z of the base"},
+            {"source_wobble", "focal spot at view v of n displaced by amplitude * cos(4 pi v / n) in camera x, y, on top of any drift"},
+            {"moving_sphere", "sphere `index` is at its true place plus (v / (n - 1)) * offset_at_last_view at view v of n (holder frame)"}}},
           {"robot_noise", {{"translation_mm", sim.robot_noise.translation_mm}, {"rotation_deg", sim.robot_noise.rotation_deg}}},
           {"simulation",
            {{"supersampling", sim.supersampling},

@@ -94,5 +94,27 @@ TEST(Trajectory, RandomDirectionsAreReproducibleAndUniform) {
   EXPECT_LT(mean.norm(), 4 * std::sqrt(1.0 / 20000));
 }
 
+TEST(Trajectory, SpinningCapCoversItsBandInEqualAreasWhileSpinning) {
+  const double lo = 5 * M_PI / 180, hi = 90 * M_PI / 180;
+  const auto dirs = spinning_cap_directions(400, lo, hi);
+  ASSERT_EQ(dirs.size(), 400u);
+  int within_10_deg = 0;
+  for (std::size_t k = 0; k < dirs.size(); ++k) {
+    EXPECT_NEAR(dirs[k].norm(), 1.0, 1e-12);
+    const double polar = std::acos(dirs[k].z());
+    EXPECT_GE(polar, lo);
+    EXPECT_LE(polar, hi);
+    within_10_deg += polar < 10 * M_PI / 180;
+    if (k > 0) {  // the spin between consecutive views is the golden angle (mod 2 pi)
+      const double turn = std::remainder(std::atan2(dirs[k].y(), dirs[k].x()) - std::atan2(dirs[k - 1].y(), dirs[k - 1].x()), 2 * M_PI);
+      EXPECT_NEAR(turn, M_PI * (3 - std::sqrt(5.0)), 1e-9);
+    }
+  }
+  // Equal areas: the share within 10 deg of the axis is that band's share of the cap's area.
+  const double share = (std::cos(lo) - std::cos(10 * M_PI / 180)) / (std::cos(lo) - std::cos(hi));
+  EXPECT_NEAR(within_10_deg, share * 400, 1.0);
+  EXPECT_THROW(spinning_cap_directions(10, 0.5, 0.4), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace ctk

@@ -164,6 +164,36 @@ TEST(ScanSimulation, TrueMatricesPutEverySphereOnItsBlobUnderUndeclaredEffects) 
   EXPECT_GT(nominal_error, 3.0);
 }
 
+// Outside the vocabulary: a focal spot that wanders twice over the scan without a trend, and a
+// sphere that moves from its place at the first view to its end offset at the last.
+TEST(ScanSimulation, AWanderingSourceAndAMovingSphereFollowTheScansProgress) {
+  ScanSimulation sim = small_circular_scan(9);
+  sim.robot_noise = {0, 0};
+  sim.effects.source_wobble_mm = Eigen::Vector2d(0.4, -0.2);
+  sim.effects.moving_sphere_mm = 0.5;
+  const TrueScan truth = make_true_scan(sim);
+  ASSERT_GE(truth.moving_sphere, 0);
+  EXPECT_NEAR(truth.moving_sphere_end_mm.norm(), 0.5, 1e-12);
+  Eigen::Vector2d sum(0, 0);
+  for (std::size_t v = 0; v < truth.views.size(); ++v) {
+    const TrueView& view = truth.views[v];
+    const double c = std::cos(4 * M_PI * static_cast<double>(v) / 9.0);
+    EXPECT_NEAR(view.source_offset_mm.x(), 0.4 * c, 1e-12);
+    EXPECT_NEAR(view.source_offset_mm.y(), -0.2 * c, 1e-12);
+    sum += view.source_offset_mm.head<2>();
+    ASSERT_TRUE(view.holder.has_value());
+    for (std::size_t k = 0; k < truth.holder.spheres_mm.size(); ++k) {
+      const Eigen::Vector3d moved = view.holder->spheres_mm[k] - truth.holder.spheres_mm[k];
+      const Eigen::Vector3d expected = static_cast<int>(k) == truth.moving_sphere ? Eigen::Vector3d((v / 8.0) * truth.moving_sphere_end_mm) : Eigen::Vector3d::Zero();
+      EXPECT_LT((moved - expected).norm(), 1e-12) << "view " << v << ", sphere " << k;
+    }
+  }
+  EXPECT_LT(sum.norm(), 1e-12);  // no mean for an offset to take up
+  const nlohmann::json j = truth_to_json(sim, truth, "truth-geometry.json");
+  EXPECT_EQ(j.at("effects").at("moving_sphere").at("index").get<int>(), truth.moving_sphere);
+  EXPECT_EQ(j.at("effects").at("source_wobble").at("amplitude_mm").get<std::vector<double>>(), (std::vector<double>{0.4, -0.2}));
+}
+
 TEST(ScanSimulation, CountsScanHasFlatDarkAndOpenBeamAtTheFlatLevel) {
   const auto dir = testing::scratch_dir();
   ScanSimulation sim = small_circular_scan(2);

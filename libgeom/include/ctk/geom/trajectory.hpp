@@ -35,6 +35,12 @@ class HealpixSphere {
 /// `count` directions uniform on the sphere, reproducible from `seed`.
 std::vector<Eigen::Vector3d> random_directions(int count, std::uint64_t seed);
 
+/// `count` directions on the band of the sphere whose angle to the holder axis (+z) lies in
+/// [min_polar_rad, max_polar_rad], equal areas per view (cosine of the polar angle in equal
+/// steps) while the holder spins about its axis by the golden angle from one view to the next:
+/// a cap of axis directions, down to views looking almost along the axis.
+std::vector<Eigen::Vector3d> spinning_cap_directions(int count, double min_polar_rad, double max_polar_rad);
+
 double angular_distance_rad(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 /// The angle between the lines along `a` and `b` (0 to pi/2): opposite directions are one line.
 double line_distance_rad(const Eigen::Vector3d& a, const Eigen::Vector3d& b);

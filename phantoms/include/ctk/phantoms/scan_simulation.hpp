@@ -24,8 +24,9 @@ struct OpenBeamFrames {
 };
 OpenBeamFrames open_beam_frames(const ScanSimulation& simulation);
 
-/// Everything in the beam: the true holder (when in the beam) and the sample.
-Phantom simulated_phantom(const ScanSimulation& simulation, const TrueScan& truth);
+/// Everything in the beam: the holder (when in the beam; the true one, or a view's own when a
+/// sphere moves) and the sample.
+Phantom simulated_phantom(const ScanSimulation& simulation, const Holder& holder);
 RenderOptions simulated_render_options(const ScanSimulation& simulation);
 /// One acquired view's image as the detector delivers it: counts (noise drawn from the seed and
 /// the view index) or noise-free line integrals, per `simulation.output`.

@@ -54,6 +54,13 @@ struct SimulationEffects {
   /// flange towards gravity (-z of the robot base) by this angle times the sine of the angle
   /// between its axis and gravity (a cantilever's load), so the error depends on the orientation.
   std::optional<double> holder_sag_deg;
+  /// Outside the vocabulary: the focal spot wanders as amplitude * cos(4 pi v / views) in camera
+  /// x, y (mm): two periods over the scan, no mean and no linear trend for an offset or a drift to
+  /// take up, nor the once-per-turn pattern of a mount offset on a joint-7 orbit.
+  std::optional<Eigen::Vector2d> source_wobble_mm;
+  /// Outside the vocabulary: one sphere (drawn at random) comes loose and moves in a random
+  /// direction, from its declared place at the first view to this far (mm) at the last.
+  std::optional<double> moving_sphere_mm;
   std::optional<BlurredViews> blurred_views;
   std::optional<int> false_blobs_per_view;
 };
