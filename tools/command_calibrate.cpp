@@ -17,6 +17,7 @@
 #include "ctk/geom/statistics.hpp"
 #include "ctk/calib/calibration_journal.hpp"
 #include "ctk/calib/calibration_pictures.hpp"
+#include "ctk/calib/holder_wall.hpp"
 #include "ctk/calib/robot_prior.hpp"
 #include "ctk/calib/scan_calibration.hpp"
 #include "ctk/geom/atomic_write.hpp"
@@ -193,6 +194,26 @@ void run_calibrate(const CalibrateOptions& o) {
   if (c.left_undone > 0)
     throw Interrupted("stopped with " + std::to_string(c.left_undone) + " of " + std::to_string(scan.projections.count) +
                       " views to go; the finished ones are in " + journal_file.string() + ": run the same command with --resume to continue");
+  // A holder whose wall the scan does not declare: measured from the images, and the views it
+  // cost (a sphere on the wall's silhouette taken for a misfit) calibrated again with it.
+  std::optional<WallMeasurement> wall;
+  if (scan.holder && !scan.holder->wall) {
+    const auto start = std::chrono::steady_clock::now();
+    wall = measure_holder_wall(scan, c);
+    if (wall && std::any_of(c.views.begin(), c.views.end(), [](const ViewCalibration& v) { return v.status == ViewStatus::rejected; })) {
+      ScanDescription with_wall = scan;
+      with_wall.holder->wall = wall->wall;
+      std::map<int, ViewCalibration> kept;
+      for (std::size_t v = 0; v < c.views.size(); ++v)
+        if (c.views[v].status != ViewStatus::rejected) kept[static_cast<int>(v)] = c.views[v];
+      BatchControl again;
+      again.done = &kept;
+      const double seconds = c.seconds;
+      c = calibrate_scan(with_wall, o.calibration, {}, &again);
+      c.seconds += seconds;
+    }
+    c.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
   RobotPriorFit prior;
   prior.reason = "switched off (--image-only)";
   if (!o.image_only) {
@@ -204,6 +225,14 @@ void run_calibrate(const CalibrateOptions& o) {
   const fs::path report = report_file(o);
   nlohmann::json j = report_json(c, o);
   j["robot_prior"] = robot_prior_json(prior);
+  if (scan.holder && scan.holder->wall)
+    j["holder_wall"] = {{"declared", true}, {"inner_radius_mm", scan.holder->wall->inner_radius_mm}, {"outer_radius_mm", scan.holder->wall->outer_radius_mm}};
+  else if (wall)
+    j["holder_wall"] = {{"declared", false},
+                        {"measured", {{"inner_radius_mm", wall->wall.inner_radius_mm}, {"outer_radius_mm", wall->wall.outer_radius_mm},
+                                      {"inner_sigma_mm", wall->inner_sigma_mm}, {"outer_sigma_mm", wall->outer_sigma_mm}, {"views", wall->views}}}};
+  else if (scan.holder)
+    j["holder_wall"] = {{"declared", false}, {"measured", nullptr}};
   j["pictures"] = write_pictures(scan, c, o);
   write_text_atomically(report, j.dump(2) + "\n");
   const auto& s = j.at("summary");
@@ -216,6 +245,12 @@ void run_calibrate(const CalibrateOptions& o) {
             << " px; median pose uncertainty " << s.at("median_translation_sigma_across_beam_mm").get<double>() * 1000
             << " um across the beam, " << s.at("median_translation_sigma_along_beam_mm").get<double>() * 1000
             << " um along it\n";
+  if (wall)
+    std::cout << "holder wall not declared by the scan; measured in " << wall->views << " views: inner radius " << wall->wall.inner_radius_mm
+              << " +- " << wall->inner_sigma_mm << " mm, outer " << wall->wall.outer_radius_mm << " +- " << wall->outer_sigma_mm
+              << " mm (declare it as holder.wall to skip this)\n";
+  else if (scan.holder && !scan.holder->wall)
+    std::cout << "holder wall not declared by the scan and not measurable (fewer than 3 views see the holder from the side)\n";
   if (prior.applied)
     std::cout << "poses combined with the robot's prior over " << prior.views << " views: repeatability measured "
               << prior.sigma_mm << " mm, " << prior.sigma_deg << " deg; median rotation uncertainty "

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
 
 #include "ctk/geom/error.hpp"
@@ -108,8 +109,21 @@ Repeatability measure_repeatability(const std::vector<Deviation>& deviations, co
     r = golden([&](double x) { return cost(x, t); }, r0 - span, r0 + span);
     t = golden([&](double x) { return cost(r, x); }, t0 - span, t0 + span);
   }
+  // A repeatability far below what the image resolves cannot be measured: the likelihood is flat
+  // down to zero there and its maximum runs off to it, which would make the prior rigid. Each
+  // variance is kept at least at the resolution of a variance estimate from these views: sqrt(2 /
+  // (3 m)) times the image's own variance on its best-resolved axis (median over the views).
+  const double m = static_cast<double>(deviations.size());
+  std::vector<double> rotation_floor, translation_floor;
+  for (const Deviation& d : deviations) {
+    rotation_floor.push_back(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(d.image_covariance.topLeftCorner<3, 3>()).eigenvalues()(0));
+    translation_floor.push_back(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(d.image_covariance.bottomRightCorner<3, 3>()).eigenvalues()(0));
+  }
+  const double resolution = std::sqrt(2 / (3 * m));
+  r = std::max(r, std::log(resolution * std::max(median_in_place(rotation_floor), 1e-300)));
+  t = std::max(t, std::log(resolution * std::max(median_in_place(translation_floor), 1e-300)));
   // The model's 12 fitted offsets take up part of the scatter.
-  const double m = static_cast<double>(deviations.size()), correction = 6 * m / (6 * m - 12);
+  const double correction = 6 * m / (6 * m - 12);
   return {std::sqrt(3 * std::exp(t) * correction), std::sqrt(3 * std::exp(r) * correction) / kDegree};
 }
 

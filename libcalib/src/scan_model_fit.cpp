@@ -1,6 +1,7 @@
 #include "ctk/calib/scan_model_fit.hpp"
 
 #include <ceres/ceres.h>
+#include <ceres/normal_prior.h>
 #include <ceres/rotation.h>
 
 #include <algorithm>
@@ -168,6 +169,26 @@ int block_size(Effect e) {
   return 0;
 }
 
+// The scale of each effect's parameters in a real setup, far beyond any error a lab leaves: a
+// weak Gaussian prior at this scale fixes the directions the data leave free (on a joint-7 orbit
+// a mount shift along the flange axis is a base shift along the joint's axis) at their smallest
+// value, where an unfixed fit wanders metres away and takes noise along; it changes an
+// identifiable parameter by far less than its uncertainty.
+Eigen::VectorXd plausible_scale(Effect e) {
+  const double deg = kDegree;
+  Eigen::VectorXd s(block_size(e));
+  switch (e) {
+    case Effect::robot_base_frame:
+    case Effect::holder_mount: s << 5 * deg, 5 * deg, 5 * deg, 50, 50, 50; break;  // rad, mm
+    case Effect::joint_offsets: s.setConstant(5 * deg); break;
+    case Effect::source_drift: s << 10, 10; break;                                  // mm per 100 views
+    case Effect::detector_intrinsics: s << 50, 50, 200; break;                       // px
+    case Effect::detector_distortion: s << 50, 200, 200; break;                      // px
+    case Effect::sphere_positions: s.setConstant(5); break;                          // mm
+  }
+  return s;
+}
+
 std::array<double, 6> start_pose(const Rigid& T) {
   return {0, 0, 0, T.translation().x(), T.translation().y(), T.translation().z()};
 }
@@ -292,6 +313,12 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
     } else if (problem.HasParameterBlock(g.block(e))) {
       ordering->AddElementToGroup(g.block(e), 1);
     }
+  }
+  for (Effect e : active) {
+    if (e == Effect::sphere_positions || !problem.HasParameterBlock(g.block(e))) continue;
+    const Eigen::VectorXd scale = plausible_scale(e);
+    const ceres::Matrix A = scale.cwiseInverse().asDiagonal();
+    problem.AddResidualBlock(new ceres::NormalPrior(A, ceres::Vector::Zero(scale.size())), nullptr, g.block(e));
   }
   set_global_blocks_constant(problem, g, active);
   if (sphere_subset)

@@ -8,6 +8,7 @@
 
 #include "../test_support.hpp"
 #include "pose_errors.hpp"
+#include "ctk/calib/holder_wall.hpp"
 #include "ctk/calib/scan_calibration.hpp"
 #include "ctk/calib/sphere_matching.hpp"
 #include "ctk/geom/error.hpp"
@@ -173,6 +174,24 @@ TEST(Calibration, KeepsItsAccuracyWithASampleInTheBeam) {
 // 2.6 mm off: every view from 5 deg on is calibrated, wall declared or not. At 2 deg the tube is
 // seen end on through 118 mm of its wall, which hides the spheres in its ring: such a view may
 // be rejected, but only as one whose spheres cannot be found.
+// A scan that does not declare its holder's wall: the tube's radii from the calibrated views'
+// images (the reference holder: 25 and 28 mm), within 0.1 mm and within their stated uncertainty.
+TEST(Calibration, MeasuresAnUndeclaredHolderWallFromTheImages) {
+  const auto dir = testing::scratch_dir();
+  simulate_scan(reference_scan(24), dir);
+  ScanDescription scan = read_scan(dir / "scan.json");
+  const HolderWall truth = *scan.holder->wall;
+  scan.holder->wall.reset();
+  const ScanCalibration c = calibrate_scan(scan, {});
+  const auto m = measure_holder_wall(scan, c);
+  ASSERT_TRUE(m.has_value());
+  std::cout << "wall measured in " << m->views << " views: inner " << m->wall.inner_radius_mm << " +- " << m->inner_sigma_mm << ", outer "
+            << m->wall.outer_radius_mm << " +- " << m->outer_sigma_mm << " mm\n";
+  EXPECT_GE(m->views, 10);
+  EXPECT_NEAR(m->wall.inner_radius_mm, truth.inner_radius_mm, std::min(0.1, 4 * m->inner_sigma_mm + 0.01));
+  EXPECT_NEAR(m->wall.outer_radius_mm, truth.outer_radius_mm, std::min(0.1, 4 * m->outer_sigma_mm + 0.01));
+}
+
 TEST(Calibration, CalibratesViewsAlongTheHolderAxisWallDeclaredOrNot) {
   const auto dir = testing::scratch_dir();
   ScanSimulation sim = reference_scan(1);

@@ -13,12 +13,14 @@
 // same 3 standard errors of the best explain the same residual and are listed in
 // `confounded_with`; among them the one earliest in kEffects is reported (robot frames before
 // detector parameters: the robot's base is never where the setup says, the detector is measured
-// separately).
+// separately). The others stay candidates: one that still explains what the chosen one leaves
+// (the two differ at second order and the data are precise enough) is accepted beside it.
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "ctk/calib/residual_structure.hpp"
 #include "ctk/calib/scan_calibration.hpp"
 #include "ctk/calib/scan_model_fit.hpp"
 #include "ctk/geom/scan.hpp"
@@ -51,11 +53,6 @@ struct EffectFinding {
   Eigen::MatrixXd covariance;      // of this effect's parameters (may be empty)
   std::vector<Effect> confounded_with;
   ModelError before, after;
-};
-
-struct StructureFinding {
-  std::string where;  // "by sphere", "by detector region", "by view order", "robot prior"
-  std::string what;
 };
 
 struct Diagnosis {

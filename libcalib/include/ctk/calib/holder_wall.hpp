@@ -1,0 +1,28 @@
+#pragma once
+// The holder's wall measured from the images, for scans that do not declare it: a calibrated
+// view knows where the holder's axis is, so every pixel's ray has a distance d to the axis and an
+// angle theta to it, and a tube of radii r < R adds mu (2 sqrt(R^2 - d^2) - 2 sqrt(r^2 - d^2)) /
+// sin(theta) to its line integral (the second term only inside r). Fitted per view over the band
+// of the spheres (pixels on a sphere's disc left out), the radii of several views give the
+// estimate and their spread its uncertainty.
+#include <optional>
+
+#include "ctk/calib/scan_calibration.hpp"
+#include "ctk/geom/helix.hpp"
+#include "ctk/geom/scan.hpp"
+
+namespace ctk {
+
+struct WallMeasurement {
+  HolderWall wall;
+  double inner_sigma_mm = 0, outer_sigma_mm = 0;  // standard errors of the medians over the views
+  int views = 0;                                   // views whose fit converged
+};
+
+/// Measures the wall in up to `max_views` calibrated views that see the holder from the side
+/// (axis at least 60 deg from the beam); empty when fewer than 3 such views fit. A sample that
+/// reaches the inside of the wall biases the inner radius.
+std::optional<WallMeasurement> measure_holder_wall(const ScanDescription& scan, const ScanCalibration& calibration,
+                                                   int max_views = 12);
+
+}  // namespace ctk
