@@ -42,27 +42,20 @@ std::string gravity_note(const ScanObservations& o, const std::vector<Eigen::Mat
   return s.str();
 }
 
-// Residual structure the final model leaves, tested against the noise (Bonferroni over cells).
-// Residual components are clipped at 3 noise deviations first: a few detections biased by the
-// scene (a sphere crossing the holder wall's edge, an overlap) must not make a group stand out,
-// while a systematic error shifts every member of its group a little and survives the clip.
-}  // namespace
-
-std::vector<StructureFinding> find_structure(const ScanObservations& o, const ScanModelFit& f) {
-  std::vector<StructureFinding> out;
-  std::vector<double> components;
-  for (const auto& view : f.residual_px)
-    for (const auto& r : view) {
-      components.push_back(std::abs(r.x()));
-      components.push_back(std::abs(r.y()));
-    }
-  if (components.size() < 20) return out;
-  const double sigma = 1.4826 * median_in_place(components);
-  auto clipped = [&](const Eigen::Vector2d& r) {
+// The residuals' noise per component (robust), and each residual clipped at 3 of it: a few
+// detections biased by the scene (a sphere crossing the holder wall's edge, an overlap) must not
+// make a group stand out, while a systematic error shifts every member of its group a little and
+// survives the clip.
+struct ResidualNoise {
+  double sigma = 0;
+  double clipped_variance = 0;  // of a component clipped at 3 sigma: 0.973 sigma^2 under Gaussian noise
+  Eigen::Vector2d clipped(const Eigen::Vector2d& r) const {
     return Eigen::Vector2d(std::clamp(r.x(), -3 * sigma, 3 * sigma), std::clamp(r.y(), -3 * sigma, 3 * sigma));
-  };
-  // The variance of a component clipped at 3 sigma is 0.973 sigma^2 under Gaussian noise.
-  const double clipped_variance = 0.973 * sigma * sigma;
+  }
+};
+
+// Mean residual per sphere and per detector cell.
+void group_structure(const ScanObservations& o, const ScanModelFit& f, const ResidualNoise& noise, std::vector<StructureFinding>& out) {
   // Mean residual vectors in groups; chi-square with 2 dof against a Bonferroni threshold.
   auto test_groups = [&](const std::string& where, int groups, auto&& group_of, auto&& name_of) {
     std::vector<Eigen::Vector2d> sum(static_cast<std::size_t>(groups), Eigen::Vector2d::Zero());
@@ -71,7 +64,7 @@ std::vector<StructureFinding> find_structure(const ScanObservations& o, const Sc
       for (std::size_t k = 0; k < f.residual_px[i].size(); ++k) {
         const int g = group_of(i, k);
         if (g < 0) continue;
-        sum[static_cast<std::size_t>(g)] += clipped(f.residual_px[i][k]);
+        sum[static_cast<std::size_t>(g)] += noise.clipped(f.residual_px[i][k]);
         ++count[static_cast<std::size_t>(g)];
       }
     const double threshold = -2.0 * std::log(1e-3 / groups);
@@ -81,7 +74,7 @@ std::vector<StructureFinding> find_structure(const ScanObservations& o, const Sc
       const auto n = count[static_cast<std::size_t>(g)];
       if (n < 5) continue;
       const Eigen::Vector2d mean = sum[static_cast<std::size_t>(g)] / n;
-      const double chi2 = n * mean.squaredNorm() / clipped_variance;
+      const double chi2 = n * mean.squaredNorm() / noise.clipped_variance;
       if (chi2 > threshold) {
         if (flagged < 6) what << (flagged ? "; " : "") << name_of(g) << " mean " << mean.norm() << " px over " << n;
         ++flagged;
@@ -107,61 +100,65 @@ std::vector<StructureFinding> find_structure(const ScanObservations& o, const Sc
       },
       [](int g) { return "cell (" + std::to_string(g % kCells) + ", " + std::to_string(g / kCells) + ")"; });
 
-  // A sphere that moves during the scan: its residuals in view v follow J_v (a + b tau_v), J_v
-  // the projection's derivative with respect to the sphere's place, tau_v the scan's progress
-  // (-1/2 .. 1/2); a fitted place leaves a = 0, a move leaves b. Least squares for (a, b) and
-  // the chi-square that b explains (3 dof), Bonferroni over the spheres.
-  {
-    std::vector<Eigen::Matrix<double, 6, 6>> normal(static_cast<std::size_t>(spheres), Eigen::Matrix<double, 6, 6>::Zero());
-    std::vector<Eigen::Matrix<double, 6, 1>> rhs(static_cast<std::size_t>(spheres), Eigen::Matrix<double, 6, 1>::Zero());
-    std::vector<int> seen(static_cast<std::size_t>(spheres), 0);
-    int first = o.views.front().view, last = first;
-    for (const auto& v : o.views) first = std::min(first, v.view), last = std::max(last, v.view);
-    const double span = std::max(1, last - first);
-    for (std::size_t i = 0; i < o.views.size(); ++i) {
-      const ViewObservations& view = o.views[i];
-      const double tau = (view.view - first) / span - 0.5;
-      for (std::size_t k = 0; k < view.spheres.size(); ++k) {
-        const auto id = static_cast<std::size_t>(view.spheres[k]);
-        const Eigen::Vector3d Y = f.poses[i] * (o.setup.holder.spheres_mm[id] + f.parameters.spheres[id]);
-        Eigen::Matrix<double, 2, 3> dp;
-        dp << o.setup.K.fu_px / Y.z(), o.setup.K.skew_px / Y.z(), -(o.setup.K.fu_px * Y.x() + o.setup.K.skew_px * Y.y()) / (Y.z() * Y.z()),
-            0, o.setup.K.fv_px / Y.z(), -o.setup.K.fv_px * Y.y() / (Y.z() * Y.z());
-        const Eigen::Matrix<double, 2, 3> J = dp * f.poses[i].linear();
-        Eigen::Matrix<double, 2, 6> A;
-        A << J, tau * J;
-        normal[id] += A.transpose() * A;
-        rhs[id] += A.transpose() * clipped(f.residual_px[i][k]);
-        ++seen[id];
-      }
-    }
-    const double chi2_3 = 3 * std::pow(1 - 2 / 27.0 + 4.75 * std::sqrt(2 / 27.0), 3);  // p ~ 1e-6 (Wilson-Hilferty)
-    const double threshold = chi2_3 + 2 * std::log(static_cast<double>(spheres));       // and for the number of spheres
-    std::ostringstream what;
-    int flagged = 0;
-    for (int k = 0; k < spheres; ++k) {
-      const auto id = static_cast<std::size_t>(k);
-      if (seen[id] < 10) continue;
-      const Eigen::Matrix<double, 6, 6>& N = normal[id];
-      // The move's part: the chi-square of b after a is fitted (Schur complement of a's block).
-      const Eigen::Matrix3d Naa = N.topLeftCorner<3, 3>(), Nab = N.topRightCorner<3, 3>(), Nbb = N.bottomRightCorner<3, 3>();
-      const Eigen::Matrix3d S = Nbb - Nab.transpose() * Naa.completeOrthogonalDecomposition().pseudoInverse() * Nab;
-      const Eigen::Vector3d g = rhs[id].tail<3>() - Nab.transpose() * Naa.completeOrthogonalDecomposition().pseudoInverse() * rhs[id].head<3>();
-      const Eigen::Vector3d b = S.completeOrthogonalDecomposition().solve(g);
-      const double chi2 = g.dot(b) / clipped_variance;
-      if (chi2 > threshold) {
-        if (flagged < 6) what << (flagged ? "; " : "") << "sphere " << k << " moves " << b.norm() << " mm over the scan";
-        ++flagged;
-      }
-    }
-    if (flagged) {
-      std::ostringstream s;
-      s << flagged << " of " << spheres << " spheres whose residuals follow the scan's progress (" << what.str()
-        << (flagged > 6 ? "; ..." : "") << "): a place that changes during the scan, outside the vocabulary";
-      out.push_back({"by sphere over the scan", s.str()});
+}
+
+// A sphere that moves during the scan: its residuals in view v follow J_v (a + b tau_v), J_v the
+// projection's derivative with respect to the sphere's place, tau_v the scan's progress (-1/2 ..
+// 1/2); a fitted place leaves a = 0, a move leaves b. Least squares for (a, b) and the chi-square
+// that b explains (3 dof), Bonferroni over the spheres.
+void moving_spheres(const ScanObservations& o, const ScanModelFit& f, const ResidualNoise& noise, std::vector<StructureFinding>& out) {
+  const auto spheres = static_cast<int>(o.setup.holder.spheres_mm.size());
+  std::vector<Eigen::Matrix<double, 6, 6>> normal(static_cast<std::size_t>(spheres), Eigen::Matrix<double, 6, 6>::Zero());
+  std::vector<Eigen::Matrix<double, 6, 1>> rhs(static_cast<std::size_t>(spheres), Eigen::Matrix<double, 6, 1>::Zero());
+  std::vector<int> seen(static_cast<std::size_t>(spheres), 0);
+  int first = o.views.front().view, last = first;
+  for (const auto& v : o.views) first = std::min(first, v.view), last = std::max(last, v.view);
+  const double span = std::max(1, last - first);
+  for (std::size_t i = 0; i < o.views.size(); ++i) {
+    const ViewObservations& view = o.views[i];
+    const double tau = (view.view - first) / span - 0.5;
+    for (std::size_t k = 0; k < view.spheres.size(); ++k) {
+      const auto id = static_cast<std::size_t>(view.spheres[k]);
+      const Eigen::Vector3d Y = f.poses[i] * (o.setup.holder.spheres_mm[id] + f.parameters.spheres[id]);
+      Eigen::Matrix<double, 2, 3> dp;
+      dp << o.setup.K.fu_px / Y.z(), o.setup.K.skew_px / Y.z(), -(o.setup.K.fu_px * Y.x() + o.setup.K.skew_px * Y.y()) / (Y.z() * Y.z()),
+          0, o.setup.K.fv_px / Y.z(), -o.setup.K.fv_px * Y.y() / (Y.z() * Y.z());
+      const Eigen::Matrix<double, 2, 3> J = dp * f.poses[i].linear();
+      Eigen::Matrix<double, 2, 6> A;
+      A << J, tau * J;
+      normal[id] += A.transpose() * A;
+      rhs[id] += A.transpose() * noise.clipped(f.residual_px[i][k]);
+      ++seen[id];
     }
   }
+  const double chi2_3 = 3 * std::pow(1 - 2 / 27.0 + 4.75 * std::sqrt(2 / 27.0), 3);  // p ~ 1e-6 (Wilson-Hilferty)
+  const double threshold = chi2_3 + 2 * std::log(static_cast<double>(spheres));       // and for the number of spheres
+  std::ostringstream what;
+  int flagged = 0;
+  for (int k = 0; k < spheres; ++k) {
+    const auto id = static_cast<std::size_t>(k);
+    if (seen[id] < 10) continue;
+    const Eigen::Matrix<double, 6, 6>& N = normal[id];
+    // The move's part: the chi-square of b after a is fitted (Schur complement of a's block).
+    const Eigen::Matrix3d Naa = N.topLeftCorner<3, 3>(), Nab = N.topRightCorner<3, 3>(), Nbb = N.bottomRightCorner<3, 3>();
+    const Eigen::Matrix3d S = Nbb - Nab.transpose() * Naa.completeOrthogonalDecomposition().pseudoInverse() * Nab;
+    const Eigen::Vector3d g = rhs[id].tail<3>() - Nab.transpose() * Naa.completeOrthogonalDecomposition().pseudoInverse() * rhs[id].head<3>();
+    const Eigen::Vector3d b = S.completeOrthogonalDecomposition().solve(g);
+    const double chi2 = g.dot(b) / noise.clipped_variance;
+    if (chi2 > threshold) {
+      if (flagged < 6) what << (flagged ? "; " : "") << "sphere " << k << " moves " << b.norm() << " mm over the scan";
+      ++flagged;
+    }
+  }
+  if (flagged) {
+    std::ostringstream s;
+    s << flagged << " of " << spheres << " spheres whose residuals follow the scan's progress (" << what.str()
+      << (flagged > 6 ? "; ..." : "") << "): a place that changes during the scan, outside the vocabulary";
+    out.push_back({"by sphere over the scan", s.str()});
+  }
+}
 
+void robot_channel_structure(const ScanObservations& o, const ScanModelFit& f, std::vector<StructureFinding>& out) {
   // The robot channel: each view's pose relative to the model's prediction, in units of the
   // repeatability. Independent noise has no memory from one view to the next and a mean square of
   // about 1 per component; a slowly varying unmodelled effect has both.
@@ -235,6 +232,25 @@ std::vector<StructureFinding> find_structure(const ScanObservations& o, const Sc
       }
     }
   }
+}
+
+}  // namespace
+
+// Residual structure the final model leaves, tested against the noise (Bonferroni over the groups).
+std::vector<StructureFinding> find_structure(const ScanObservations& o, const ScanModelFit& f) {
+  std::vector<StructureFinding> out;
+  std::vector<double> components;
+  for (const auto& view : f.residual_px)
+    for (const auto& r : view) {
+      components.push_back(std::abs(r.x()));
+      components.push_back(std::abs(r.y()));
+    }
+  if (components.size() < 20) return out;
+  const double sigma = 1.4826 * median_in_place(components);
+  const ResidualNoise noise{sigma, 0.973 * sigma * sigma};
+  group_structure(o, f, noise, out);
+  moving_spheres(o, f, noise, out);
+  robot_channel_structure(o, f, out);
   return out;
 }
 
