@@ -184,7 +184,7 @@ Eigen::VectorXd plausible_scale(Effect e) {
     case Effect::source_drift: s << 10, 10; break;                                  // mm per 100 views
     case Effect::detector_intrinsics: s << 50, 50, 200; break;                       // px
     case Effect::detector_distortion: s << 50, 200, 200; break;                      // px
-    case Effect::sphere_positions: s.setConstant(5); break;                          // mm
+    case Effect::sphere_positions: s.resize(0); break;  // fixed by the sphere gauge instead
   }
   return s;
 }
@@ -315,8 +315,8 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
     }
   }
   for (Effect e : active) {
-    if (e == Effect::sphere_positions || !problem.HasParameterBlock(g.block(e))) continue;
     const Eigen::VectorXd scale = plausible_scale(e);
+    if (scale.size() == 0 || !problem.HasParameterBlock(g.block(e))) continue;
     const ceres::Matrix A = scale.cwiseInverse().asDiagonal();
     problem.AddResidualBlock(new ceres::NormalPrior(A, ceres::Vector::Zero(scale.size())), nullptr, g.block(e));
   }
