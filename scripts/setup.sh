@@ -11,6 +11,7 @@ packages=(
   libopenimageio-dev     # TIFF/EXR/PNG I/O
   openimageio-tools      # its CMake package file refers to these binaries
   libopenexr-dev         # EXR
+  libtiff-dev            # TIFF projections read directly (libdeflate)
   libgeographiclib-dev   # equal-area map projection
   libhealpix-cxx-dev     # sphere pixelisation
   libcli11-dev           # command line

@@ -50,8 +50,20 @@ bool refine_centroid(const Image& im, const Eigen::Vector2d& guess, double radiu
 }
 
 std::vector<SphereDetection> detect_spheres(const Image& im, const DetectionOptions& o) {
+  // The searched rectangle; the filters read the image around it (OpenCV filters a submatrix with
+  // its parent's pixels beyond the edge), so its responses equal those of the whole image.
+  cv::Rect roi(0, 0, im.cols, im.rows);
+  if (!o.region.isEmpty()) {
+    const int c0 = std::max(0, static_cast<int>(std::floor(o.region.min().x())));
+    const int r0 = std::max(0, static_cast<int>(std::floor(o.region.min().y())));
+    const int c1 = std::min(im.cols - 1, static_cast<int>(std::ceil(o.region.max().x())));
+    const int r1 = std::min(im.rows - 1, static_cast<int>(std::ceil(o.region.max().y())));
+    if (c1 - c0 < 2 || r1 - r0 < 2) return {};
+    roi = cv::Rect(c0, r0, c1 - c0 + 1, r1 - r0 + 1);
+  }
   // Difference of Gaussians matched to a disc of radius R: sigma R / sqrt(2) against 2x that.
-  const cv::Mat image(im.rows, im.cols, CV_32F, const_cast<float*>(im.pixels.data()));
+  const cv::Mat whole(im.rows, im.cols, CV_32F, const_cast<float*>(im.pixels.data()));
+  const cv::Mat image = whole(roi);
   const double s = std::max(0.7, o.radius_px / std::sqrt(2.0));
   cv::Mat narrow, wide, dog;
   cv::GaussianBlur(image, narrow, cv::Size(0, 0), s, s, cv::BORDER_REPLICATE);
@@ -64,17 +76,17 @@ std::vector<SphereDetection> detect_spheres(const Image& im, const DetectionOpti
   // Threshold from the noise: a robust spread (median absolute deviation) of the response, so
   // the strong walls do not raise it.
   std::vector<float> sample;
-  sample.reserve(static_cast<std::size_t>(im.rows * im.cols / 16 + 1));
-  for (int r = 0; r < im.rows; r += 4)
-    for (int c = 0; c < im.cols; c += 4) sample.push_back(dog.at<float>(r, c));
+  sample.reserve(static_cast<std::size_t>(roi.area() / 16 + 1));
+  for (int r = 0; r < roi.height; r += 4)
+    for (int c = 0; c < roi.width; c += 4) sample.push_back(dog.at<float>(r, c));
   const float centre = median_in_place(sample);
   for (float& x : sample) x = std::abs(x - centre);
   const float threshold = centre + o.noise_sigmas * 1.4826f * std::max(median_in_place(sample), 1e-12f);
   std::vector<SphereDetection> candidates;
-  for (int r = 1; r + 1 < im.rows; ++r) {
+  for (int r = 1; r + 1 < roi.height; ++r) {
     const float* d = dog.ptr<float>(r);
     const float* m = dilated.ptr<float>(r);
-    for (int c = 1; c + 1 < im.cols; ++c) {
+    for (int c = 1; c + 1 < roi.width; ++c) {
       if (d[c] <= threshold || d[c] < m[c]) continue;
       // A sphere is a bump (both curvatures strongly negative); a wall's edge is a ridge.
       const double dxx = narrow.at<float>(r, c + 1) - 2.0 * narrow.at<float>(r, c) + narrow.at<float>(r, c - 1);
@@ -84,7 +96,7 @@ std::vector<SphereDetection> detect_spheres(const Image& im, const DetectionOpti
       const double mean_curvature = 0.5 * (dxx + dyy), spread = std::sqrt(0.25 * (dxx - dyy) * (dxx - dyy) + dxy * dxy);
       const double l_large = mean_curvature - spread, l_small = mean_curvature + spread;  // both < 0 for a bump
       if (!(l_small < 0) || l_small > o.min_roundness * l_large) continue;
-      candidates.push_back({Eigen::Vector2d(c, r), 0.0, d[c]});
+      candidates.push_back({Eigen::Vector2d(c + roi.x, r + roi.y), 0.0, d[c]});
     }
   }
   std::sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.response > b.response; });

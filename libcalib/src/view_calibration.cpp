@@ -143,6 +143,18 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   out.radius_px = radius_px;
   DetectionOptions detection;
   detection.radius_px = radius_px;
+  // Spheres are looked for only where the first guess can have put them: a shift of the pattern
+  // beyond the search is never matched. Most of a detector sees no sphere, and the filters over the
+  // whole image were a fifth of a view's time (perf on ctk calibrate, 120 views of 720 x 720).
+  for (const auto& X : holder.spheres_mm)
+    if (const Eigen::Vector3d c = K * (initial * X); c.z() > 0) detection.region.extend(Eigen::Vector2d(c.head<2>() / c.z()));
+  if (!detection.region.isEmpty()) {
+    const double margin = o.search_px + 2 * radius_px + 8;
+    detection.region.min().array() -= margin;
+    detection.region.max().array() += margin;
+    if (!detection.region.intersects(Eigen::AlignedBox2d(Eigen::Vector2d(0, 0), Eigen::Vector2d(image.cols - 1, image.rows - 1))))
+      detection.region = Eigen::AlignedBox2d(Eigen::Vector2d(0, 0), Eigen::Vector2d(0, 0));
+  }
   // `measured` are where the centres are in the image (profile fits refine them there); `detections`
   // are the same centres where an ideal pinhole detector would have them (a declared distortion
   // removed), which is what matching and the pose fit compare with projections.

@@ -12,6 +12,7 @@
 #include "ctk/geom/atomic_write.hpp"
 #include "ctk/geom/error.hpp"
 #include "ctk/geom/output_set.hpp"
+#include "tiff_reading.hpp"
 
 namespace ctk {
 
@@ -33,6 +34,12 @@ constexpr std::size_t kMostPixels = std::size_t{1} << 30;
 // header claiming 20000 x 20000 costs nothing. Only regular files: a FIFO or a device would hang.
 Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>>& expected, std::string* written_by) {
   require_regular_file(file);
+  if (auto tiff = read_plain_tiff(file, expected, kMostPixels)) {
+    if (written_by)
+      *written_by = tiff->description.rfind(kWrittenBy, 0) == 0 ? tiff->description.substr(std::string_view(kWrittenBy).size())
+                                                                 : std::string();
+    return std::move(tiff->image);
+  }
   auto in = ImageInput::open(file.string());
   if (!in) throw InputError(file.string(), "", "cannot read the image: " + OIIO::geterror());
   const ImageSpec& spec = in->spec();

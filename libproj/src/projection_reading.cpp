@@ -38,23 +38,6 @@ std::optional<FlatDark> read_flat_dark(const ScanDescription& scan) {
   return FlatDark{mean_of(scan.projections.flat), mean_of(scan.projections.dark)};
 }
 
-void counts_to_line_integrals(const Image& counts, const Image& flat, const Image& dark, float* p, float* w,
-                              std::size_t& clamped) {
-  // A transmission above 1.5 cannot come from attenuation: treat it like one at or below zero.
-  constexpr double kMinCounts = 0.5, kMaxTransmission = 1.5;
-  for (std::size_t i = 0; i < counts.pixels.size(); ++i) {
-    const double open = double(flat.pixels[i]) - double(dark.pixels[i]);
-    const double detected = double(counts.pixels[i]) - double(dark.pixels[i]);
-    double t = open > 0 ? std::max(detected, kMinCounts) / open : kMaxTransmission;
-    if (open <= 0 || detected < kMinCounts || t > kMaxTransmission) {
-      ++clamped;
-      t = std::clamp(t, kMinCounts / std::max(open, 1.0), kMaxTransmission);
-    }
-    p[i] = -std::log(static_cast<float>(t));  // single precision: the result is a float anyway
-    if (w) w[i] = static_cast<float>(open > 0 ? std::max(detected, kMinCounts) / open : 0.0);
-  }
-}
-
 std::size_t mask_non_finite(Image& image, float* weights) {
   std::vector<std::size_t> bad;
   for (std::size_t i = 0; i < image.pixels.size(); ++i)

@@ -53,6 +53,39 @@ TEST(SphereDetectionMeasured, FindsTheEighteenBeadsInEveryView) {
   }
 }
 
+// Searching a region finds there exactly what the whole image finds there (the filters read the
+// pixels around the region, the threshold comes from the region's own noise), and nothing outside.
+TEST(SphereDetectionMeasured, ARegionFindsWhatTheWholeImageFindsThere) {
+  for (const char* view : {"centered_0", "tilt_60"}) {
+    const Image image = bumps(view);
+    const std::vector<SphereDetection> whole = detect(image);
+    ASSERT_GE(whole.size(), 18u);
+    // The box around the six strongest beads, a bead's diameter to spare.
+    Eigen::AlignedBox2d box;
+    for (int i = 0; i < 6; ++i) box.extend(whole[static_cast<std::size_t>(i)].uv);
+    box.min().array() -= 2 * kSmallBeadRadiusPx;
+    box.max().array() += 2 * kSmallBeadRadiusPx;
+    DetectionOptions o;
+    o.radius_px = kSmallBeadRadiusPx;
+    o.region = box;
+    const std::vector<SphereDetection> inside = detect_spheres(image, o);
+    int beads_inside = 0;
+    for (int i = 0; i < 18; ++i) {
+      const SphereDetection& bead = whole[static_cast<std::size_t>(i)];
+      if (!box.contains(bead.uv)) continue;
+      ++beads_inside;
+      double nearest = 1e9;
+      for (const auto& d : inside) nearest = std::min(nearest, (d.uv - bead.uv).norm());
+      EXPECT_LT(nearest, 1e-9) << view << ": bead at " << bead.uv.transpose();
+    }
+    EXPECT_GE(beads_inside, 6) << view;
+    Eigen::AlignedBox2d reach = box;
+    reach.min().array() -= 1;
+    reach.max().array() += 1;
+    for (const auto& d : inside) EXPECT_TRUE(reach.contains(d.uv)) << view << ": found outside at " << d.uv.transpose();
+  }
+}
+
 // Pixel centres sit at integers (scan-format.md): turning the image by 180 degrees maps pixel
 // (u, v) to (cols - 1 - u, rows - 1 - v), and every sub-pixel centre must follow exactly. A
 // half-pixel slip in the convention would show as a whole pixel here.

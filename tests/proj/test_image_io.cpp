@@ -45,6 +45,49 @@ TEST(ImageIo, Uint16CountsStayCounts) {
   for (std::size_t i = 0; i < counts.size(); ++i) EXPECT_EQ(im.pixels[i], counts[i]);
 }
 
+// Strip TIFFs of one channel go through libtiff directly, the rest through OpenImageIO: every
+// sample type, compression, predictor, strip height (a last strip shorter than the rest), tiles
+// and colour must give the values OpenImageIO reads (integer counts kept as counts).
+TEST(ImageIo, EveryTiffLayoutReadsAsOpenImageIoReadsIt) {
+  const auto dir = testing::scratch_dir();
+  const int cols = 37, rows = 11;
+  struct Layout {
+    OIIO::TypeDesc type;
+    int channels;
+    const char* compression;
+    int rows_per_strip;  // 0: tiles of 16 x 16
+    double scale;        // counts per unit of OpenImageIO's float
+  };
+  const Layout layouts[] = {{OIIO::TypeDesc::UINT16, 1, "none", 11, 65535.0}, {OIIO::TypeDesc::UINT16, 1, "zip", 3, 65535.0},
+                            {OIIO::TypeDesc::UINT16, 1, "lzw", 4, 65535.0},   {OIIO::TypeDesc::UINT8, 1, "zip", 5, 255.0},
+                            {OIIO::TypeDesc::UINT32, 1, "none", 2, 4294967295.0}, {OIIO::TypeDesc::FLOAT, 1, "zip", 3, 1.0},
+                            {OIIO::TypeDesc::UINT16, 1, "zip", 0, 65535.0},   {OIIO::TypeDesc::UINT16, 3, "zip", 4, 65535.0}};
+  int n = 0;
+  for (const Layout& l : layouts) {
+    const auto file = dir / ("layout-" + std::to_string(n++) + ".tif");
+    OIIO::ImageSpec spec(cols, rows, l.channels, l.type);
+    spec.attribute("compression", l.compression);
+    if (l.rows_per_strip > 0) spec.attribute("tiff:RowsPerStrip", l.rows_per_strip);
+    else spec.tile_width = spec.tile_height = 16;
+    std::vector<float> written(static_cast<std::size_t>(cols * rows * l.channels));
+    for (std::size_t i = 0; i < written.size(); ++i) written[i] = static_cast<float>((i * 7919) % 1000) / 1000.0f;
+    auto out = OIIO::ImageOutput::create(file.string());
+    ASSERT_TRUE(out->open(file.string(), spec)) << out->geterror();
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, written.data())) << out->geterror();
+    out->close();
+    auto in = OIIO::ImageInput::open(file.string());
+    ASSERT_TRUE(in);
+    std::vector<float> expected(static_cast<std::size_t>(cols * rows));
+    ASSERT_TRUE(in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, expected.data()));
+    const Image im = read_image(file, cols, rows);
+    ASSERT_EQ(im.pixels.size(), expected.size());
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+      const float counts = l.scale == 1.0 ? expected[i] : static_cast<float>(std::round(expected[i] * l.scale));
+      ASSERT_EQ(im.pixels[i], counts) << file << " pixel " << i;
+    }
+  }
+}
+
 TEST(ImageIo, ReadsTheMeasuredPepperFlatAndDark) {
   const auto dir = testing::shared_data_dir() / "flexray-pepper-cone";
   // The README: 190 rows x 239 columns, dark ~1 320, flat ~46 900 counts.

@@ -2,13 +2,16 @@
 // opened), counts scans get weights, line-integral scans come through unchanged.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "../test_support.hpp"
 #include "ctk/geom/error.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/scan_simulation.hpp"
+#include "ctk/proj/projection_reading.hpp"
 #include "ctk/recon/measurements.hpp"
 
 namespace ctk {
@@ -83,6 +86,46 @@ TEST(Measurements, CountsGiveLineIntegralsNearTheTruthAndWeights) {
   EXPECT_NEAR(m.line_integrals.at(0, 0, 0), 0.0, 0.03);
   EXPECT_NEAR(m.weights.at(0, 0, 0), 1.0, 0.03);
   EXPECT_EQ(m.clamped_pixels, 0u);
+}
+
+// The conversion runs as SIMD lanes and a scalar tail: every lane and the tail follow the
+// definition, -log(max(I - dark, 0.5) / (flat - dark)) with the transmission clamped to
+// (0.5 / open, 1.5] where implausible, weights the unclamped transmission, NaN counts kept NaN.
+TEST(Measurements, CountsToLineIntegralsFollowTheDefinitionInEveryLane) {
+  const int n = 1003;  // not a multiple of any vector width
+  Image counts{n, 1, std::vector<float>(n)}, flat{n, 1, std::vector<float>(n)}, dark{n, 1, std::vector<float>(n)};
+  std::uint32_t state = 12345;
+  auto next = [&] { return (state = state * 1664525u + 1013904223u) >> 8; };
+  for (int i = 0; i < n; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    dark.pixels[u] = static_cast<float>(90 + next() % 20);
+    flat.pixels[u] = static_cast<float>(i % 97 == 0 ? 50 + next() % 80 : 8000 + next() % 4000);  // some flats at or below dark
+    const std::uint32_t kind = next() % 10;
+    counts.pixels[u] = kind == 0   ? dark.pixels[u] - 5                                        // below dark
+                       : kind == 1 ? flat.pixels[u] * 2                                          // transmission above 1.5
+                       : kind == 2 ? std::numeric_limits<float>::quiet_NaN()                    // a dead pixel
+                                   : dark.pixels[u] + static_cast<float>(next() % 9000);
+  }
+  std::vector<float> p(n), w(n);
+  std::size_t clamped = 0;
+  counts_to_line_integrals(counts, flat, dark, p.data(), w.data(), clamped);
+  std::size_t expected_clamped = 0;
+  for (int i = 0; i < n; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    const double open = double(flat.pixels[u]) - dark.pixels[u], detected = double(counts.pixels[u]) - dark.pixels[u];
+    if (std::isnan(counts.pixels[u])) {
+      EXPECT_TRUE(std::isnan(p[u])) << i;
+      continue;
+    }
+    double t = open > 0 ? std::max(detected, 0.5) / open : 1.5;
+    if (open <= 0 || detected < 0.5 || t > 1.5) {
+      ++expected_clamped;
+      t = std::clamp(t, 0.5 / std::max(open, 1.0), 1.5);
+    }
+    EXPECT_NEAR(p[u], -std::log(t), 2e-6 * std::max(1.0, std::abs(std::log(t)))) << i;
+    EXPECT_NEAR(w[u], open > 0 ? std::max(detected, 0.5) / open : 0.0, 1e-6 * std::max(1.0, double(std::abs(w[u])))) << i;
+  }
+  EXPECT_EQ(clamped, expected_clamped);
 }
 
 // A view described twice, or a matrix that puts the volume behind the source (an all-zero volume

@@ -4,6 +4,7 @@
 // every direction there (a sphere is a bump; the tube's silhouette edges are ridges), each refined to a sub-pixel centre by an
 // intensity-weighted centroid after removing a plane fitted to the surrounding ring.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <vector>
 
 #include "ctk/proj/image_io.hpp"
@@ -21,6 +22,8 @@ struct DetectionOptions {
   double noise_sigmas = 5.0;      // response threshold, in robust noise deviations
   double min_roundness = 0.3;     // smaller / larger curvature: below, a ridge (a wall's edge)
   int max_candidates = 400;
+  Eigen::AlignedBox2d region;     // the pixels searched, e.g. where a first guess puts the spheres
+                                  // with room for its error (empty: the whole image)
 };
 
 /// `line_integrals` is one view's image; returns the detections, strongest first.
