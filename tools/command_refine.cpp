@@ -42,6 +42,21 @@ fs::path beside(const fs::path& out, const std::string& suffix) { return out.par
 
 void write_central_slice(const Volume& x, float high, const fs::path& file) { write_slice_png(x, 2, x.layout.size[2] / 2, 0.0f, high, file); }
 
+// What the final model leaves fixed on the detector: each pixel's mean held-out residual over its
+// standard error, grey 0 at mid-grey, black at -10 and white at +10 or beyond (rows left out of
+// the costs at 0). A one-row detector is drawn as a band 48 rows high.
+void write_pattern_picture(const DetectorPattern& p, const fs::path& file) {
+  const int height = p.rows == 1 ? 48 : p.rows;
+  Volume z(VolumeLayout::centred({p.cols, height, 1}, Eigen::Vector3d::Ones()));
+  for (int row = 0; row < height; ++row)
+    for (int c = 0; c < p.cols; ++c) {
+      const std::size_t i = static_cast<std::size_t>(p.rows == 1 ? 0 : row) * static_cast<std::size_t>(p.cols) + static_cast<std::size_t>(c);
+      const double se = p.standard_error[i];
+      z.at(c, row, 0) = p.used[i] && se > 0 && std::isfinite(se) ? static_cast<float>(std::clamp(p.mean[i] / se, -10.0, 10.0)) : 0.0f;
+    }
+  write_slice_png(z, 2, 0, -10.0f, 10.0f, file);
+}
+
 // The axis' column from the data alone (conjugate rays of the row through the principal point):
 // an estimate that does not rest on the yardstick. Full circles at equal steps only; otherwise
 // `why_not` says why there is none.
@@ -76,7 +91,7 @@ void run_refine(const RefineOptions& o) {
   files.scan("--scan", o.scan, scan);
   files.input("--geometry", o.geometry);
   files.output("--out", o.out);
-  for (const char* suffix : {".geometry.json", ".scan.json", ".before.png", ".after.png"})
+  for (const char* suffix : {".geometry.json", ".scan.json", ".before.png", ".after.png", ".pattern.png", ".pixel-offsets.tif"})
     files.output(std::string("beside --out: ") + suffix, beside(o.out, suffix));
   files.check();
   OutputSet outputs;  // published together, after the last is written
@@ -144,6 +159,7 @@ void run_refine(const RefineOptions& o) {
   nlohmann::json lacks = nlohmann::json::array();
   if (r.model.blur_arc_rad > 0) lacks.push_back("angular_blur");
   if (r.model.hardening_c2 != 0) lacks.push_back("beam_hardening");
+  if (!r.model.pixel_offset.empty()) lacks.push_back("pixel offsets (pixel_gain / column_gain): in " + beside(o.out, ".pixel-offsets.tif").string());
   if (!lacks.empty()) report["corrected_scan_lacks"] = lacks;
   report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_text_atomically(o.out, report.dump(2) + "\n");
@@ -151,6 +167,9 @@ void run_refine(const RefineOptions& o) {
   const float high = preview_ceiling(r.volume_before);  // one grey scale for both pictures
   write_central_slice(r.volume_before, high, beside(o.out, ".before.png"));
   write_central_slice(r.volume_after, high, beside(o.out, ".after.png"));
+  write_pattern_picture(r.residual_pattern, beside(o.out, ".pattern.png"));
+  if (!r.model.pixel_offset.empty())
+    write_image_float(Image{scan.detector.cols, scan.detector.rows, r.model.pixel_offset}, beside(o.out, ".pixel-offsets.tif"));
 
   outputs.publish();
   std::cout << "held-out projection RMS " << r.heldout_rms_before << " -> " << r.heldout_rms_after << "; sharpness "
@@ -158,7 +177,8 @@ void run_refine(const RefineOptions& o) {
   for (const auto& e : r.effects)
     if (e.accepted) std::cout << "accepted " << e.name << " " << e.parameters.dump() << " +- " << e.uncertainty.dump() << "\n";
   std::cout << "report " << o.out.string() << ", refined matrices " << geometry_file.string() << ", scan " << scan_file.string()
-            << ", slices " << beside(o.out, ".before.png").string() << " / .after.png\n";
+            << ", slices " << beside(o.out, ".before.png").string() << " / .after.png, what is left on the detector "
+            << beside(o.out, ".pattern.png").string() << "\n";
 }
 
 }  // namespace
@@ -174,7 +194,8 @@ void register_refine(CLI::App& app) {
       ->check(non_negative_number);
   cmd->add_option("--z", o->z_accept, "Acceptance: held-out improvement in standard errors")->check(positive_number)->capture_default_str();
   cmd->add_option("--effects", o->effects, "Candidates (default: all)")
-      ->check(CLI::IsMember({"detector_offset", "detector_roll", "axis_tilt", "magnification", "angular_blur", "beam_hardening"}));
+      ->check(CLI::IsMember({"detector_offset", "detector_roll", "axis_tilt", "magnification", "angular_blur", "beam_hardening",
+                             "pixel_gain", "column_gain"}));
   cmd->callback([o] { run_refine(*o); });
 }
 

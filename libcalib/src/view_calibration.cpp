@@ -233,8 +233,14 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
     }
   }
   if (best.matches.empty()) {
-    out.reason = "too few spheres: no consistent match of the " + std::to_string(out.detections) +
-                 " detections near the first-guess pose (at least " + std::to_string(o.min_spheres) + " spheres needed)";
+    const auto on_detector = std::count(first.visible.begin(), first.visible.end(), true);
+    if (visible < o.min_spheres && on_detector >= o.min_spheres)
+      out.reason = "the image cannot fix the pose: the first guess puts " + std::to_string(on_detector) +
+                   " spheres on the detector, but only " + std::to_string(visible) +
+                   " stand apart from the others (the projected helix overlaps itself, as when looking along the holder axis)";
+    else
+      out.reason = "too few spheres: no consistent match of the " + std::to_string(out.detections) +
+                   " detections near the first-guess pose (at least " + std::to_string(o.min_spheres) + " spheres needed)";
     return out;
   }
   // The matched spheres' centres from their whole profiles, then the spheres missed so far, then

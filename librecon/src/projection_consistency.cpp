@@ -55,7 +55,9 @@ Volume ConsistencyProbe::reconstruct(const std::vector<int>& views, const std::v
   for (std::size_t i = 0; i < views.size(); ++i) {
     const float* in = b_.view(views[i]);
     float* out = sub.view(static_cast<int>(i));
-    for (std::size_t p = 0; p < b_.pixels_per_view(); ++p) out[p] = static_cast<float>(linearise_line_integral(in[p], model.hardening_c2));
+    const float* offset = model.pixel_offset.empty() ? nullptr : model.pixel_offset.data();
+    for (std::size_t p = 0; p < b_.pixels_per_view(); ++p)
+      out[p] = static_cast<float>(linearise_line_integral(offset ? in[p] - offset[p] : in[p], model.hardening_c2));
     P.push_back(matrices[static_cast<std::size_t>(views[i])]);
   }
   Volume x(layout);
@@ -63,8 +65,9 @@ Volume ConsistencyProbe::reconstruct(const std::vector<int>& views, const std::v
   return x;
 }
 
-std::vector<double> ConsistencyProbe::fit_costs(const GlobalGeometry& geometry, const ForwardModel& model) const {
-  return costs(split_.fit, geometry, model, nullptr);
+std::vector<double> ConsistencyProbe::fit_costs(const GlobalGeometry& geometry, const ForwardModel& model,
+                                                ProjectionStack* fit_residuals) const {
+  return costs(split_.fit, geometry, model, fit_residuals);
 }
 
 std::vector<double> ConsistencyProbe::judge_costs(const GlobalGeometry& geometry, const ForwardModel& model,
@@ -107,8 +110,9 @@ std::vector<double> ConsistencyProbe::costs(const std::vector<int>& held_out, co
     double sum = 0;
     const std::size_t first = static_cast<std::size_t>(row_margin_) * static_cast<std::size_t>(b_.cols);
     const std::size_t last = predicted.size() - first;
+    const float* offset = model.pixel_offset.empty() ? nullptr : model.pixel_offset.data();
     for (std::size_t p = first; p < last; ++p) {
-      const double r = measured_from_linear(predicted[p], model.hardening_c2) - measured[p];
+      const double r = measured_from_linear(predicted[p], model.hardening_c2) - (offset ? measured[p] - offset[p] : measured[p]);
       if (residual) residual[p] = static_cast<float>(r);
       sum += r * r;
     }

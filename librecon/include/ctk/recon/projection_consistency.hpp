@@ -25,6 +25,10 @@ struct ForwardModel {
   /// Not physics but the yardstick's own resolution: this fraction of a 3 x 3 box filter is mixed
   /// into every prediction, so that effects cannot win by merely smoothing a streaky prediction.
   double prediction_smoothing = 0;
+  /// pixel_gain / column_gain: what each detector pixel adds to every view's line integral (its
+  /// gain differs between the flat and the projections; a defective column), subtracted from the
+  /// measurements before anything else. One value per pixel, row-major; empty: none.
+  std::vector<float> pixel_offset;
 };
 /// Measured line integral p to the straight (monochromatic) one, and back.
 double linearise_line_integral(double p, double c2);
@@ -41,15 +45,18 @@ class ConsistencyProbe {
 
   /// Mean squared residual per fit (or judge) view, in measured line-integral units squared, over
   /// the detector rows except a tenth at the top and at the bottom (a long object's incomplete
-  /// region): the views not named are not predicted. `judge_residuals` (optional) receives
-  /// predicted - measured for the judge views.
-  std::vector<double> fit_costs(const GlobalGeometry& geometry, const ForwardModel& model) const;
+  /// region): the views not named are not predicted. `fit_residuals` / `judge_residuals`
+  /// (optional) receive predicted - measured for those views (0 in the rows left out).
+  std::vector<double> fit_costs(const GlobalGeometry& geometry, const ForwardModel& model, ProjectionStack* fit_residuals = nullptr) const;
   std::vector<double> judge_costs(const GlobalGeometry& geometry, const ForwardModel& model, ProjectionStack* judge_residuals = nullptr) const;
   /// FDK from every view with the model's geometry and linearisation, on `layout`.
   Volume reconstruct_all(const GlobalGeometry& geometry, const ForwardModel& model, const VolumeLayout& layout) const;
   const CircularTrajectory& orbit() const { return orbit_; }
   const Detector& detector() const { return detector_; }
   const ConsistencySplit& split() const { return split_; }
+  const ProjectionStack& measured() const { return b_; }
+  /// Detector rows left out of the costs at the top and at the bottom.
+  int row_margin() const { return row_margin_; }
   /// Principal point of the first nominal view (the detector offsets are relative to it).
   Eigen::Vector2d nominal_principal_point() const;
 
