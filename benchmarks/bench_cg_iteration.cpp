@@ -28,7 +28,11 @@ void BM_CgIteration(benchmark::State& state) {
 }
 
 BENCHMARK(BM_CgIteration<StandardTrajectory::circular>)->Args({1, 360})->UseManualTime()->Iterations(1)->Unit(benchmark::kSecond);
-BENCHMARK(BM_CgIteration<StandardTrajectory::spherical>)->Args({1, 360})->UseManualTime()->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_CgIteration<StandardTrajectory::spherical>)
+    ->Args({1, 360})
+    ->UseManualTime()
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond);
 
 }  // namespace
 }  // namespace ctk

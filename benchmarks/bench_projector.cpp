@@ -22,9 +22,9 @@ struct Fixture {
     std::fill(y.data.begin(), y.data.end(), 1.0f);
   }
   void count(benchmark::State& state) const {
-    state.counters["voxel_views_per_s"] = benchmark::Counter(
-        static_cast<double>(problem.layout.voxel_count()) * static_cast<double>(problem.views.size()),
-        benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["voxel_views_per_s"] =
+        benchmark::Counter(static_cast<double>(problem.layout.voxel_count()) * static_cast<double>(problem.views.size()),
+                           benchmark::Counter::kIsIterationInvariantRate);
   }
 };
 

@@ -20,9 +20,7 @@ inline std::filesystem::path scratch_dir() {
   return dir;
 }
 
-inline void write_text(const std::filesystem::path& file, const std::string& text) {
-  std::ofstream(file) << text;
-}
+inline void write_text(const std::filesystem::path& file, const std::string& text) { std::ofstream(file) << text; }
 
 inline std::filesystem::path shared_data_dir() { return CTK_SHARED_DATA_DIR; }
 

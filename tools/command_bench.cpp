@@ -85,8 +85,11 @@ void write_dump_manifest(const StandardProblem& p, const std::vector<ProjectionM
       {"format", "ctk-bench-dump/1"},
       {"trajectory", p.trajectory},
       {"subset", subset},
-      {"volume", {{"size", p.layout.size}, {"voxel_mm", {p.layout.voxel_mm.x(), p.layout.voxel_mm.y(), p.layout.voxel_mm.z()}},
-                  {"origin_mm", {p.layout.origin_mm.x(), p.layout.origin_mm.y(), p.layout.origin_mm.z()}}, {"order", "x fastest"}}},
+      {"volume",
+       {{"size", p.layout.size},
+        {"voxel_mm", {p.layout.voxel_mm.x(), p.layout.voxel_mm.y(), p.layout.voxel_mm.z()}},
+        {"origin_mm", {p.layout.origin_mm.x(), p.layout.origin_mm.y(), p.layout.origin_mm.z()}},
+        {"order", "x fastest"}}},
       {"detector", {{"cols", p.cols}, {"rows", p.rows}, {"pixel", "(u, v) = (column, row) at the pixel centre"}}},
       {"matrices", matrices},
       {"files", {{"x", "x.raw"}, {"y", "y.raw"}, {"forward", "forward.raw"}, {"back", "back.raw"}}},
@@ -163,9 +166,8 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
   // every reference view then started with a cold cache, which flattered the fast projector.)
   for (int run = 0; run < o.repeat; ++run) {
     fast_runs.push_back(seconds([&] { forward ? fast.forward(x, p.views, y) : fast.back(y, p.views, out); }));
-    ref_runs.push_back(seconds([&] {
-      forward ? forward_project_reference(x, ref_views, y_ref) : back_project_reference(y_ref, ref_views, out_ref);
-    }));
+    ref_runs.push_back(seconds(
+        [&] { forward ? forward_project_reference(x, ref_views, y_ref) : back_project_reference(y_ref, ref_views, out_ref); }));
   }
   const double fast_s = median(fast_runs), ref_s = median(ref_runs);
   if (forward) {
@@ -185,10 +187,10 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
   }
   const double ref_full = ref_s * n_views / n_ref;
   const double voxel_views = static_cast<double>(p.layout.voxel_count()) * n_views;
-  log << "  " << std::left << std::setw(8) << (forward ? "forward" : "back") << std::right << std::fixed
-      << std::setprecision(3) << std::setw(10) << fast_s << " s" << std::setw(12) << ref_full << " s" << std::setw(9)
-      << std::setprecision(1) << ref_full / fast_s << "x" << std::setw(12) << std::scientific << std::setprecision(2)
-      << voxel_views / fast_s << std::setw(12) << voxel_views / ref_full << std::setw(11) << agreement << "\n";
+  log << "  " << std::left << std::setw(8) << (forward ? "forward" : "back") << std::right << std::fixed << std::setprecision(3)
+      << std::setw(10) << fast_s << " s" << std::setw(12) << ref_full << " s" << std::setw(9) << std::setprecision(1)
+      << ref_full / fast_s << "x" << std::setw(12) << std::scientific << std::setprecision(2) << voxel_views / fast_s
+      << std::setw(12) << voxel_views / ref_full << std::setw(11) << agreement << "\n";
   nlohmann::json ref_runs_full = nlohmann::json::array();
   for (const double r : ref_runs) ref_runs_full.push_back(r * n_views / n_ref);
   return {{"fast_seconds", fast_s},
@@ -239,24 +241,20 @@ void run_bench(const BenchOptions& o) {
     const StandardProblem p = standard_problem(trajectory, o.views, o.scale);
     if (!o.dump.empty()) {
       std::filesystem::create_directories(o.dump / p.trajectory);
-      write_dump_manifest(p, reference_subset(p, std::min(o.reference_views, o.views)), "reference: the views the reference ran on",
-                          o.dump / p.trajectory);
+      write_dump_manifest(p, reference_subset(p, std::min(o.reference_views, o.views)),
+                          "reference: the views the reference ran on", o.dump / p.trajectory);
       dump_neighbours(trajectory, o);
     }
     if (trajectory == StandardTrajectory::circular) {
-      result["problem"] = {{"volume", p.layout.size},
-                           {"voxel_mm", p.layout.voxel_mm.x()},
-                           {"detector", {p.cols, p.rows}},
-                           {"pixel_mm", 1.6 * o.scale},
-                           {"source_isocentre_mm", 1000.0},
-                           {"source_detector_mm", 1500.0},
+      result["problem"] = {{"volume", p.layout.size},   {"voxel_mm", p.layout.voxel_mm.x()}, {"detector", {p.cols, p.rows}},
+                           {"pixel_mm", 1.6 * o.scale}, {"source_isocentre_mm", 1000.0},     {"source_detector_mm", 1500.0},
                            {"views", o.views}};
     }
-    log << p.trajectory << ": " << p.layout.size[0] << "^3 voxels, " << p.cols << " x " << p.rows << " detector, "
-        << o.views << " views; fast on " << fast.threads() << " threads (" << JosephProjector::simd_target() << ", "
+    log << p.trajectory << ": " << p.layout.size[0] << "^3 voxels, " << p.cols << " x " << p.rows << " detector, " << o.views
+        << " views; fast on " << fast.threads() << " threads (" << JosephProjector::simd_target() << ", "
         << JosephProjector::simd_lanes() << " lanes), reference on 1 thread over " << std::min(o.reference_views, o.views)
-        << " views scaled to " << o.views << (o.repeat > 1 ? ", medians of " + std::to_string(o.repeat) + " alternating runs" : "")
-        << "\n"
+        << " views scaled to " << o.views
+        << (o.repeat > 1 ? ", medians of " + std::to_string(o.repeat) + " alternating runs" : "") << "\n"
         << "  direction     fast   reference  speedup  fast vox-views/s  ref vox-views/s  rel.diff\n";
     nlohmann::json section = {{"forward", measure(p, o, true, log)}, {"back", measure(p, o, false, log)}};
     if (trajectory == StandardTrajectory::circular) {
@@ -273,23 +271,28 @@ void run_bench(const BenchOptions& o) {
 
 void register_bench(CLI::App& app) {
   auto options = std::make_shared<BenchOptions>();
-  CLI::App* cmd = app.add_subcommand("bench", "Projector throughput: fast (all threads) vs naive reference (1 thread) on the standard problem");
+  CLI::App* cmd = app.add_subcommand(
+      "bench", "Projector throughput: fast (all threads) vs naive reference (1 thread) on the standard problem");
   cmd->add_option("--views", options->views, "Views per trajectory")->capture_default_str()->check(CLI::Range(1, 100000));
   cmd->add_option("--reference-views", options->reference_views,
                   "Views the reference is timed on (its time is scaled per view to --views)")
-      ->capture_default_str()->check(CLI::Range(1, 100000));
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
   cmd->add_option("--scale", options->scale, "Divide volume and detector sizes by this (1 = the standard problem)")
-      ->capture_default_str()->check(CLI::Range(1, 64));
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
   cmd->add_option("--threads", options->threads, "Threads for the fast projector (0 = all)")->capture_default_str();
   cmd->add_option("--repeat", options->repeat,
                   "Time fast and reference this many times each, taking turns, and report the medians")
-      ->capture_default_str()->check(CLI::Range(1, 100));
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100));
   cmd->add_option("--simd", options->simd,
                   "Run the fast projector on this SIMD target instead of the widest (to see what each gives)")
       ->check(CLI::IsMember(JosephProjector::simd_targets()));
   cmd->add_flag("--json", options->json, "Print the result as JSON on stdout (the table goes to stderr)");
   cmd->add_option("--dump", options->dump,
-                  "Write the fast projector's results on the reference's views, and on 16 neighbouring views, to this folder (for benchmarks/yardstick.py)");
+                  "Write the fast projector's results on the reference's views, and on 16 neighbouring views, to this folder "
+                  "(for benchmarks/yardstick.py)");
   cmd->callback([options] { run_bench(*options); });
 }
 

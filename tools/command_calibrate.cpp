@@ -54,7 +54,8 @@ nlohmann::json calibration_run(const CalibrateOptions& o, const ScanDescription&
 nlohmann::json robot_prior_json(const RobotPriorFit& p) {
   if (!p.applied) return {{"applied", false}, {"reason", p.reason}};
   auto offset = [](const double* x) {
-    return nlohmann::json{{"rotation_deg", {x[0] * 180 / M_PI, x[1] * 180 / M_PI, x[2] * 180 / M_PI}}, {"translation_mm", {x[3], x[4], x[5]}}};
+    return nlohmann::json{{"rotation_deg", {x[0] * 180 / M_PI, x[1] * 180 / M_PI, x[2] * 180 / M_PI}},
+                          {"translation_mm", {x[3], x[4], x[5]}}};
   };
   return {{"applied", true},
           {"views", p.views},
@@ -75,7 +76,8 @@ nlohmann::json report_json(const ScanCalibration& c, const CalibrateOptions& o) 
   int ok = 0, rejected = 0, skipped = 0;
   for (std::size_t v = 0; v < c.views.size(); ++v) {
     const ViewCalibration& r = c.views[v];
-    nlohmann::json j = {{"index", v}, {"status", to_string(r.status)}, {"detections", r.detections}, {"spheres_used", r.spheres_used}};
+    nlohmann::json j = {
+        {"index", v}, {"status", to_string(r.status)}, {"detections", r.detections}, {"spheres_used", r.spheres_used}};
     if (!r.reason.empty()) j["reason"] = r.reason;
     if (r.P) {
       j["rms_px"] = r.rms_px;
@@ -155,7 +157,9 @@ std::vector<std::string> write_pictures(const ScanDescription& scan, const ScanC
   return written;
 }
 
-fs::path report_file(const CalibrateOptions& o) { return o.report.empty() ? fs::path(o.out).replace_extension(".report.json") : o.report; }
+fs::path report_file(const CalibrateOptions& o) {
+  return o.report.empty() ? fs::path(o.out).replace_extension(".report.json") : o.report;
+}
 
 void run_calibrate(const CalibrateOptions& o) {
   const ScanDescription scan = read_scan(o.scan);
@@ -174,13 +178,15 @@ void run_calibrate(const CalibrateOptions& o) {
   const nlohmann::json run = calibration_run(o, scan);
   std::unique_ptr<CalibrationJournal> journal;
   if (o.resume) {
-    if (!fs::exists(journal_file)) throw InputError("--resume", "", "no calibration journal at " + journal_file.string() + " to continue");
+    if (!fs::exists(journal_file))
+      throw InputError("--resume", "", "no calibration journal at " + journal_file.string() + " to continue");
     journal = CalibrationJournal::resume(journal_file, run);
-    std::cout << "continuing: " << journal->done().size() << " views were calibrated by the interrupted run (" << journal_file.string()
-              << ")\n";
+    std::cout << "continuing: " << journal->done().size() << " views were calibrated by the interrupted run ("
+              << journal_file.string() << ")\n";
   } else {
     if (fs::exists(journal_file))
-      std::cout << "note: " << journal_file.string() << " holds an interrupted run's views; this run starts afresh (--resume continues it)\n";
+      std::cout << "note: " << journal_file.string()
+                << " holds an interrupted run's views; this run starts afresh (--resume continues it)\n";
     journal = std::make_unique<CalibrationJournal>(journal_file, run);
   }
   const std::map<int, ViewCalibration> earlier = journal->done();
@@ -193,14 +199,16 @@ void run_calibrate(const CalibrateOptions& o) {
   ScanCalibration c = calibrate_scan(scan, o.calibration, std::ref(progress), &control);
   if (c.left_undone > 0)
     throw Interrupted("stopped with " + std::to_string(c.left_undone) + " of " + std::to_string(scan.projections.count) +
-                      " views to go; the finished ones are in " + journal_file.string() + ": run the same command with --resume to continue");
+                      " views to go; the finished ones are in " + journal_file.string() +
+                      ": run the same command with --resume to continue");
   // A holder whose wall the scan does not declare: measured from the images, and the views it
   // cost (a sphere on the wall's silhouette taken for a misfit) calibrated again with it.
   std::optional<WallMeasurement> wall;
   if (scan.holder && !scan.holder->wall) {
     const auto start = std::chrono::steady_clock::now();
     wall = measure_holder_wall(scan, c);
-    if (wall && std::any_of(c.views.begin(), c.views.end(), [](const ViewCalibration& v) { return v.status == ViewStatus::rejected; })) {
+    if (wall &&
+        std::any_of(c.views.begin(), c.views.end(), [](const ViewCalibration& v) { return v.status == ViewStatus::rejected; })) {
       ScanDescription with_wall = scan;
       with_wall.holder->wall = wall->wall;
       std::map<int, ViewCalibration> kept;
@@ -226,11 +234,17 @@ void run_calibrate(const CalibrateOptions& o) {
   nlohmann::json j = report_json(c, o);
   j["robot_prior"] = robot_prior_json(prior);
   if (scan.holder && scan.holder->wall)
-    j["holder_wall"] = {{"declared", true}, {"inner_radius_mm", scan.holder->wall->inner_radius_mm}, {"outer_radius_mm", scan.holder->wall->outer_radius_mm}};
+    j["holder_wall"] = {{"declared", true},
+                        {"inner_radius_mm", scan.holder->wall->inner_radius_mm},
+                        {"outer_radius_mm", scan.holder->wall->outer_radius_mm}};
   else if (wall)
     j["holder_wall"] = {{"declared", false},
-                        {"measured", {{"inner_radius_mm", wall->wall.inner_radius_mm}, {"outer_radius_mm", wall->wall.outer_radius_mm},
-                                      {"inner_sigma_mm", wall->inner_sigma_mm}, {"outer_sigma_mm", wall->outer_sigma_mm}, {"views", wall->views}}}};
+                        {"measured",
+                         {{"inner_radius_mm", wall->wall.inner_radius_mm},
+                          {"outer_radius_mm", wall->wall.outer_radius_mm},
+                          {"inner_sigma_mm", wall->inner_sigma_mm},
+                          {"outer_sigma_mm", wall->outer_sigma_mm},
+                          {"views", wall->views}}}};
   else if (scan.holder)
     j["holder_wall"] = {{"declared", false}, {"measured", nullptr}};
   j["pictures"] = write_pictures(scan, c, o);
@@ -241,14 +255,13 @@ void run_calibrate(const CalibrateOptions& o) {
   if (c.taken_over > 0) std::cout << c.taken_over << " views taken from the interrupted run, the others calibrated now\n";
   std::cout << "calibrated " << s.at("ok") << " of " << s.at("views") << " views (" << s.at("rejected") << " rejected, "
             << s.at("skipped") << " skipped) in " << c.seconds << " s (" << s.at("views_per_second").get<double>()
-            << " views/s); median reprojection RMS " << s.at("median_rms_px").get<double>()
-            << " px; median pose uncertainty " << s.at("median_translation_sigma_across_beam_mm").get<double>() * 1000
-            << " um across the beam, " << s.at("median_translation_sigma_along_beam_mm").get<double>() * 1000
-            << " um along it\n";
+            << " views/s); median reprojection RMS " << s.at("median_rms_px").get<double>() << " px; median pose uncertainty "
+            << s.at("median_translation_sigma_across_beam_mm").get<double>() * 1000 << " um across the beam, "
+            << s.at("median_translation_sigma_along_beam_mm").get<double>() * 1000 << " um along it\n";
   if (wall)
-    std::cout << "holder wall not declared by the scan; measured in " << wall->views << " views: inner radius " << wall->wall.inner_radius_mm
-              << " +- " << wall->inner_sigma_mm << " mm, outer " << wall->wall.outer_radius_mm << " +- " << wall->outer_sigma_mm
-              << " mm (declare it as holder.wall to skip this)\n";
+    std::cout << "holder wall not declared by the scan; measured in " << wall->views << " views: inner radius "
+              << wall->wall.inner_radius_mm << " +- " << wall->inner_sigma_mm << " mm, outer " << wall->wall.outer_radius_mm
+              << " +- " << wall->outer_sigma_mm << " mm (declare it as holder.wall to skip this)\n";
   else if (scan.holder && !scan.holder->wall)
     std::cout << "holder wall not declared by the scan and not measurable (fewer than 3 views see the holder from the side)\n";
   if (prior.applied)
@@ -275,12 +288,18 @@ void register_calibrate(CLI::App& app) {
   cmd->add_option("--scan", o->scan, "scan.json (ctk-scan/1) with a holder section")->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "Geometry to write (ctk-geometry/1)")->capture_default_str();
   cmd->add_option("--report", o->report, "Report (JSON; default: <out>.report.json)");
-  cmd->add_option("--min-spheres", o->calibration.min_spheres, "Fewer matched spheres: view rejected")->check(CLI::Range(6, 1000))->capture_default_str();
-  cmd->add_option("--max-rms", o->calibration.max_rms_px, "Larger reprojection RMS (px): view rejected")->check(positive_number)->capture_default_str();
-  cmd->add_option("--search", o->calibration.search_px, "How far (px) the first guess may misplace the sphere pattern")->check(positive_number)->capture_default_str();
+  cmd->add_option("--min-spheres", o->calibration.min_spheres, "Fewer matched spheres: view rejected")
+      ->check(CLI::Range(6, 1000))
+      ->capture_default_str();
+  cmd->add_option("--max-rms", o->calibration.max_rms_px, "Larger reprojection RMS (px): view rejected")
+      ->check(positive_number)
+      ->capture_default_str();
+  cmd->add_option("--search", o->calibration.search_px, "How far (px) the first guess may misplace the sphere pattern")
+      ->check(positive_number)
+      ->capture_default_str();
   cmd->add_flag("--image-only", o->image_only,
-                 "Poses from the images alone (default: combined with the robot's prior, its base, mount and repeatability "
-                 "measured on the scan)");
+                "Poses from the images alone (default: combined with the robot's prior, its base, mount and repeatability "
+                "measured on the scan)");
   cmd->add_flag("--resume", o->resume,
                 "Continue an interrupted run: the views it finished (journaled beside --out, .journal) are taken as they are, "
                 "the others calibrated; same scan and options");

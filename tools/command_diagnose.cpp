@@ -38,8 +38,8 @@ void set_repeatability(const DiagnoseOptions& o, const ScanDescription& scan, co
   ScanCalibration copy = c;
   const RobotPriorFit prior = combine_with_robot(scan, copy);
   if (!prior.applied) {
-    std::cout << "robot repeatability not measured (" << prior.reason << "): assumed " << d.robot_sigma_mm << " mm, " << d.robot_sigma_deg
-              << " deg\n";
+    std::cout << "robot repeatability not measured (" << prior.reason << "): assumed " << d.robot_sigma_mm << " mm, "
+              << d.robot_sigma_deg << " deg\n";
     return;
   }
   if (!o.repeatability_mm) d.robot_sigma_mm = prior.sigma_mm;
@@ -70,8 +70,8 @@ void run_diagnose(const DiagnoseOptions& o) {
   set_repeatability(o, scan, c, diagnosis);
   const ScanObservations observations = observe_scan(scan, c, diagnosis);
   if (observations.views.size() < 10)
-    throw InputError(o.geometry.string(), "views", "only " + std::to_string(observations.views.size()) +
-                                                       " calibrated views; the diagnosis needs at least 10");
+    throw InputError(o.geometry.string(), "views",
+                     "only " + std::to_string(observations.views.size()) + " calibrated views; the diagnosis needs at least 10");
   std::cout << observations.views.size() << " views, detection noise " << observations.centre_sigma_px << " px per axis\n";
   const Diagnosis d = diagnose(observations, diagnosis, [](const std::string& s) { std::cout << s << std::endl; });
 
@@ -114,15 +114,19 @@ void run_diagnose(const DiagnoseOptions& o) {
 
 void register_diagnose(CLI::App& app) {
   auto o = std::make_shared<DiagnoseOptions>();
-  CLI::App* cmd = app.add_subcommand("diagnose", "Find the physical effect behind a calibration's residual; report, corrected scan, pictures");
+  CLI::App* cmd = app.add_subcommand(
+      "diagnose", "Find the physical effect behind a calibration's residual; report, corrected scan, pictures");
   cmd->add_option("--scan", o->scan, "scan.json (ctk-scan/1) with a holder")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--geometry", o->geometry, "Its calibrated geometry (ctk-geometry/1, from ctk calibrate)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--geometry", o->geometry, "Its calibrated geometry (ctk-geometry/1, from ctk calibrate)")
+      ->required()
+      ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "Report to write (ctk-diagnosis/1)")->capture_default_str();
   cmd->add_option("--corrected-scan", o->corrected, "Corrected scan to write (default: <out>.corrected-scan.json)");
   cmd->add_option("--robot-repeatability-mm", o->repeatability_mm,
                   "Robot repeatability (3-D RMS) the prior assumes; default: measured on the scan")
       ->check(positive_number);
-  cmd->add_option("--robot-repeatability-deg", o->repeatability_deg, "Same, rotation; default: measured on the scan")->check(positive_number);
+  cmd->add_option("--robot-repeatability-deg", o->repeatability_deg, "Same, rotation; default: measured on the scan")
+      ->check(positive_number);
   cmd->callback([o] { run_diagnose(*o); });
 }
 

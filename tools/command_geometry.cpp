@@ -80,7 +80,8 @@ void run_geometry(const GeometryOptions& o) {
 
 void register_geometry(CLI::App& app) {
   auto options = std::make_shared<GeometryOptions>();
-  CLI::App* cmd = app.add_subcommand("geometry", "Nominal per-view geometry of a scan (robot FK or given matrices), with a report");
+  CLI::App* cmd =
+      app.add_subcommand("geometry", "Nominal per-view geometry of a scan (robot FK or given matrices), with a report");
   cmd->add_option("--scan", options->scan, "scan.json (ctk-scan/1)")->required();
   cmd->add_option("--out", options->out, "geometry file to write (ctk-geometry/1)")->capture_default_str();
   cmd->add_option("--astra", options->astra, "also write ASTRA cone_vec rows (mm) to this file");

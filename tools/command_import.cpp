@@ -28,8 +28,8 @@ struct ProjectionOptions {
   int count = 0;
   std::string kind = "counts";
   std::vector<std::string> flat, dark;
-  std::vector<int> detector;       // cols rows (of the image the geometry describes)
-  std::vector<double> pitch;       // mm: one value or u v
+  std::vector<int> detector;  // cols rows (of the image the geometry describes)
+  std::vector<double> pitch;  // mm: one value or u v
   fs::path out;
 };
 
@@ -54,8 +54,12 @@ void add_projection_options(CLI::App* cmd, ProjectionOptions& o, bool pitch_requ
       ->capture_default_str();
   cmd->add_option("--flat", o.flat, "Flat (open-beam) frame(s); several are averaged");
   cmd->add_option("--dark", o.dark, "Dark (offset) frame(s); several are averaged");
-  cmd->add_option("--detector", o.detector, "Columns and rows of the image the geometry describes")->expected(2)->required()->check(positive_number);
-  auto* pitch = cmd->add_option("--pitch", o.pitch, "Pixel pitch in mm: one value or u v")->expected(1, 2)->check(positive_number);
+  cmd->add_option("--detector", o.detector, "Columns and rows of the image the geometry describes")
+      ->expected(2)
+      ->required()
+      ->check(positive_number);
+  auto* pitch =
+      cmd->add_option("--pitch", o.pitch, "Pixel pitch in mm: one value or u v")->expected(1, 2)->check(positive_number);
   if (pitch_required) pitch->required();
 }
 
@@ -91,8 +95,9 @@ Detector described_detector(const ProjectionOptions& o, double pitch_u, double p
 void check_images(const ScanDescription& scan) {
   const ProjectionCensus census = require_projection_files(scan, "--files", "");
   if (census.missing > 0)
-    std::cerr << "warning: " << census.missing << " of " << scan.projections.count << " projection files do not exist (the first is "
-              << census.first_missing.string() << "); calibrate and reconstruct will reject those views\n";
+    std::cerr << "warning: " << census.missing << " of " << scan.projections.count
+              << " projection files do not exist (the first is " << census.first_missing.string()
+              << "); calibrate and reconstruct will reject those views\n";
   read_image(census.first_present, scan.detector.cols, scan.detector.rows);  // names the file and both sizes where they differ
 }
 
@@ -101,7 +106,8 @@ void finish(const ImportedScan& imported, const fs::path& out, const fs::path& v
   const ScanDescription& scan = imported.scan;
   check_images(scan);
   RunFiles files;
-  for (int v = 0; v < scan.projections.count; ++v) files.input("--files: projection " + std::to_string(v), scan.projection_path(v));
+  for (int v = 0; v < scan.projections.count; ++v)
+    files.input("--files: projection " + std::to_string(v), scan.projection_path(v));
   for (const std::string& f : scan.projections.flat) files.input("--flat", scan.resolve(f));
   for (const std::string& d : scan.projections.dark) files.input("--dark", scan.resolve(d));
   files.input("--vectors", vectors);
@@ -122,14 +128,15 @@ void finish(const ImportedScan& imported, const fs::path& out, const fs::path& v
 void run_circular(const CircularOptions& o) {
   const ProjectionSet projections = projection_set(o);
   if (!(o.sod < o.sdd))
-    throw InputError("--sod", "", (std::ostringstream() << o.sod << " mm is not less than --sdd " << o.sdd
-                                                        << " mm: the rotation axis lies between the source and the detector")
-                                      .str());
+    throw InputError("--sod", "",
+                     (std::ostringstream() << o.sod << " mm is not less than --sdd " << o.sdd
+                                           << " mm: the rotation axis lies between the source and the detector")
+                         .str());
   const double pu = o.pitch.front(), pv = o.pitch.back();
   CircularOrbit orbit;
   orbit.detector = described_detector(o, pu, pv);
-  orbit.principal_point_px = o.principal_point.empty() ? orbit.detector.centre_px()
-                                                       : Eigen::Vector2d(o.principal_point[0], o.principal_point[1]);
+  orbit.principal_point_px =
+      o.principal_point.empty() ? orbit.detector.centre_px() : Eigen::Vector2d(o.principal_point[0], o.principal_point[1]);
   orbit.source_to_axis_mm = o.sod;
   orbit.source_to_detector_mm = o.sdd;
   orbit.sense = o.sense;
@@ -145,15 +152,18 @@ void run_cone_vec(const ConeVecOptions& o) {
   if (rows.empty())
     for (int i = 0; i < projections.count; ++i) rows.push_back(i);
   if (static_cast<int>(rows.size()) != projections.count)
-    throw InputError("--vector-rows", "", std::to_string(rows.size()) + " rows for " + std::to_string(projections.count) + " projections");
+    throw InputError("--vector-rows", "",
+                     std::to_string(rows.size()) + " rows for " + std::to_string(projections.count) + " projections");
   const Eigen::Vector3d u0(all.at(0)[6], all.at(0)[7], all.at(0)[8]), v0(all.at(0)[9], all.at(0)[10], all.at(0)[11]);
-  const Detector described = described_detector(o, o.pitch.empty() ? u0.norm() : o.pitch.front(), o.pitch.empty() ? v0.norm() : o.pitch.back());
+  const Detector described =
+      described_detector(o, o.pitch.empty() ? u0.norm() : o.pitch.front(), o.pitch.empty() ? v0.norm() : o.pitch.back());
   const StoredOrientation orientation = stored_orientation_from_string(o.orientation);
   const Eigen::Matrix3d to_stored = described_to_stored(orientation, described);
   std::vector<ProjectionMatrix> matrices;
   for (int r : rows) {
     if (r < 0 || r >= static_cast<int>(all.size()))
-      throw InputError(o.vectors.string(), "row " + std::to_string(r), "out of range: the file has " + std::to_string(all.size()) + " rows");
+      throw InputError(o.vectors.string(), "row " + std::to_string(r),
+                       "out of range: the file has " + std::to_string(all.size()) + " rows");
     try {
       const ProjectionMatrix described_P = from_cone_vec(all[static_cast<std::size_t>(r)], described);
       matrices.push_back(ProjectionMatrix(to_stored * described_P.matrix()));
@@ -182,20 +192,25 @@ void register_import(CLI::App& app) {
   circular->add_option("--sdd", c->sdd, "Source to detector, mm")->required()->check(positive_number);
   circular->add_option("--first-angle", c->first_angle_deg, "Angle of view 0, degrees")->capture_default_str();
   circular->add_option("--step", c->step_deg, "Angle between views, degrees")->required();
-  circular->add_option("--principal-point", c->principal_point,
-                       "u0 v0 in pixels: where the central ray meets the detector (u0 is also the rotation axis' column); default: the detector centre")
+  circular
+      ->add_option("--principal-point", c->principal_point,
+                   "u0 v0 in pixels: where the central ray meets the detector (u0 is also the rotation axis' column); default: "
+                   "the detector centre")
       ->expected(2);
   circular->add_option("--sense", c->sense, "Rotation sense, +1 or -1")->check(CLI::IsMember({1, -1}))->capture_default_str();
   circular->callback([c] { run_circular(*c); });
 
   auto v = std::make_shared<ConeVecOptions>();
-  CLI::App* cone_vec = cmd->add_subcommand("cone-vec", "ASTRA cone_vec rows (source, detector centre, column step, row step), mm");
+  CLI::App* cone_vec =
+      cmd->add_subcommand("cone-vec", "ASTRA cone_vec rows (source, detector centre, column step, row step), mm");
   add_projection_options(cone_vec, *v, false);
   cone_vec->add_option("--vectors", v->vectors, "Text file, 12 numbers per line")->required()->check(CLI::ExistingFile);
-  cone_vec->add_option("--vector-rows", v->vector_rows, "Row of the vectors file for each projection, in view order (default: 0, 1, ...)");
-  cone_vec->add_option("--orientation", v->orientation,
-                       "How the stored files relate to the image the vectors describe: as-described, or transpose-flipud "
-                       "(described = transpose(flipud(stored)), as the CWI walnut loader does)")
+  cone_vec->add_option("--vector-rows", v->vector_rows,
+                       "Row of the vectors file for each projection, in view order (default: 0, 1, ...)");
+  cone_vec
+      ->add_option("--orientation", v->orientation,
+                   "How the stored files relate to the image the vectors describe: as-described, or transpose-flipud "
+                   "(described = transpose(flipud(stored)), as the CWI walnut loader does)")
       ->check(CLI::IsMember({"as-described", "transpose-flipud"}))
       ->capture_default_str();
   cone_vec->callback([v] { run_cone_vec(*v); });

@@ -48,7 +48,7 @@ struct PlanCommandOptions {
   double coarse_voxel_mm = 0.75;
   int binning = 3;
   bool compare = false;
-  int random_draws = 1;  // random trajectories compared (each a draw of its own)
+  int random_draws = 1;                                       // random trajectories compared (each a draw of its own)
   int eval_size = 0, eval_iterations = 20, eval_binning = 2;  // eval_size 0: everything in the beam
   double eval_voxel_mm = 0.5, eval_lambda = 3.0;
   bool compare_only = false;
@@ -59,7 +59,8 @@ PlanningOptions planning_options(const PlanCommandOptions& o) {
   PlanningOptions p;
   p.scout_nside = o.scout_nside;
   p.views = o.views;
-  p.coarse_volume = VolumeLayout::centred({o.coarse_size, o.coarse_size, o.coarse_size}, Eigen::Vector3d::Constant(o.coarse_voxel_mm));
+  p.coarse_volume =
+      VolumeLayout::centred({o.coarse_size, o.coarse_size, o.coarse_size}, Eigen::Vector3d::Constant(o.coarse_voxel_mm));
   p.planner.candidate_nside = o.candidate_nside;
   p.planner.planned_views = o.views;
   p.planner.damage_exponent = o.damage_exponent;
@@ -111,7 +112,9 @@ PlanningSetup setup_from_scan(const fs::path& file, const ScanDescription& scan,
 
 void print_view(const PlannedViewRecord& v, int wanted, int& calibrated) {
   if (v.calibrated) ++calibrated;
-  const std::string what = v.calibrated ? "calibrated" : v.acquired ? "left out (" + v.reason + ")" : "refused (" + v.reason + ")";
+  const std::string what = v.calibrated ? "calibrated"
+                           : v.acquired ? "left out (" + v.reason + ")"
+                                        : "refused (" + v.reason + ")";
   std::fprintf(stderr, "%s request %3d: %s, %d / %d calibrated", v.scout ? "scout" : "plan ", v.index, what.c_str(), calibrated,
                wanted);
   if (v.calibrated) std::fprintf(stderr, ", calibration %.3f px", v.calibration_rms_px);
@@ -129,7 +132,8 @@ void report_plan(const PlanningResult& r, const fs::path& folder) {
             << r.views.size() << " requests";
   if (!r.step_seconds.empty())
     std::cout << "; planner step " << sum / static_cast<double>(r.step_seconds.size()) << " s mean, " << worst << " s max";
-  std::cout << "; absorbers: " << (r.segmentation.voxels > 0 ? std::to_string(r.segmentation.voxels) + " coarse voxels" : r.segmentation.note)
+  std::cout << "; absorbers: "
+            << (r.segmentation.voxels > 0 ? std::to_string(r.segmentation.voxels) + " coarse voxels" : r.segmentation.note)
             << "\n";
 }
 
@@ -165,7 +169,8 @@ VolumeLayout evaluation_layout(const PlanCommandOptions& o, const ScanSimulation
     for (const Primitive& primitive : p.primitives)
       for (const Eigen::Vector3d& corner : primitive.bounding_corners()) reach = reach.cwiseMax(corner.cwiseAbs());
   std::array<int, 3> size{};
-  for (int a = 0; a < 3; ++a) size[static_cast<std::size_t>(a)] = 2 * static_cast<int>(std::ceil(reach[a] / o.eval_voxel_mm + 0.5));
+  for (int a = 0; a < 3; ++a)
+    size[static_cast<std::size_t>(a)] = 2 * static_cast<int>(std::ceil(reach[a] / o.eval_voxel_mm + 0.5));
   return VolumeLayout::centred(size, voxel);
 }
 
@@ -239,7 +244,10 @@ nlohmann::json random_draw_summary(const std::vector<ComparedTrajectory>& compar
       most = std::max(most, v);
       if (lower_is_better ? v < planned.*member : v > planned.*member) ++better;
     }
-    summary[key] = {{"mean", sum / static_cast<double>(compared.size() - 2)}, {"min", least}, {"max", most}, {"draws_better_than_planned", better}};
+    summary[key] = {{"mean", sum / static_cast<double>(compared.size() - 2)},
+                    {"min", least},
+                    {"max", most},
+                    {"draws_better_than_planned", better}};
   };
   figure("rmse_per_mm", &TrajectoryQuality::rmse_per_mm, true);
   figure("rmse_outside_absorbers_per_mm", &TrajectoryQuality::rmse_outside_absorbers_per_mm, true);
@@ -262,8 +270,8 @@ void compare(const PlanCommandOptions& o, const ScanSimulation& simulation) {
   std::vector<std::string> names = {"planned", "whole-sphere"};
   for (int k = 0; k < o.random_draws; ++k) names.push_back(random_name(k));
   for (const std::string& name : names) {
-    std::cerr << "reconstructing " << name << " (" << layout.size[0] << " x " << layout.size[1] << " x " << layout.size[2] << " at "
-              << o.eval_voxel_mm << " mm, " << o.eval_iterations << " WLS-CG iterations) ...\n";
+    std::cerr << "reconstructing " << name << " (" << layout.size[0] << " x " << layout.size[1] << " x " << layout.size[2]
+              << " at " << o.eval_voxel_mm << " mm, " << o.eval_iterations << " WLS-CG iterations) ...\n";
     volumes.push_back(evaluation_reconstruction(o.out / name, layout, o));
   }
   std::vector<ComparedTrajectory> compared;
@@ -277,8 +285,8 @@ void compare(const PlanCommandOptions& o, const ScanSimulation& simulation) {
                        {"rmse_outside_absorbers_per_mm", q.rmse_outside_absorbers_per_mm},
                        {"edge_gradient_per_mm2", q.edge_gradient_per_mm2},
                        {"profile_gradient_per_mm2", q.profile_gradient_per_mm2}};
-    std::printf("%-14s %6d  %11.5f  %22.5f  %22.5f  %25.5f\n", names[i].c_str(), n, q.rmse_per_mm, q.rmse_outside_absorbers_per_mm,
-                q.edge_gradient_per_mm2, q.profile_gradient_per_mm2);
+    std::printf("%-14s %6d  %11.5f  %22.5f  %22.5f  %25.5f\n", names[i].c_str(), n, q.rmse_per_mm,
+                q.rmse_outside_absorbers_per_mm, q.edge_gradient_per_mm2, q.profile_gradient_per_mm2);
   }
   std::printf("truth's edge gradient: %.5f, profile gradient: %.5f\n", compared.front().quality.truth_edge_gradient_per_mm2,
               compared.front().quality.truth_profile_gradient_per_mm2);
@@ -288,8 +296,12 @@ void compare(const PlanCommandOptions& o, const ScanSimulation& simulation) {
   write_trajectory_comparison_png(compared, truth, o.out / "comparison.png");
   nlohmann::json j = {{"format", "ctk-plan-comparison/1"},
                       {"sample", sample.name},
-                      {"volume", {{"size", layout.size}, {"voxel_mm", o.eval_voxel_mm}, {"iterations", o.eval_iterations},
-                                  {"lambda", o.eval_lambda}, {"binning", o.eval_binning}}},
+                      {"volume",
+                       {{"size", layout.size},
+                        {"voxel_mm", o.eval_voxel_mm},
+                        {"iterations", o.eval_iterations},
+                        {"lambda", o.eval_lambda},
+                        {"binning", o.eval_binning}}},
                       {"profile_through_voxel", through},
                       {"absorbers_above_per_mm", absorber_above},
                       {"truth_edge_gradient_per_mm2", compared.front().quality.truth_edge_gradient_per_mm2},
@@ -318,12 +330,13 @@ void run_plan(const PlanCommandOptions& o) {
     RunFiles files;
     files.scan("--setup", o.setup, lab_scan);
     files.input_folder("--lab", o.lab);
-    for (const char* name : {"scan.json", "joints.csv", "flat.tif", "dark.tif", "geometry.json", "trajectory.json", "plan-map.png",
-                             "coarse.nrrd"})
+    for (const char* name :
+         {"scan.json", "joints.csv", "flat.tif", "dark.tif", "geometry.json", "trajectory.json", "plan-map.png", "coarse.nrrd"})
       files.output(std::string("--out: ") + name, o.out / name);
     files.check();
     const PlanningSetup setup = setup_from_scan(o.setup, lab_scan, o.sod_mm);
-    FileExchangeAcquisition acquisition(o.lab, setup.setup.detector.cols, setup.setup.detector.rows, std::chrono::seconds(o.timeout_s));
+    FileExchangeAcquisition acquisition(o.lab, setup.setup.detector.cols, setup.setup.detector.rows,
+                                        std::chrono::seconds(o.timeout_s));
     PlanningResult r = plan_trajectory(acquisition, setup, options, on_view);
     acquisition.finish();
     // The lab's folder is its own: the planned scan goes to --out and names the lab's images
@@ -366,42 +379,93 @@ void run_plan(const PlanCommandOptions& o) {
 
 void register_plan(CLI::App& app) {
   auto o = std::make_shared<PlanCommandOptions>();
-  CLI::App* cmd = app.add_subcommand("plan", "Plan a spherical trajectory that avoids looking through absorbers (simulation or lab)");
-  cmd->add_option("--out", o->out, "Output folder: the planned scan (lab mode), or planned/ and, with --compare, whole-sphere/ and random/")
+  CLI::App* cmd =
+      app.add_subcommand("plan", "Plan a spherical trajectory that avoids looking through absorbers (simulation or lab)");
+  cmd->add_option("--out", o->out,
+                  "Output folder: the planned scan (lab mode), or planned/ and, with --compare, whole-sphere/ and random/")
       ->capture_default_str();
   cmd->add_option("--phantom", o->phantoms, "Simulation mode: built-in phantoms or ctk-phantom/1 files in the holder");
   cmd->add_option("--lab", o->lab, "Lab mode: the folder shared with the acquisition process (request/answer files)");
-  cmd->add_option("--setup", o->setup, "Lab mode: the lab's ctk-scan/1 file (detector, robot frames, holder, flat, dark)")->check(CLI::ExistingFile);
-  cmd->add_option("--timeout", o->timeout_s, "Lab mode: seconds to wait for each answer")->check(positive_number)->capture_default_str();
+  cmd->add_option("--setup", o->setup, "Lab mode: the lab's ctk-scan/1 file (detector, robot frames, holder, flat, dark)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--timeout", o->timeout_s, "Lab mode: seconds to wait for each answer")
+      ->check(positive_number)
+      ->capture_default_str();
   cmd->add_option("--sod", o->sod_mm, "Source-to-isocentre distance (mm)")->check(positive_number)->capture_default_str();
   cmd->add_option("--views", o->views, "Views to acquire, scout included")->check(CLI::Range(2, 10000))->capture_default_str();
-  cmd->add_option("--scout-nside", o->scout_nside, "HEALPix resolution of the scout (6 nside^2 directions: one of each opposite pair of cells)")->check(CLI::Range(1, 16))->capture_default_str();
-  cmd->add_option("--candidate-nside", o->candidate_nside, "HEALPix resolution of the candidate directions")->check(CLI::Range(1, 64))->capture_default_str();
-  cmd->add_option("--spread-exponent", o->spread_exponent, "m: how strongly the largest gaps between views are preferred")->check(non_negative_number)->capture_default_str();
-  cmd->add_option("--widest-gap-fraction", o->widest_gap_fraction, "f: draw only among directions whose gap to the views so far is at least f times the widest (0: all)")->check(CLI::Range(0.0, 1.0))->capture_default_str();
-  cmd->add_option("--edge-tangency-weight", o->edge_tangency_weight, "b: share of the view density that follows the directions tangent to the sample's strong edges (0: even)")->check(CLI::Range(0.0, 1.0))->capture_default_str();
-  cmd->add_option("--tangent-width", o->tangent_width_deg, "How far from an edge's tangent plane a direction still counts as grazing it (deg)")->check(CLI::Range(1.0, 45.0))->capture_default_str();
-  cmd->add_option("--damage-exponent", o->damage_exponent, "s: how strongly long absorber paths are avoided")->check(non_negative_number)->capture_default_str();
+  cmd->add_option("--scout-nside", o->scout_nside,
+                  "HEALPix resolution of the scout (6 nside^2 directions: one of each opposite pair of cells)")
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str();
+  cmd->add_option("--candidate-nside", o->candidate_nside, "HEALPix resolution of the candidate directions")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  cmd->add_option("--spread-exponent", o->spread_exponent, "m: how strongly the largest gaps between views are preferred")
+      ->check(non_negative_number)
+      ->capture_default_str();
+  cmd->add_option("--widest-gap-fraction", o->widest_gap_fraction,
+                  "f: draw only among directions whose gap to the views so far is at least f times the widest (0: all)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--edge-tangency-weight", o->edge_tangency_weight,
+                  "b: share of the view density that follows the directions tangent to the sample's strong edges (0: even)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--tangent-width", o->tangent_width_deg,
+                  "How far from an edge's tangent plane a direction still counts as grazing it (deg)")
+      ->check(CLI::Range(1.0, 45.0))
+      ->capture_default_str();
+  cmd->add_option("--damage-exponent", o->damage_exponent, "s: how strongly long absorber paths are avoided")
+      ->check(non_negative_number)
+      ->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the planner's draws (and of the simulation)")->capture_default_str();
   cmd->add_option("--cols", o->cols, "Simulated detector columns")->check(CLI::Range(16, 100000))->capture_default_str();
   cmd->add_option("--rows", o->rows, "Simulated detector rows")->check(CLI::Range(16, 100000))->capture_default_str();
   cmd->add_option("--pitch", o->pitch_mm, "Simulated pixel pitch (mm)")->check(positive_number)->capture_default_str();
-  cmd->add_option("--sdd", o->sdd_mm, "Simulated source-to-detector distance (mm)")->check(positive_number)->capture_default_str();
-  cmd->add_option("--kvp", o->kvp, "Simulated tube voltage (polychromatic)")->check(CLI::Range(16.0, 150.0))->capture_default_str();
-  cmd->add_option("--filter-al-mm", o->filter_al_mm, "Simulated aluminium filter")->check(non_negative_number)->capture_default_str();
-  cmd->add_option("--flat-counts", o->flat_counts, "Simulated open-beam counts")->check(CLI::Range(1.0, 65000.0))->capture_default_str();
-  cmd->add_option("--coarse-size", o->coarse_size, "Voxels per axis of the planner's volume")->check(CLI::Range(8, 1024))->capture_default_str();
-  cmd->add_option("--coarse-voxel", o->coarse_voxel_mm, "Voxel size of the planner's volume (mm)")->check(positive_number)->capture_default_str();
-  cmd->add_option("--binning", o->binning, "Detector binning of the planner's reconstruction")->check(CLI::Range(1, 64))->capture_default_str();
-  cmd->add_flag("--compare", o->compare, "Simulation mode: also acquire and reconstruct the whole-sphere and random trajectories of the same size");
-  cmd->add_option("--random-draws", o->random_draws, "With --compare: random trajectories to compare with (random/, random-2/ ...), summarised by mean and range")
-      ->check(CLI::Range(1, 100))->capture_default_str();
-  cmd->add_option("--eval-size", o->eval_size, "Voxels per axis of a cube for the comparison reconstructions (0: a volume holding the holder and the sample)")->check(CLI::Range(0, 2048))->capture_default_str();
-  cmd->add_option("--eval-voxel", o->eval_voxel_mm, "Voxel size of the comparison reconstructions (mm)")->check(positive_number)->capture_default_str();
-  cmd->add_option("--eval-iterations", o->eval_iterations, "WLS-CG iterations of the comparison reconstructions")->check(CLI::Range(1, 1000))->capture_default_str();
-  cmd->add_option("--eval-lambda", o->eval_lambda, "Gradient penalty of the comparison reconstructions")->check(non_negative_number)->capture_default_str();
+  cmd->add_option("--sdd", o->sdd_mm, "Simulated source-to-detector distance (mm)")
+      ->check(positive_number)
+      ->capture_default_str();
+  cmd->add_option("--kvp", o->kvp, "Simulated tube voltage (polychromatic)")
+      ->check(CLI::Range(16.0, 150.0))
+      ->capture_default_str();
+  cmd->add_option("--filter-al-mm", o->filter_al_mm, "Simulated aluminium filter")
+      ->check(non_negative_number)
+      ->capture_default_str();
+  cmd->add_option("--flat-counts", o->flat_counts, "Simulated open-beam counts")
+      ->check(CLI::Range(1.0, 65000.0))
+      ->capture_default_str();
+  cmd->add_option("--coarse-size", o->coarse_size, "Voxels per axis of the planner's volume")
+      ->check(CLI::Range(8, 1024))
+      ->capture_default_str();
+  cmd->add_option("--coarse-voxel", o->coarse_voxel_mm, "Voxel size of the planner's volume (mm)")
+      ->check(positive_number)
+      ->capture_default_str();
+  cmd->add_option("--binning", o->binning, "Detector binning of the planner's reconstruction")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  cmd->add_flag("--compare", o->compare,
+                "Simulation mode: also acquire and reconstruct the whole-sphere and random trajectories of the same size");
+  cmd->add_option("--random-draws", o->random_draws,
+                  "With --compare: random trajectories to compare with (random/, random-2/ ...), summarised by mean and range")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  cmd->add_option("--eval-size", o->eval_size,
+                  "Voxels per axis of a cube for the comparison reconstructions (0: a volume holding the holder and the sample)")
+      ->check(CLI::Range(0, 2048))
+      ->capture_default_str();
+  cmd->add_option("--eval-voxel", o->eval_voxel_mm, "Voxel size of the comparison reconstructions (mm)")
+      ->check(positive_number)
+      ->capture_default_str();
+  cmd->add_option("--eval-iterations", o->eval_iterations, "WLS-CG iterations of the comparison reconstructions")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  cmd->add_option("--eval-lambda", o->eval_lambda, "Gradient penalty of the comparison reconstructions")
+      ->check(non_negative_number)
+      ->capture_default_str();
   cmd->add_flag("--compare-only", o->compare_only, "Reconstruct and compare the trajectories already in --out (no acquisition)");
-  cmd->add_option("--eval-binning", o->eval_binning, "Detector binning of the comparison reconstructions")->check(CLI::Range(1, 64))->capture_default_str();
+  cmd->add_option("--eval-binning", o->eval_binning, "Detector binning of the comparison reconstructions")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
   cmd->callback([o] { run_plan(*o); });
 }
 

@@ -73,7 +73,6 @@ std::uint64_t fingerprint(const FloatBuffer& data) {
   return h;
 }
 
-
 VolumeLayout volume_layout(const ReconstructOptions& o, const ScanDescription& scan, const std::vector<ProjectionMatrix>& views) {
   VolumeLayout layout = default_volume_layout(scan, views, o.voxel_mm);
   if (!o.size.empty()) {
@@ -114,9 +113,12 @@ void run_reconstruct(const ReconstructOptions& o) {
   const ReconstructionMethod method = o.method == "sirt"  ? ReconstructionMethod::sirt
                                       : o.method == "fdk" ? ReconstructionMethod::fdk
                                                           : ReconstructionMethod::wls_cg;
-  const bool weighted = method == ReconstructionMethod::wls_cg && !o.unweighted && scan.projections.kind == ProjectionKind::counts;
+  const bool weighted =
+      method == ReconstructionMethod::wls_cg && !o.unweighted && scan.projections.kind == ProjectionKind::counts;
   const int used = static_cast<int>(geometry.ok_views().size());
-  if (used == 0) throw InputError(o.geometry.empty() ? o.scan.string() : o.geometry.string(), json_key("views"), "no view is \"ok\": nothing to reconstruct");
+  if (used == 0)
+    throw InputError(o.geometry.empty() ? o.scan.string() : o.geometry.string(), json_key("views"),
+                     "no view is \"ok\": nothing to reconstruct");
   const int described = static_cast<int>(geometry.views.size());
   std::cout << "geometry: " << (o.geometry.empty() ? "nominal (from the scan file)" : o.geometry.string()) << ", " << used
             << " of " << described << " views ok (the others are not used)";
@@ -137,7 +139,8 @@ void run_reconstruct(const ReconstructOptions& o) {
             << "memory plan (" << to_string(method) << "): " << plan.describe() << "; available "
             << static_cast<double>(available) / 1e9 << " GB\n";
   if (plan.total_bytes() > available)
-    throw std::runtime_error("the run needs " + plan.describe() + " but only " + std::to_string(static_cast<double>(available) / 1e9) +
+    throw std::runtime_error("the run needs " + plan.describe() + " but only " +
+                             std::to_string(static_cast<double>(available) / 1e9) +
                              " GB are available: use a coarser --voxel, a smaller --size or fewer views");
 
   Progress reading("reading projections", "views");
@@ -146,7 +149,8 @@ void run_reconstruct(const ReconstructOptions& o) {
   reading_options.undistort = !o.as_measured;
   Measurements m = load_measurements(scan, geometry, reading_options, std::ref(reading));
   if (!m.distortion_note.empty()) std::cout << m.distortion_note << "\n";
-  if (m.clamped_pixels > 0) std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
+  if (m.clamped_pixels > 0)
+    std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
   report_masked_and_left_out(m, o.geometry.empty() ? o.scan : o.geometry);
 
   const nlohmann::json run = {
@@ -159,18 +163,23 @@ void run_reconstruct(const ReconstructOptions& o) {
       {"tolerance", o.tolerance},
       {"volume", {{"size", layout.size}, {"voxel_mm", layout.voxel_mm.x()}}},
       {"views_used", m.view_indices},
-      {"data_fingerprint", std::to_string(fingerprint(m.line_integrals.data)) + (weighted ? "/" + std::to_string(fingerprint(m.weights.data)) : "")}};
+      {"data_fingerprint",
+       std::to_string(fingerprint(m.line_integrals.data)) + (weighted ? "/" + std::to_string(fingerprint(m.weights.data)) : "")}};
   std::optional<SolverState> saved;
   if (o.resume) {
-    if (method == ReconstructionMethod::fdk) throw InputError("--resume", "", "fdk is not iterative: there is nothing to continue");
+    if (method == ReconstructionMethod::fdk)
+      throw InputError("--resume", "", "fdk is not iterative: there is nothing to continue");
     if (!fs::exists(state_file)) throw InputError("--resume", "", "no saved state at " + state_file.string() + " to continue");
     nlohmann::json saved_run;
     saved = read_solver_state(state_file, saved_run);
     // A saved state continues only the run that saved it: same data, geometry, volume and solver.
-    require_same_run(saved_run, run, state_file.string(), "run", "continue with the same inputs and options, or start afresh without --resume");
-    std::cout << "continuing " << to_string(method) << " after iteration " << saved->iteration << " (state " << state_file.string() << ")\n";
+    require_same_run(saved_run, run, state_file.string(), "run",
+                     "continue with the same inputs and options, or start afresh without --resume");
+    std::cout << "continuing " << to_string(method) << " after iteration " << saved->iteration << " (state "
+              << state_file.string() << ")\n";
   } else if (fs::exists(state_file) && method != ReconstructionMethod::fdk) {
-    std::cout << "note: " << state_file.string() << " holds the state of an interrupted run; this run starts afresh (--resume continues it)\n";
+    std::cout << "note: " << state_file.string()
+              << " holds the state of an interrupted run; this run starts afresh (--resume continues it)\n";
   }
   const InterruptionWatch watch;
   Checkpointing checkpointing;
@@ -190,8 +199,8 @@ void run_reconstruct(const ReconstructOptions& o) {
   if (method == ReconstructionMethod::fdk) {
     // Refuses non-circular scans before any work, with the deviation found.
     const CircularTrajectory circle = fit_circular_trajectory(m.matrices);
-    std::cout << "circular trajectory: radius " << circle.radius_mm << " mm, arc " << circle.arc_rad * 180 / M_PI
-              << " deg" << (circle.arc_rad < 2 * M_PI - 1e-9 ? " (short scan: Parker weights)" : "") << "\n";
+    std::cout << "circular trajectory: radius " << circle.radius_mm << " mm, arc " << circle.arc_rad * 180 / M_PI << " deg"
+              << (circle.arc_rad < 2 * M_PI - 1e-9 ? " (short scan: Parker weights)" : "") << "\n";
     fdk_reconstruct(m.matrices, m.line_integrals, scan.detector, x);
     report.stop_reason = "FDK (Hann-windowed ramp)";
     report.iterations.push_back({});
@@ -206,39 +215,44 @@ void run_reconstruct(const ReconstructOptions& o) {
     report = solve_wls_cg(A, m.matrices, m.line_integrals, weighted ? &m.weights : nullptr, x, w, on_iteration, &checkpointing);
   }
   if (report.stop_reason == kStoppedOnRequest)
-    throw Interrupted("stopped after iteration " + std::to_string(report.iterations.back().iteration) + "; the solver's state is in " +
-                      state_file.string() + ": run the same command with --resume to continue");
-  if (method == ReconstructionMethod::fdk) std::cout << report.stop_reason << "\n";
-  else std::cout << report.stop_reason << "; cost " << report.iterations.front().cost << " -> " << report.iterations.back().cost << "\n";
+    throw Interrupted("stopped after iteration " + std::to_string(report.iterations.back().iteration) +
+                      "; the solver's state is in " + state_file.string() + ": run the same command with --resume to continue");
+  if (method == ReconstructionMethod::fdk)
+    std::cout << report.stop_reason << "\n";
+  else
+    std::cout << report.stop_reason << "; cost " << report.iterations.front().cost << " -> " << report.iterations.back().cost
+              << "\n";
 
   write_volume_nrrd(x, o.out);
   write_previews(x, o.out);
-  nlohmann::json log = {
-      {"format", "ctk-reconstruction-log/1"},
-      {"scan", o.scan.string()},
-      {"geometry", o.geometry.empty() ? "nominal" : o.geometry.string()},
-      {"method", to_string(method)},
-      {"weights", weighted ? "poisson" : "unit"},
-      {"lambda", o.lambda},
-      {"regulariser", o.regulariser},
-      {"volume", {{"size", layout.size}, {"voxel_mm", layout.voxel_mm.x()}, {"origin_mm", {layout.origin_mm.x(), layout.origin_mm.y(), layout.origin_mm.z()}}}},
-      {"views_used", m.view_indices},
-      {"clamped_pixels", m.clamped_pixels},
-      {"masked_pixels", m.masked_pixels},
-      {"views_left_out", m.left_out},
-      {"notes", m.notes},
-      {"detector_distortion", m.distortion_note},
-      {"memory_plan", plan.describe()},
-      {"solver", to_json(report)},
-      {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};
+  nlohmann::json log = {{"format", "ctk-reconstruction-log/1"},
+                        {"scan", o.scan.string()},
+                        {"geometry", o.geometry.empty() ? "nominal" : o.geometry.string()},
+                        {"method", to_string(method)},
+                        {"weights", weighted ? "poisson" : "unit"},
+                        {"lambda", o.lambda},
+                        {"regulariser", o.regulariser},
+                        {"volume",
+                         {{"size", layout.size},
+                          {"voxel_mm", layout.voxel_mm.x()},
+                          {"origin_mm", {layout.origin_mm.x(), layout.origin_mm.y(), layout.origin_mm.z()}}}},
+                        {"views_used", m.view_indices},
+                        {"clamped_pixels", m.clamped_pixels},
+                        {"masked_pixels", m.masked_pixels},
+                        {"views_left_out", m.left_out},
+                        {"notes", m.notes},
+                        {"detector_distortion", m.distortion_note},
+                        {"memory_plan", plan.describe()},
+                        {"solver", to_json(report)},
+                        {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};
   fs::path log_file = o.out;
   log_file.replace_extension(".log.json");
   write_text_atomically(log_file, log.dump(2) + "\n");
   outputs.publish();
   std::error_code ignored;
   fs::remove(state_file, ignored);  // the run is complete: nothing left to continue
-  std::cout << "volume written to " << o.out.string() << ", previews *_axial/_coronal/_sagittal.png, log "
-            << log_file.string() << "\n";
+  std::cout << "volume written to " << o.out.string() << ", previews *_axial/_coronal/_sagittal.png, log " << log_file.string()
+            << "\n";
 }
 
 }  // namespace
@@ -250,8 +264,11 @@ void register_reconstruct(CLI::App& app) {
   cmd->add_option("--geometry", o->geometry, "Per-view matrices (ctk-geometry/1); default: the scan's nominal geometry")
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "Volume to write (.nrrd: header and data in one file)")->required();
-  cmd->add_option("--method", o->method, "wls-cg, sirt or fdk (circular scans only)")->check(CLI::IsMember({"wls-cg", "sirt", "fdk"}))->capture_default_str();
-  cmd->add_option("--iterations", o->iterations, "Iterations (default: 30 for wls-cg, 100 for sirt)")->check(CLI::Range(1, 100000));
+  cmd->add_option("--method", o->method, "wls-cg, sirt or fdk (circular scans only)")
+      ->check(CLI::IsMember({"wls-cg", "sirt", "fdk"}))
+      ->capture_default_str();
+  cmd->add_option("--iterations", o->iterations, "Iterations (default: 30 for wls-cg, 100 for sirt)")
+      ->check(CLI::Range(1, 100000));
   cmd->add_option("--lambda", o->lambda, "Regularisation weight")->check(non_negative_number)->capture_default_str();
   cmd->add_option("--regulariser", o->regulariser, "identity (Tikhonov) or gradient")
       ->check(CLI::IsMember({"identity", "gradient"}))
@@ -266,10 +283,12 @@ void register_reconstruct(CLI::App& app) {
   cmd->add_option("--size", o->size, "Voxels: n (cube) or nx ny nz (default: cover the holder, or the field of view)")
       ->expected(1, 3)
       ->check(CLI::Range(1, 100000));
-  cmd->add_option("--voxel", o->voxel_mm, "Voxel size in mm (default: a pixel seen at the holder origin)")->check(positive_number);
-  cmd->add_flag("--resume", o->resume,
-                "Continue an interrupted run (Ctrl-C or a kill) from the solver state saved beside --out (.state); same inputs and "
-                "options, --iterations may grow");
+  cmd->add_option("--voxel", o->voxel_mm, "Voxel size in mm (default: a pixel seen at the holder origin)")
+      ->check(positive_number);
+  cmd->add_flag(
+      "--resume", o->resume,
+      "Continue an interrupted run (Ctrl-C or a kill) from the solver state saved beside --out (.state); same inputs and "
+      "options, --iterations may grow");
   cmd->add_option("--checkpoint-every", o->checkpoint_every,
                   "Save the solver's state every N iterations (0: only on Ctrl-C); removed when the run completes")
       ->check(CLI::Range(0, 100000))

@@ -40,7 +40,9 @@ struct RefineOptions {
 
 fs::path beside(const fs::path& out, const std::string& suffix) { return out.parent_path() / (out.stem().string() + suffix); }
 
-void write_central_slice(const Volume& x, float high, const fs::path& file) { write_slice_png(x, 2, x.layout.size[2] / 2, 0.0f, high, file); }
+void write_central_slice(const Volume& x, float high, const fs::path& file) {
+  write_slice_png(x, 2, x.layout.size[2] / 2, 0.0f, high, file);
+}
 
 // What the final model leaves fixed on the detector: each pixel's mean held-out residual over its
 // standard error, grey 0 at mid-grey, black at -10 and white at +10 or beyond (rows left out of
@@ -50,9 +52,11 @@ void write_pattern_picture(const DetectorPattern& p, const fs::path& file) {
   Volume z(VolumeLayout::centred({p.cols, height, 1}, Eigen::Vector3d::Ones()));
   for (int row = 0; row < height; ++row)
     for (int c = 0; c < p.cols; ++c) {
-      const std::size_t i = static_cast<std::size_t>(p.rows == 1 ? 0 : row) * static_cast<std::size_t>(p.cols) + static_cast<std::size_t>(c);
+      const std::size_t i =
+          static_cast<std::size_t>(p.rows == 1 ? 0 : row) * static_cast<std::size_t>(p.cols) + static_cast<std::size_t>(c);
       const double se = p.standard_error[i];
-      z.at(c, row, 0) = p.used[i] && se > 0 && std::isfinite(se) ? static_cast<float>(std::clamp(p.mean[i] / se, -10.0, 10.0)) : 0.0f;
+      z.at(c, row, 0) =
+          p.used[i] && se > 0 && std::isfinite(se) ? static_cast<float>(std::clamp(p.mean[i] / se, -10.0, 10.0)) : 0.0f;
     }
   write_slice_png(z, 2, 0, -10.0f, 10.0f, file);
 }
@@ -60,8 +64,8 @@ void write_pattern_picture(const DetectorPattern& p, const fs::path& file) {
 // The axis' column from the data alone (conjugate rays of the row through the principal point):
 // an estimate that does not rest on the yardstick. Full circles at equal steps only; otherwise
 // `why_not` says why there is none.
-std::optional<ConjugateRayEstimate> conjugate_rays(const Measurements& m, const ConsistencyProbe& probe, const ScanDescription& scan,
-                                                   std::string& why_not) {
+std::optional<ConjugateRayEstimate> conjugate_rays(const Measurements& m, const ConsistencyProbe& probe,
+                                                   const ScanDescription& scan, std::string& why_not) {
   const Eigen::Vector2d pp = probe.nominal_principal_point();
   try {
     const FanSinogram s = row_sinogram(m.line_integrals, probe.orbit(), scan.detector, pp.y(), scan.source_to_detector_mm);
@@ -112,7 +116,8 @@ void run_refine(const RefineOptions& o) {
   const int coarse_slices = scan.detector.rows == 1 ? 1 : static_cast<int>(std::ceil(1.2 * coarse.size[2]));
   coarse = VolumeLayout::centred({coarse.size[0], coarse.size[1], coarse_slices}, coarse.voxel_mm);
   std::cout << "held-out predictions on " << coarse.size[0] << " x " << coarse.size[1] << " x " << coarse.size[2] << " voxels of "
-            << coarse.voxel_mm.x() << " mm; sharpness on " << fine.size[0] << " x " << fine.size[1] << " x " << fine.size[2] << "\n";
+            << coarse.voxel_mm.x() << " mm; sharpness on " << fine.size[0] << " x " << fine.size[1] << " x " << fine.size[2]
+            << "\n";
   const ConsistencyProbe probe(m.line_integrals, m.matrices, scan.detector, coarse, interleaved_split(m.line_integrals.views));
 
   RefinementOptions options;
@@ -126,16 +131,16 @@ void run_refine(const RefineOptions& o) {
   std::string why_not;
   const std::optional<ConjugateRayEstimate> conjugate = conjugate_rays(m, probe, scan, why_not);
   if (conjugate) {
-    log("conjugate rays put the axis at column " + std::to_string(conjugate->u0_px) + " +- " + std::to_string(conjugate->standard_error_px) +
-        " px: the detector offset's scan starts there");
+    log("conjugate rays put the axis at column " + std::to_string(conjugate->u0_px) + " +- " +
+        std::to_string(conjugate->standard_error_px) + " px: the detector offset's scan starts there");
     options.knob_starts["u0_px"] = conjugate->u0_px;
   }
   const RefinementResult r = refine_markerless(probe, fine, options, log);
   const double loop_u0 = probe.nominal_principal_point().x() + r.geometry.du_px;
   const nlohmann::json cross_check = cross_check_json(conjugate, why_not, loop_u0);
   if (conjugate)
-    std::cout << "cross-check: conjugate rays " << conjugate->u0_px << " +- " << conjugate->standard_error_px << " px, the loop " << loop_u0
-              << " px (difference " << conjugate->u0_px - loop_u0 << " px)\n";
+    std::cout << "cross-check: conjugate rays " << conjugate->u0_px << " +- " << conjugate->standard_error_px << " px, the loop "
+              << loop_u0 << " px (difference " << conjugate->u0_px - loop_u0 << " px)\n";
 
   // The refined matrices replace the ok views' matrices; other views stay as they were.
   const std::vector<ProjectionMatrix> refined = apply_global_geometry(r.geometry, m.matrices, probe.orbit());
@@ -159,7 +164,8 @@ void run_refine(const RefineOptions& o) {
   nlohmann::json lacks = nlohmann::json::array();
   if (r.model.blur_arc_rad > 0) lacks.push_back("angular_blur");
   if (r.model.hardening_c2 != 0) lacks.push_back("beam_hardening");
-  if (!r.model.pixel_offset.empty()) lacks.push_back("pixel offsets (pixel_gain / column_gain): in " + beside(o.out, ".pixel-offsets.tif").string());
+  if (!r.model.pixel_offset.empty())
+    lacks.push_back("pixel offsets (pixel_gain / column_gain): in " + beside(o.out, ".pixel-offsets.tif").string());
   if (!lacks.empty()) report["corrected_scan_lacks"] = lacks;
   report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_text_atomically(o.out, report.dump(2) + "\n");
@@ -185,14 +191,22 @@ void run_refine(const RefineOptions& o) {
 
 void register_refine(CLI::App& app) {
   auto o = std::make_shared<RefineOptions>();
-  CLI::App* cmd = app.add_subcommand("refine", "Markerless loop for circular scans: find and fit the effects the geometry lacks, judged on held-out views");
+  CLI::App* cmd = app.add_subcommand(
+      "refine", "Markerless loop for circular scans: find and fit the effects the geometry lacks, judged on held-out views");
   cmd->add_option("--scan", o->scan, "scan.json (ctk-scan/1)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--geometry", o->geometry, "Per-view matrices to start from (default: the scan's nominal geometry)")->check(CLI::ExistingFile);
-  cmd->add_option("--out", o->out, "Report (ctk-diagnosis/1); beside it <stem>.geometry.json, <stem>.scan.json, slices")->required();
-  cmd->add_option("--coarsening", o->coarsening, "Voxel of the held-out predictions, in pixels seen at the axis")->check(CLI::Range(1.0, 8.0))->capture_default_str();
-  cmd->add_option("--blur-arc", o->blur_arc_deg, "Arc of rotation each view is known to integrate, degrees (sets the blur scan's step)")
+  cmd->add_option("--geometry", o->geometry, "Per-view matrices to start from (default: the scan's nominal geometry)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "Report (ctk-diagnosis/1); beside it <stem>.geometry.json, <stem>.scan.json, slices")
+      ->required();
+  cmd->add_option("--coarsening", o->coarsening, "Voxel of the held-out predictions, in pixels seen at the axis")
+      ->check(CLI::Range(1.0, 8.0))
+      ->capture_default_str();
+  cmd->add_option("--blur-arc", o->blur_arc_deg,
+                  "Arc of rotation each view is known to integrate, degrees (sets the blur scan's step)")
       ->check(non_negative_number);
-  cmd->add_option("--z", o->z_accept, "Acceptance: held-out improvement in standard errors")->check(positive_number)->capture_default_str();
+  cmd->add_option("--z", o->z_accept, "Acceptance: held-out improvement in standard errors")
+      ->check(positive_number)
+      ->capture_default_str();
   cmd->add_option("--effects", o->effects, "Candidates (default: all)")
       ->check(CLI::IsMember({"detector_offset", "detector_roll", "axis_tilt", "magnification", "angular_blur", "beam_hardening",
                              "pixel_gain", "column_gain"}));

@@ -53,16 +53,19 @@ struct SimulateOptions {
   std::optional<int> false_blobs;
 };
 
-Eigen::Vector3d vec3(const std::vector<double>& v) { return v.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(v[0], v[1], v[2]); }
+Eigen::Vector3d vec3(const std::vector<double>& v) {
+  return v.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(v[0], v[1], v[2]);
+}
 Eigen::Vector2d vec2(const std::vector<double>& v) { return v.empty() ? Eigen::Vector2d::Zero() : Eigen::Vector2d(v[0], v[1]); }
 
 SimulationEffects effects_from(const SimulateOptions& o, const PandaSetup& setup) {
   SimulationEffects e;
   if (o.sdd_error_mm || !o.principal_point_error_px.empty() || !o.tilt_deg.empty())
-    e.detector_intrinsics = DetectorIntrinsicsError{o.sdd_error_mm.value_or(0.0), vec2(o.principal_point_error_px), vec2(o.tilt_deg)};
+    e.detector_intrinsics =
+        DetectorIntrinsicsError{o.sdd_error_mm.value_or(0.0), vec2(o.principal_point_error_px), vec2(o.tilt_deg)};
   if (o.distortion_k1)
-    e.detector_distortion = RadialDistortion{*o.distortion_k1, o.distortion_centre_px.empty() ? setup.detector.centre_px()
-                                                                                              : vec2(o.distortion_centre_px)};
+    e.detector_distortion = RadialDistortion{
+        *o.distortion_k1, o.distortion_centre_px.empty() ? setup.detector.centre_px() : vec2(o.distortion_centre_px)};
   if (o.displaced_spheres) e.sphere_positions = SphereDisplacement{*o.displaced_spheres, o.displacement_mm};
   if (!o.base_translation_mm.empty() || !o.base_rotation_deg.empty())
     e.robot_base_frame = RigidOffset{vec3(o.base_translation_mm), vec3(o.base_rotation_deg)};
@@ -87,13 +90,15 @@ void run_simulate(const SimulateOptions& o) {
   // Running again into a simulation's folder replaces it; a scan that no simulation wrote (a
   // measured one: scan.json without truth.json) is never overwritten by a slip of --out.
   if (std::filesystem::exists(o.out / "scan.json") && !std::filesystem::exists(o.out / "truth.json"))
-    throw InputError("--out", "", o.out.string() + " holds a scan that ctk simulate did not write (scan.json without truth.json): choose another folder");
+    throw InputError(
+        "--out", "",
+        o.out.string() + " holds a scan that ctk simulate did not write (scan.json without truth.json): choose another folder");
   RunFiles files;
   for (const std::string& name : o.phantoms)
     if (std::filesystem::path(name).extension() == ".json") files.input("--phantom", name);
   files.input("--poses", o.poses);
-  const std::vector<std::string> written = {"scan.json", "truth.json", "truth-geometry.json", "joints.csv", "poses.json", "flat.tif",
-                                             "dark.tif", "projections"};
+  const std::vector<std::string> written = {"scan.json", "truth.json", "truth-geometry.json", "joints.csv", "poses.json",
+                                            "flat.tif",  "dark.tif",   "projections"};
   for (const std::string& name : written)
     if (name != "projections") files.output("--out: " + name, o.out / name);
   files.output_folder("--out: projections", o.out / "projections");
@@ -126,11 +131,16 @@ void run_simulate(const SimulateOptions& o) {
     sim.trajectory = circular_robot_trajectory(sim.setup, o.views);
   } else {
     std::vector<Eigen::Vector3d> directions;
-    if (o.trajectory == "spherical") directions = HealpixSphere(o.nside).directions();
+    if (o.trajectory == "spherical")
+      directions = HealpixSphere(o.nside).directions();
     else if (o.trajectory == "cap" && o.cap_deg[0] > o.cap_deg[1])
-      throw InputError("--cap-deg", "", "expected the least angle first, got " + std::to_string(o.cap_deg[0]) + " before " + std::to_string(o.cap_deg[1]));
-    else if (o.trajectory == "cap") directions = spinning_cap_directions(o.views, o.cap_deg[0] * kDegree, o.cap_deg[1] * kDegree);
-    else directions = random_directions(o.views, o.seed);
+      throw InputError(
+          "--cap-deg", "",
+          "expected the least angle first, got " + std::to_string(o.cap_deg[0]) + " before " + std::to_string(o.cap_deg[1]));
+    else if (o.trajectory == "cap")
+      directions = spinning_cap_directions(o.views, o.cap_deg[0] * kDegree, o.cap_deg[1] * kDegree);
+    else
+      directions = random_directions(o.views, o.seed);
     std::cerr << "planning " << directions.size() << " " << o.trajectory << " views (numerical IK) ...\n";
     sim.trajectory = spherical_robot_trajectory(sim.setup, directions);
   }
@@ -146,12 +156,12 @@ void run_simulate(const SimulateOptions& o) {
   const SimulationReport r = simulate_scan(sim, folder.path(), std::ref(progress));
   folder.commit();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cout << "simulated scan written to " << (o.out / "scan.json").string() << ": " << r.views << " views ("
-            << r.views_acquired << " acquired, " << r.views - r.views_acquired << " unreachable), " << o.cols << " x "
-            << o.rows << " px, phantom: " << (sim.with_holder ? "helix-holder " : "") << sim.sample.name << "\n";
+  std::cout << "simulated scan written to " << (o.out / "scan.json").string() << ": " << r.views << " views (" << r.views_acquired
+            << " acquired, " << r.views - r.views_acquired << " unreachable), " << o.cols << " x " << o.rows
+            << " px, phantom: " << (sim.with_holder ? "helix-holder " : "") << sim.sample.name << "\n";
   if (r.saturated_pixels > 0) std::cout << "warning: " << r.saturated_pixels << " pixels saturated at 65535 counts\n";
-  std::cout << "truth (true matrices, poses, effects applied) in " << (o.out / "truth.json").string() << "; "
-            << seconds << " s\n";
+  std::cout << "truth (true matrices, poses, effects applied) in " << (o.out / "truth.json").string() << "; " << seconds
+            << " s\n";
 }
 
 }  // namespace
@@ -172,7 +182,9 @@ void register_simulate(CLI::App& app) {
       ->check(CLI::IsMember({"circular", "spherical", "cap", "random"}))
       ->capture_default_str()
       ->excludes(poses);
-  cmd->add_option("--views", o->views, "Views of a circular, cap or random trajectory")->check(CLI::Range(1, 100000))->capture_default_str();
+  cmd->add_option("--views", o->views, "Views of a circular, cap or random trajectory")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
   cmd->add_option("--cap-deg", o->cap_deg, "A cap trajectory's band: least and greatest angle between beam and holder axis")
       ->expected(2)
       ->check(CLI::Range(0.0, 180.0))
@@ -189,33 +201,59 @@ void register_simulate(CLI::App& app) {
   cmd->add_option("--output", o->output, "counts: 16-bit TIFF with flat and dark; line-integrals: float EXR, noise-free")
       ->check(CLI::IsMember({"counts", "line-integrals"}))
       ->capture_default_str();
-  cmd->add_option("--flat-counts", o->flat_counts, "Mean counts above dark, open beam")->check(CLI::Range(1.0, 65000.0))->capture_default_str();
-  cmd->add_option("--dark-counts", o->dark_counts, "Dark offset (counts)")->check(CLI::Range(0.0, 10000.0))->capture_default_str();
+  cmd->add_option("--flat-counts", o->flat_counts, "Mean counts above dark, open beam")
+      ->check(CLI::Range(1.0, 65000.0))
+      ->capture_default_str();
+  cmd->add_option("--dark-counts", o->dark_counts, "Dark offset (counts)")
+      ->check(CLI::Range(0.0, 10000.0))
+      ->capture_default_str();
   cmd->add_option("--kvp", o->kvp, "Polychromatic rays from a tube at this voltage (Kramers spectrum; beam hardening)")
       ->check(CLI::Range(16.0, 150.0));
   cmd->add_option("--filter-al-mm", o->filter_al_mm, "Aluminium filter of the polychromatic spectrum")
       ->check(non_negative_number)
       ->capture_default_str();
-  cmd->add_option("--robot-noise-mm", o->robot_noise_mm, "Pose repeatability, RMS translation (0: off)")->check(non_negative_number)->capture_default_str();
-  cmd->add_option("--robot-noise-deg", o->robot_noise_deg, "Pose repeatability, RMS rotation (0: off)")->check(non_negative_number)->capture_default_str();
+  cmd->add_option("--robot-noise-mm", o->robot_noise_mm, "Pose repeatability, RMS translation (0: off)")
+      ->check(non_negative_number)
+      ->capture_default_str();
+  cmd->add_option("--robot-noise-deg", o->robot_noise_deg, "Pose repeatability, RMS rotation (0: off)")
+      ->check(non_negative_number)
+      ->capture_default_str();
   cmd->add_option("--seed", o->seed, "Random seed (noise, effects)")->capture_default_str();
 
   const std::string effects = "Effects (undeclared: only truth.json knows)";
   cmd->add_option("--sdd-error-mm", o->sdd_error_mm, "True SDD minus declared")->group(effects);
-  cmd->add_option("--principal-point-error-px", o->principal_point_error_px, "True (u0, v0) minus declared")->expected(2)->group(effects);
+  cmd->add_option("--principal-point-error-px", o->principal_point_error_px, "True (u0, v0) minus declared")
+      ->expected(2)
+      ->group(effects);
   cmd->add_option("--detector-tilt-deg", o->tilt_deg, "Out-of-plane tilt about u, then v")->expected(2)->group(effects);
   cmd->add_option("--distortion-k1", o->distortion_k1, "Radial distortion k1 (1/px^2)")->group(effects);
-  cmd->add_option("--distortion-centre-px", o->distortion_centre_px, "Distortion centre (default: detector centre)")->expected(2)->group(effects);
-  cmd->add_option("--displaced-spheres", o->displaced_spheres, "Number of spheres off their declared centre")->check(CLI::Range(0, 1000))->group(effects);
-  cmd->add_option("--displacement-mm", o->displacement_mm, "How far each displaced sphere is off")->check(positive_number)->capture_default_str()->group(effects);
-  cmd->add_option("--base-translation-mm", o->base_translation_mm, "Robot base-frame offset (base axes)")->expected(3)->group(effects);
+  cmd->add_option("--distortion-centre-px", o->distortion_centre_px, "Distortion centre (default: detector centre)")
+      ->expected(2)
+      ->group(effects);
+  cmd->add_option("--displaced-spheres", o->displaced_spheres, "Number of spheres off their declared centre")
+      ->check(CLI::Range(0, 1000))
+      ->group(effects);
+  cmd->add_option("--displacement-mm", o->displacement_mm, "How far each displaced sphere is off")
+      ->check(positive_number)
+      ->capture_default_str()
+      ->group(effects);
+  cmd->add_option("--base-translation-mm", o->base_translation_mm, "Robot base-frame offset (base axes)")
+      ->expected(3)
+      ->group(effects);
   cmd->add_option("--base-rotation-deg", o->base_rotation_deg, "Robot base-frame rotation vector")->expected(3)->group(effects);
-  cmd->add_option("--mount-translation-mm", o->mount_translation_mm, "Holder-mount offset (flange axes)")->expected(3)->group(effects);
+  cmd->add_option("--mount-translation-mm", o->mount_translation_mm, "Holder-mount offset (flange axes)")
+      ->expected(3)
+      ->group(effects);
   cmd->add_option("--mount-rotation-deg", o->mount_rotation_deg, "Holder-mount rotation vector")->expected(3)->group(effects);
-  cmd->add_option("--joint-offsets-deg", o->joint_offsets_deg, "Encoder zero offsets q1..q7 (true = logged + offset)")->expected(7)->group(effects);
-  cmd->add_option("--source-drift-mm", o->source_drift_mm, "Focal-spot drift per 100 views (camera x, y)")->expected(2)->group(effects);
+  cmd->add_option("--joint-offsets-deg", o->joint_offsets_deg, "Encoder zero offsets q1..q7 (true = logged + offset)")
+      ->expected(7)
+      ->group(effects);
+  cmd->add_option("--source-drift-mm", o->source_drift_mm, "Focal-spot drift per 100 views (camera x, y)")
+      ->expected(2)
+      ->group(effects);
   cmd->add_option("--holder-sag-deg", o->holder_sag_deg,
-                  "Outside the diagnosis' vocabulary: the holder turns towards gravity by this much times the sine of its axis' angle to it")
+                  "Outside the diagnosis' vocabulary: the holder turns towards gravity by this much times the sine of its axis' "
+                  "angle to it")
       ->group(effects);
   cmd->add_option("--source-wobble-mm", o->source_wobble_mm,
                   "Outside the vocabulary: the focal spot wanders by this amplitude * cos(4 pi view / views) (camera x, y)")
@@ -226,8 +264,13 @@ void register_simulate(CLI::App& app) {
       ->check(positive_number)
       ->group(effects);
   cmd->add_option("--blur-fraction", o->blur_fraction, "Fraction of views blurred")->check(CLI::Range(0.0, 1.0))->group(effects);
-  cmd->add_option("--blur-sigma-px", o->blur_sigma_px, "Blur of those views")->check(positive_number)->capture_default_str()->group(effects);
-  cmd->add_option("--false-blobs", o->false_blobs, "Spurious sphere-like blobs per view")->check(CLI::Range(0, 10000))->group(effects);
+  cmd->add_option("--blur-sigma-px", o->blur_sigma_px, "Blur of those views")
+      ->check(positive_number)
+      ->capture_default_str()
+      ->group(effects);
+  cmd->add_option("--false-blobs", o->false_blobs, "Spurious sphere-like blobs per view")
+      ->check(CLI::Range(0, 10000))
+      ->group(effects);
   cmd->callback([o] { run_simulate(*o); });
 }
 

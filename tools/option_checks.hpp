@@ -27,7 +27,8 @@ inline const CLI::Validator positive_number = finite_number_from_zero(true);
 inline const CLI::Validator fraction_below_one(
     [](std::string& input) -> std::string {
       double value = 0;
-      if (!CLI::detail::lexical_cast(input, value) || !(value >= 0 && value < 1)) return "expected a number in [0, 1), got " + input;
+      if (!CLI::detail::lexical_cast(input, value) || !(value >= 0 && value < 1))
+        return "expected a number in [0, 1), got " + input;
       return {};
     },
     "[0, 1)", "fraction below one");

@@ -53,7 +53,8 @@ nlohmann::json view_calibration_to_json(const ViewCalibration& v) {
                       {"outlier_detected_px", points(v.outlier_detected_px)}};
   if (v.P) {
     nlohmann::json rows = nlohmann::json::array();
-    for (int r = 0; r < 3; ++r) rows.push_back({v.P->matrix()(r, 0), v.P->matrix()(r, 1), v.P->matrix()(r, 2), v.P->matrix()(r, 3)});
+    for (int r = 0; r < 3; ++r)
+      rows.push_back({v.P->matrix()(r, 0), v.P->matrix()(r, 1), v.P->matrix()(r, 2), v.P->matrix()(r, 3)});
     j["P"] = rows;
   }
   if (v.T_camera_holder) j["T_camera_holder"] = rigid_to_json(*v.T_camera_holder);
@@ -64,10 +65,14 @@ ViewCalibration view_calibration_from_json(const nlohmann::json& json, const std
   const JsonNode node(json, file, path);
   ViewCalibration v;
   const std::string status = node.at("status").string();
-  if (status == "ok") v.status = ViewStatus::ok;
-  else if (status == "rejected") v.status = ViewStatus::rejected;
-  else if (status == "skipped") v.status = ViewStatus::skipped;
-  else node.at("status").fail("expected ok, rejected or skipped");
+  if (status == "ok")
+    v.status = ViewStatus::ok;
+  else if (status == "rejected")
+    v.status = ViewStatus::rejected;
+  else if (status == "skipped")
+    v.status = ViewStatus::skipped;
+  else
+    node.at("status").fail("expected ok, rejected or skipped");
   v.reason = node.at("reason").string();
   v.rms_px = node.at("rms_px").number();
   v.spheres_used = node.at("spheres_used").integer();

@@ -11,25 +11,29 @@
 
 namespace ctk {
 
-void write_residual_per_view_png(const std::vector<ViewCalibration>& views, double threshold_px, const std::filesystem::path& png) {
+void write_residual_per_view_png(const std::vector<ViewCalibration>& views, double threshold_px,
+                                 const std::filesystem::path& png) {
   double top = 1.25 * threshold_px;
   for (const auto& v : views) top = std::max(top, 1.05 * v.rms_px);
   const double n = static_cast<double>(std::max<std::size_t>(views.size(), 1));
-  Chart chart(760, 300, {-0.5, n - 0.5, 0, top, "reprojection RMS per view (red x: rejected, orange: threshold)", "view", "RMS (px)"});
+  Chart chart(760, 300,
+              {-0.5, n - 0.5, 0, top, "reprojection RMS per view (red x: rejected, orange: threshold)", "view", "RMS (px)"});
   chart.ticks(std::max(1.0, nice_step(n, 10)), nice_step(top, 5));
   chart.line(-0.5, threshold_px, n - 0.5, threshold_px, colour::orange);
   for (std::size_t i = 0; i < views.size(); ++i) {
     const auto& v = views[i];
     const double x = static_cast<double>(i);
-    if (v.status == ViewStatus::ok) chart.dot(x, v.rms_px, colour::ramp(v.rms_px / threshold_px));
-    else if (v.status == ViewStatus::rejected) chart.cross(x, v.P ? v.rms_px : 0.97 * top, colour::red);
-    else chart.cross(x, 0.97 * top, colour::grey);
+    if (v.status == ViewStatus::ok)
+      chart.dot(x, v.rms_px, colour::ramp(v.rms_px / threshold_px));
+    else if (v.status == ViewStatus::rejected)
+      chart.cross(x, v.P ? v.rms_px : 0.97 * top, colour::red);
+    else
+      chart.cross(x, 0.97 * top, colour::grey);
   }
   chart.save(png);
 }
 
-void write_detections_png(const Image& im, const ViewCalibration& view, const std::filesystem::path& png,
-                          double magnify) {
+void write_detections_png(const Image& im, const ViewCalibration& view, const std::filesystem::path& png, double magnify) {
   // Grey levels from the 1st to the 99.9th percentile of the line integrals.
   std::vector<float> sorted = im.pixels;
   std::sort(sorted.begin(), sorted.end());
@@ -37,24 +41,27 @@ void write_detections_png(const Image& im, const ViewCalibration& view, const st
   cv::Mat grey(im.rows, im.cols, CV_8U);
   for (int r = 0; r < im.rows; ++r)
     for (int c = 0; c < im.cols; ++c) {
-      const double f = (im.pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c)] - low) /
-                       std::max(high - low, 1e-12);
+      const double f =
+          (im.pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c)] - low) /
+          std::max(high - low, 1e-12);
       grey.at<unsigned char>(r, c) = static_cast<unsigned char>(std::clamp(255.0 * (1.0 - f), 0.0, 255.0));
     }
   cv::Mat picture;
   cv::cvtColor(grey, picture, cv::COLOR_GRAY2BGR);
-  const auto pt = [](const Eigen::Vector2d& p) { return cv::Point(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y()))); };
+  const auto pt = [](const Eigen::Vector2d& p) {
+    return cv::Point(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())));
+  };
   for (std::size_t k = 0; k < view.detected_px.size(); ++k) {
     const Eigen::Vector2d& d = view.detected_px[k];
     const Eigen::Vector2d& f = view.fitted_px[k];
     cv::circle(picture, pt(f), static_cast<int>(std::lround(view.radius_px + 3)), colour::green, 1, cv::LINE_AA);
     cv::line(picture, pt(f), pt(f + magnify * (d - f)), colour::red, 1, cv::LINE_AA);
-    cv::putText(picture, std::to_string(view.spheres[k]), pt(f) + cv::Point(7, -7), cv::FONT_HERSHEY_SIMPLEX, 0.35,
-                colour::blue, 1, cv::LINE_AA);
+    cv::putText(picture, std::to_string(view.spheres[k]), pt(f) + cv::Point(7, -7), cv::FONT_HERSHEY_SIMPLEX, 0.35, colour::blue,
+                1, cv::LINE_AA);
   }
   char caption[160];
-  std::snprintf(caption, sizeof caption, "%s, %d spheres, RMS %.3f px; green: fitted, red: residual x%g",
-                to_string(view.status), view.spheres_used, view.rms_px, magnify);
+  std::snprintf(caption, sizeof caption, "%s, %d spheres, RMS %.3f px; green: fitted, red: residual x%g", to_string(view.status),
+                view.spheres_used, view.rms_px, magnify);
   cv::putText(picture, caption, {8, 18}, cv::FONT_HERSHEY_SIMPLEX, 0.45, colour::red, 1, cv::LINE_AA);
   write_png_atomically(picture, png);
 }
@@ -66,8 +73,9 @@ Eigen::Vector3d source_direction_in_holder(const Rigid& T_camera_holder) {
 void write_view_directions_png(const std::vector<ViewDirection>& views, double threshold_px, const std::filesystem::path& png) {
   // Lambert cylindrical equal-area: x = longitude (shown in degrees), y = sin(latitude).
   constexpr double kDeg = 180 / M_PI;
-  Chart chart(900, 287, {-180, 180, -1, 1, "view directions (source seen from the holder), equal-area; colour: RMS, x: rejected",
-                         "longitude about the holder axis (deg)", "sin(latitude)"});
+  Chart chart(900, 287,
+              {-180, 180, -1, 1, "view directions (source seen from the holder), equal-area; colour: RMS, x: rejected",
+               "longitude about the holder axis (deg)", "sin(latitude)"});
   for (int lon = -180; lon <= 180; lon += 30) chart.line(lon, -1, lon, 1, colour::light);
   for (int lat = -60; lat <= 60; lat += 30) {
     const double y = std::sin(lat / kDeg);
@@ -76,8 +84,10 @@ void write_view_directions_png(const std::vector<ViewDirection>& views, double t
   chart.ticks(60, 0.5);
   for (const auto& v : views) {
     const MapPoint p = equal_area_map(v.source_in_holder);
-    if (v.status == ViewStatus::ok) chart.dot(p.x * kDeg, p.y, colour::ramp(v.rms_px / threshold_px), 3);
-    else chart.cross(p.x * kDeg, p.y, v.status == ViewStatus::rejected ? colour::red : colour::grey);
+    if (v.status == ViewStatus::ok)
+      chart.dot(p.x * kDeg, p.y, colour::ramp(v.rms_px / threshold_px), 3);
+    else
+      chart.cross(p.x * kDeg, p.y, v.status == ViewStatus::rejected ? colour::red : colour::grey);
   }
   chart.save(png);
 }

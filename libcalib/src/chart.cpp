@@ -25,7 +25,9 @@ double nice_step(double span, int ticks) {
 }
 
 Chart::Chart(int plot_width, int plot_height, ChartAxes axes)
-    : axes_(std::move(axes)), width_(plot_width), height_(plot_height),
+    : axes_(std::move(axes)),
+      width_(plot_width),
+      height_(plot_height),
       canvas_(plot_height + 46 + 46, plot_width + 70 + 20, CV_8UC3, cv::Scalar(255, 255, 255)) {
   cv::rectangle(canvas_, cv::Rect(left_, top_, width_, height_), colour::black, 1);
   const auto font = cv::FONT_HERSHEY_SIMPLEX;
@@ -40,7 +42,9 @@ cv::Point Chart::at(double x, double y) const {
   return {left_ + static_cast<int>(std::lround(fx * width_)), top_ + height_ - static_cast<int>(std::lround(fy * height_))};
 }
 
-void Chart::dot(double x, double y, const cv::Scalar& c, int radius) { cv::circle(canvas_, at(x, y), radius, c, cv::FILLED, cv::LINE_AA); }
+void Chart::dot(double x, double y, const cv::Scalar& c, int radius) {
+  cv::circle(canvas_, at(x, y), radius, c, cv::FILLED, cv::LINE_AA);
+}
 
 void Chart::cross(double x, double y, const cv::Scalar& c, int size) {
   const cv::Point p = at(x, y);
@@ -79,7 +83,9 @@ void Chart::ticks(double x_step, double y_step) {
 void write_png_atomically(const cv::Mat& picture, const std::filesystem::path& png) {
   std::vector<unsigned char> bytes;
   cv::imencode(".png", picture, bytes);
-  write_file_atomically(png, [&](std::ostream& out) { out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())); });
+  write_file_atomically(png, [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  });
 }
 
 void Chart::save(const std::filesystem::path& png) const { write_png_atomically(canvas_, png); }

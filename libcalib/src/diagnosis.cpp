@@ -168,7 +168,8 @@ ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration
   return o;
 }
 
-Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options, const std::function<void(const std::string&)>& log) {
+Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
+                   const std::function<void(const std::string&)>& log) {
   Diagnosis d;
   d.views_ok = static_cast<int>(o.views.size());
   auto say = [&](const std::string& s) {
@@ -324,7 +325,8 @@ nlohmann::json vec(const double* p, int n, double scale = 1.0) {
 }
 
 // The contract's parameters and their uncertainties for one effect.
-void effect_parameters_json(const EffectFinding& f, const ScanObservations& o, nlohmann::json& parameters, nlohmann::json& uncertainty) {
+void effect_parameters_json(const EffectFinding& f, const ScanObservations& o, nlohmann::json& parameters,
+                            nlohmann::json& uncertainty) {
   const EffectParameters& p = f.parameters;
   const Eigen::MatrixXd& C = f.covariance;
   std::vector<double> sd;
@@ -335,8 +337,12 @@ void effect_parameters_json(const EffectFinding& f, const ScanObservations& o, n
     if (sd.size() == 6) uncertainty = {{"translation_mm", vec(sd.data() + 3, 3)}, {"rotation_deg", vec(sd.data(), 3, deg)}};
   };
   switch (f.effect) {
-    case Effect::robot_base_frame: rigid(p.base); break;
-    case Effect::holder_mount: rigid(p.mount); break;
+    case Effect::robot_base_frame:
+      rigid(p.base);
+      break;
+    case Effect::holder_mount:
+      rigid(p.mount);
+      break;
     case Effect::joint_offsets:
       parameters = {{"offsets_deg", vec(p.joints, 7, deg)}};
       if (sd.size() == 7) uncertainty = {{"offsets_deg", vec(sd.data(), 7, deg)}};
@@ -350,8 +356,8 @@ void effect_parameters_json(const EffectFinding& f, const ScanObservations& o, n
     }
     case Effect::detector_intrinsics: {
       const Intrinsics K = intrinsics_of(o.setup, p);
-      parameters = {{"fu_px", K.fu_px}, {"fv_px", K.fv_px}, {"skew_px", K.skew_px}, {"u0_px", K.u0_px}, {"v0_px", K.v0_px},
-                    {"source_to_detector_mm", K.fu_px * o.setup.detector.pitch_u_mm}};
+      parameters = {{"fu_px", K.fu_px}, {"fv_px", K.fv_px}, {"skew_px", K.skew_px},
+                    {"u0_px", K.u0_px}, {"v0_px", K.v0_px}, {"source_to_detector_mm", K.fu_px * o.setup.detector.pitch_u_mm}};
       if (sd.size() == 3) uncertainty = {{"u0_px", sd[0]}, {"v0_px", sd[1]}, {"fu_px", sd[2]}};
       break;
     }
@@ -395,7 +401,8 @@ void error_json(nlohmann::json& j, const ModelError& before, const ModelError& a
 }  // namespace
 
 nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& o) {
-  nlohmann::json baseline = {{"rms_px", d.baseline.rms_px}, {"heldout_rms_px", d.baseline.heldout_rms_px}, {"views_ok", d.views_ok}};
+  nlohmann::json baseline = {
+      {"rms_px", d.baseline.rms_px}, {"heldout_rms_px", d.baseline.heldout_rms_px}, {"views_ok", d.views_ok}};
   if (o.setup.robot) {
     baseline["fk_translation_rms_mm"] = d.baseline.fk_translation_rms_mm;
     baseline["fk_rotation_rms_deg"] = d.baseline.fk_rotation_rms_deg;
@@ -421,15 +428,17 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& o) 
     after["fk_translation_rms_mm"] = d.final_error.fk_translation_rms_mm;
     after["fk_rotation_rms_deg"] = d.final_error.fk_rotation_rms_deg;
   }
-  return {{"format", "ctk-diagnosis/1"},
-          {"baseline", baseline},
-          {"final", after},
-          {"effects", effects},
-          {"unexplained", {{"structured", !d.unexplained.empty()}, {"note", note}}},
-          {"noise", {{"centre_sigma_px", o.centre_sigma_px}, {"robot_sigma_mm", o.robot_sigma_mm}, {"robot_sigma_deg", o.robot_sigma_deg}}},
-          {"criterion",
-           "an effect is accepted when, fitted on one half of the views (interleaved) and judged on the other, the mean per-view "
-           "improvement of the held-out cost exceeds 3 standard errors (one-sided p ~ 0.001)"}};
+  return {
+      {"format", "ctk-diagnosis/1"},
+      {"baseline", baseline},
+      {"final", after},
+      {"effects", effects},
+      {"unexplained", {{"structured", !d.unexplained.empty()}, {"note", note}}},
+      {"noise",
+       {{"centre_sigma_px", o.centre_sigma_px}, {"robot_sigma_mm", o.robot_sigma_mm}, {"robot_sigma_deg", o.robot_sigma_deg}}},
+      {"criterion",
+       "an effect is accepted when, fitted on one half of the views (interleaved) and judged on the other, the mean per-view "
+       "improvement of the held-out cost exceeds 3 standard errors (one-sided p ~ 0.001)"}};
 }
 
 ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d) {
@@ -440,8 +449,12 @@ ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d) 
   };
   for (Effect e : d.accepted) {
     switch (e) {
-      case Effect::robot_base_frame: out.panda->T_camera_base = scan.panda->T_camera_base * offset(p.base); break;
-      case Effect::holder_mount: out.panda->T_flange_holder = offset(p.mount) * scan.panda->T_flange_holder; break;
+      case Effect::robot_base_frame:
+        out.panda->T_camera_base = scan.panda->T_camera_base * offset(p.base);
+        break;
+      case Effect::holder_mount:
+        out.panda->T_flange_holder = offset(p.mount) * scan.panda->T_flange_holder;
+        break;
       case Effect::joint_offsets:
         for (int j = 0; j < panda::kJointCount; ++j) out.panda->joint_offsets_rad[static_cast<std::size_t>(j)] += p.joints[j];
         break;
@@ -456,8 +469,10 @@ ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d) 
         // The centre is absolute (the declared principal point plus the fitted offset). Found on
         // top of a declared distortion, the k1 add up (the centres are taken as the same).
         const RadialDistortion found = distortion_of(declared_setup(scan), p);
-        if (out.distortion) out.distortion->k1_per_px2 += found.k1_per_px2;
-        else out.distortion = found;
+        if (out.distortion)
+          out.distortion->k1_per_px2 += found.k1_per_px2;
+        else
+          out.distortion = found;
         break;
       }
       case Effect::source_drift:

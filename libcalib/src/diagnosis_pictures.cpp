@@ -54,14 +54,17 @@ std::vector<double> sphere_means(const ScanModelFit& f, const ScanObservations& 
 std::vector<double> fk_errors(const ScanObservations& o, const std::vector<Rigid>& reference, const EffectParameters& model) {
   std::vector<double> out;
   for (std::size_t i = 0; i < o.views.size(); ++i)
-    out.push_back(o.views[i].joints ? (reference[i].translation() - robot_predicted_pose(o.setup, model, *o.views[i].joints).translation()).norm()
-                                    : 0.0);
+    out.push_back(
+        o.views[i].joints
+            ? (reference[i].translation() - robot_predicted_pose(o.setup, model, *o.views[i].joints).translation()).norm()
+            : 0.0);
   return out;
 }
 
 }  // namespace
 
-std::vector<std::string> write_diagnosis_pictures(const Diagnosis& d, const ScanObservations& o, const std::filesystem::path& stem) {
+std::vector<std::string> write_diagnosis_pictures(const Diagnosis& d, const ScanObservations& o,
+                                                  const std::filesystem::path& stem) {
   std::vector<std::string> written;
   auto named = [&](const std::string& what) {
     const std::filesystem::path p(stem.string() + "." + what + ".png");

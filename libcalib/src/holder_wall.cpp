@@ -36,7 +36,8 @@ struct TubeResidual {
 
 // The pixels of one view near the tube, between the first and the last sphere along the axis and
 // off every sphere's disc.
-std::vector<WallSample> wall_samples(const ScanDescription& scan, const Image& image, const ViewCalibration& view, double helix_radius) {
+std::vector<WallSample> wall_samples(const ScanDescription& scan, const Image& image, const ViewCalibration& view,
+                                     double helix_radius) {
   const Holder& holder = *scan.holder;
   const Eigen::Matrix3d K_inverse = scan.intrinsics().K().inverse();
   const Rigid& T = *view.T_camera_holder;
@@ -60,7 +61,8 @@ std::vector<WallSample> wall_samples(const ScanDescription& scan, const Image& i
       const double d = (s * ray - (origin + t * axis)).norm();
       if (d < 0.6 * helix_radius || d > 1.4 * helix_radius) continue;
       const Eigen::Vector2d pixel(u, v);
-      if (std::any_of(discs.begin(), discs.end(), [&](const Eigen::Vector2d& c) { return (c - pixel).norm() < sphere_px; })) continue;
+      if (std::any_of(discs.begin(), discs.end(), [&](const Eigen::Vector2d& c) { return (c - pixel).norm() < sphere_px; }))
+        continue;
       out.push_back({d, 1 / std::sqrt(denominator), image.pixels[static_cast<std::size_t>(v) * image.cols + u]});
     }
   return out;
@@ -75,8 +77,8 @@ std::optional<Eigen::Vector2d> fit_view(const std::vector<WallSample>& samples, 
   x[2] = peak / (2 * std::sqrt(x[0] * x[0] - x[1] * x[1]));  // the line integral at the inner edge
   ceres::Problem problem;
   for (const WallSample& s : samples)
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TubeResidual, 1, 5>(new TubeResidual{s}), new ceres::HuberLoss(0.05 * peak),
-                             x);
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TubeResidual, 1, 5>(new TubeResidual{s}),
+                             new ceres::HuberLoss(0.05 * peak), x);
   const ceres::Solver::Summary summary = solve_small_problem(problem, 100, 1e-10);
   if (!summary.IsSolutionUsable() || !(x[1] > 0.3 * helix_radius && x[1] < x[0] && x[0] < 1.4 * helix_radius && x[2] > 0))
     return std::nullopt;

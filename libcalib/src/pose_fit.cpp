@@ -60,7 +60,8 @@ PoseFit fit_pose(const Eigen::Matrix3d& K, const Rigid& initial, const std::vect
   cov_options.algorithm_type = ceres::DENSE_SVD;
   cov_options.num_threads = 1;
   ceres::Covariance covariance(cov_options);
-  const std::vector<std::pair<const double*, const double*>> blocks = {{t.data(), t.data()}, {q.coeffs().data(), q.coeffs().data()}};
+  const std::vector<std::pair<const double*, const double*>> blocks = {{t.data(), t.data()},
+                                                                       {q.coeffs().data(), q.coeffs().data()}};
   const int dof = 2 * static_cast<int>(X.size()) - 6;
   if (dof > 0 && covariance.Compute(blocks, &problem)) {
     const double variance = ss / dof;

@@ -55,7 +55,8 @@ struct ResidualNoise {
 };
 
 // Mean residual per sphere and per detector cell.
-void group_structure(const ScanObservations& o, const ScanModelFit& f, const ResidualNoise& noise, std::vector<StructureFinding>& out) {
+void group_structure(const ScanObservations& o, const ScanModelFit& f, const ResidualNoise& noise,
+                     std::vector<StructureFinding>& out) {
   // Mean residual vectors in groups; chi-square with 2 dof against a Bonferroni threshold.
   auto test_groups = [&](const std::string& where, int groups, auto&& group_of, auto&& name_of) {
     std::vector<Eigen::Vector2d> sum(static_cast<std::size_t>(groups), Eigen::Vector2d::Zero());
@@ -82,13 +83,15 @@ void group_structure(const ScanObservations& o, const ScanModelFit& f, const Res
     }
     if (flagged) {
       std::ostringstream s;
-      s << flagged << " of " << groups << " with a mean residual beyond noise (" << what.str() << (flagged > 6 ? "; ..." : "") << ")";
+      s << flagged << " of " << groups << " with a mean residual beyond noise (" << what.str() << (flagged > 6 ? "; ..." : "")
+        << ")";
       out.push_back({where, s.str()});
     }
   };
   const auto spheres = static_cast<int>(o.setup.holder.spheres_mm.size());
-  test_groups("by sphere", spheres, [&](std::size_t i, std::size_t k) { return o.views[i].spheres[k]; },
-              [](int g) { return "sphere " + std::to_string(g); });
+  test_groups(
+      "by sphere", spheres, [&](std::size_t i, std::size_t k) { return o.views[i].spheres[k]; },
+      [](int g) { return "sphere " + std::to_string(g); });
   constexpr int kCells = 6;
   test_groups(
       "by detector region", kCells * kCells,
@@ -99,14 +102,14 @@ void group_structure(const ScanObservations& o, const ScanModelFit& f, const Res
         return cv * kCells + cu;
       },
       [](int g) { return "cell (" + std::to_string(g % kCells) + ", " + std::to_string(g / kCells) + ")"; });
-
 }
 
 // A sphere that moves during the scan: its residuals in view v follow J_v (a + b tau_v), J_v the
 // projection's derivative with respect to the sphere's place, tau_v the scan's progress (-1/2 ..
 // 1/2); a fitted place leaves a = 0, a move leaves b. Least squares for (a, b) and the chi-square
 // that b explains (3 dof), Bonferroni over the spheres.
-void moving_spheres(const ScanObservations& o, const ScanModelFit& f, const ResidualNoise& noise, std::vector<StructureFinding>& out) {
+void moving_spheres(const ScanObservations& o, const ScanModelFit& f, const ResidualNoise& noise,
+                    std::vector<StructureFinding>& out) {
   const auto spheres = static_cast<int>(o.setup.holder.spheres_mm.size());
   std::vector<Eigen::Matrix<double, 6, 6>> normal(static_cast<std::size_t>(spheres), Eigen::Matrix<double, 6, 6>::Zero());
   std::vector<Eigen::Matrix<double, 6, 1>> rhs(static_cast<std::size_t>(spheres), Eigen::Matrix<double, 6, 1>::Zero());
@@ -121,8 +124,9 @@ void moving_spheres(const ScanObservations& o, const ScanModelFit& f, const Resi
       const auto id = static_cast<std::size_t>(view.spheres[k]);
       const Eigen::Vector3d Y = f.poses[i] * (o.setup.holder.spheres_mm[id] + f.parameters.spheres[id]);
       Eigen::Matrix<double, 2, 3> dp;
-      dp << o.setup.K.fu_px / Y.z(), o.setup.K.skew_px / Y.z(), -(o.setup.K.fu_px * Y.x() + o.setup.K.skew_px * Y.y()) / (Y.z() * Y.z()),
-          0, o.setup.K.fv_px / Y.z(), -o.setup.K.fv_px * Y.y() / (Y.z() * Y.z());
+      dp << o.setup.K.fu_px / Y.z(), o.setup.K.skew_px / Y.z(),
+          -(o.setup.K.fu_px * Y.x() + o.setup.K.skew_px * Y.y()) / (Y.z() * Y.z()), 0, o.setup.K.fv_px / Y.z(),
+          -o.setup.K.fv_px * Y.y() / (Y.z() * Y.z());
       const Eigen::Matrix<double, 2, 3> J = dp * f.poses[i].linear();
       Eigen::Matrix<double, 2, 6> A;
       A << J, tau * J;
@@ -132,7 +136,7 @@ void moving_spheres(const ScanObservations& o, const ScanModelFit& f, const Resi
     }
   }
   const double chi2_3 = 3 * std::pow(1 - 2 / 27.0 + 4.75 * std::sqrt(2 / 27.0), 3);  // p ~ 1e-6 (Wilson-Hilferty)
-  const double threshold = chi2_3 + 2 * std::log(static_cast<double>(spheres));       // and for the number of spheres
+  const double threshold = chi2_3 + 2 * std::log(static_cast<double>(spheres));      // and for the number of spheres
   std::ostringstream what;
   int flagged = 0;
   for (int k = 0; k < spheres; ++k) {
@@ -142,7 +146,8 @@ void moving_spheres(const ScanObservations& o, const ScanModelFit& f, const Resi
     // The move's part: the chi-square of b after a is fitted (Schur complement of a's block).
     const Eigen::Matrix3d Naa = N.topLeftCorner<3, 3>(), Nab = N.topRightCorner<3, 3>(), Nbb = N.bottomRightCorner<3, 3>();
     const Eigen::Matrix3d S = Nbb - Nab.transpose() * Naa.completeOrthogonalDecomposition().pseudoInverse() * Nab;
-    const Eigen::Vector3d g = rhs[id].tail<3>() - Nab.transpose() * Naa.completeOrthogonalDecomposition().pseudoInverse() * rhs[id].head<3>();
+    const Eigen::Vector3d g =
+        rhs[id].tail<3>() - Nab.transpose() * Naa.completeOrthogonalDecomposition().pseudoInverse() * rhs[id].head<3>();
     const Eigen::Vector3d b = S.completeOrthogonalDecomposition().solve(g);
     const double chi2 = g.dot(b) / noise.clipped_variance;
     if (chi2 > threshold) {
@@ -195,7 +200,8 @@ void robot_channel_structure(const ScanObservations& o, const ScanModelFit& f, s
       // time in the lab: the focal spot, the detector), whatever the trajectory's order of directions.
       for (int c = 0; c < 6; ++c)
         smooth([&](std::size_t i) { return d[i](c); }, std::string("the pose's deviation from the robot model (") +
-                                                          (c < 3 ? "rotation " : "translation ") + "xyz"[c % 3] + ", holder frame)");
+                                                           (c < 3 ? "rotation " : "translation ") + "xyz"[c % 3] +
+                                                           ", holder frame)");
       for (int c = 0; c < 3; ++c)
         smooth([&](std::size_t i) { return moved[i](c); },
                std::string("the holder's place against the robot model's (") + "xyz"[c] + ", camera frame)");
@@ -208,9 +214,12 @@ void robot_channel_structure(const ScanObservations& o, const ScanModelFit& f, s
         const double explained = gravity_explained(o, d, c);
         if (n * explained > chi2_3) {
           std::ostringstream s;
-          s << "the pose's deviation from the robot model (" << (c < 3 ? "rotation " : "translation ") << "xyz"[c % 3] << ") follows the "
-            << "direction of gravity in the flange frame (" << static_cast<int>(100 * explained) << " % of its variance; noise would "
-            << "explain under " << std::max(1, static_cast<int>(100 * chi2_3 / n)) << " %): a load-dependent effect outside the vocabulary, "
+          s << "the pose's deviation from the robot model (" << (c < 3 ? "rotation " : "translation ") << "xyz"[c % 3]
+            << ") follows the "
+            << "direction of gravity in the flange frame (" << static_cast<int>(100 * explained)
+            << " % of its variance; noise would "
+            << "explain under " << std::max(1, static_cast<int>(100 * chi2_3 / n))
+            << " %): a load-dependent effect outside the vocabulary, "
             << "such as the holder sagging";
           out.push_back({"by robot configuration", s.str()});
         }
@@ -224,9 +233,9 @@ void robot_channel_structure(const ScanObservations& o, const ScanModelFit& f, s
         for (const auto& x : d) sum2 += x(c) * x(c);
         if (sum2 > limit) {
           std::ostringstream s;
-          s << "the pose's deviation from the robot model (" << (c < 3 ? "rotation " : "translation ") << "xyz"[c % 3]
-            << ") is " << std::sqrt(sum2 / n) << " times the repeatability (RMS), beyond what it allows ("
-            << std::sqrt(limit / n) << ")" << gravity_note(o, d, c);
+          s << "the pose's deviation from the robot model (" << (c < 3 ? "rotation " : "translation ") << "xyz"[c % 3] << ") is "
+            << std::sqrt(sum2 / n) << " times the repeatability (RMS), beyond what it allows (" << std::sqrt(limit / n) << ")"
+            << gravity_note(o, d, c);
           out.push_back({"by robot configuration", s.str()});
         }
       }

@@ -116,8 +116,10 @@ Repeatability measure_repeatability(const std::vector<Deviation>& deviations, co
   const double m = static_cast<double>(deviations.size());
   std::vector<double> rotation_floor, translation_floor;
   for (const Deviation& d : deviations) {
-    rotation_floor.push_back(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(d.image_covariance.topLeftCorner<3, 3>()).eigenvalues()(0));
-    translation_floor.push_back(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(d.image_covariance.bottomRightCorner<3, 3>()).eigenvalues()(0));
+    rotation_floor.push_back(
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(d.image_covariance.topLeftCorner<3, 3>()).eigenvalues()(0));
+    translation_floor.push_back(
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(d.image_covariance.bottomRightCorner<3, 3>()).eigenvalues()(0));
   }
   const double resolution = std::sqrt(2 / (3 * m));
   r = std::max(r, std::log(resolution * std::max(median_in_place(rotation_floor), 1e-300)));
@@ -173,7 +175,8 @@ EffectParameters fit_robot_model(const ScanObservations& o, const std::vector<st
   // Base and mount trade off against each other along directions the trajectory does not turn
   // (on a joint-7 orbit, a shift along the axis in one is one in the other): a weak prior (20 mm,
   // 5 deg, far beyond any setup's error) keeps the smallest pair among equivalent ones.
-  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<WeakOffsetPrior, 12, 6, 6>(new WeakOffsetPrior), nullptr, p.base, p.mount);
+  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<WeakOffsetPrior, 12, 6, 6>(new WeakOffsetPrior), nullptr, p.base,
+                           p.mount);
   solve_small_problem(problem, 50, 1e-10);
   return p;
 }
@@ -206,7 +209,8 @@ RobotPriorFit combine_with_robot(const ScanDescription& scan, ScanCalibration& c
   for (ViewObservations& v : o.views) {
     const ViewCalibration& r = c.views[static_cast<std::size_t>(v.view)];
     const int dof = 2 * static_cast<int>(r.spheres.size()) - 6;
-    if (dof > 0) v.centre_sigma_px = std::max(o.centre_sigma_px, r.rms_px * std::sqrt(r.spheres.size() / static_cast<double>(dof)));
+    if (dof > 0)
+      v.centre_sigma_px = std::max(o.centre_sigma_px, r.rms_px * std::sqrt(r.spheres.size() / static_cast<double>(dof)));
   }
   // Each view's image pose is summarised by its deviation from the model and the image's
   // covariance of it (the poses eliminated: exact for Gaussian noise to first order, and a scan
@@ -216,7 +220,8 @@ RobotPriorFit combine_with_robot(const ScanDescription& scan, ScanCalibration& c
   for (std::size_t i : views) {
     const ViewObservations& v = o.views[i];
     const FlangeChain chain = flange_chain(o.setup, declared, *v.joints);
-    image_covariance[i] = image_information(o, v, chain, flange_deviation(o.setup, declared, *v.joints, v.T_calibrated)).inverse();
+    image_covariance[i] =
+        image_information(o, v, chain, flange_deviation(o.setup, declared, *v.joints, v.T_calibrated)).inverse();
   }
   // Fit the model with the repeatability assumed, measure the repeatability about it, refit. Views
   // whose image and robot disagree beyond both noises (p < 0.001) take no part in either.
@@ -236,8 +241,10 @@ RobotPriorFit combine_with_robot(const ScanDescription& scan, ScanCalibration& c
     result.inconsistent_views.clear();
     for (std::size_t i : views) {
       const Deviation& d = deviations[i];
-      if (d.n.dot((d.image_covariance + measured).ldlt().solve(d.n)) <= kConsistent) consistent.push_back(i);
-      else result.inconsistent_views.push_back(o.views[i].view);
+      if (d.n.dot((d.image_covariance + measured).ldlt().solve(d.n)) <= kConsistent)
+        consistent.push_back(i);
+      else
+        result.inconsistent_views.push_back(o.views[i].view);
     }
     if (static_cast<int>(consistent.size()) < options.min_views) {
       result.reason = "only " + std::to_string(consistent.size()) + " views agree with the robot's model";

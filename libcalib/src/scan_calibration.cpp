@@ -19,8 +19,9 @@ struct FirstGuess {
   std::string reason;
 };
 
-ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<FirstGuess>& guesses, const CalibrationOptions& options,
-                                const std::function<void(int, int)>& progress, const BatchControl* control) {
+ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<FirstGuess>& guesses,
+                                const CalibrationOptions& options, const std::function<void(int, int)>& progress,
+                                const BatchControl* control) {
   const auto start = std::chrono::steady_clock::now();
   options.validate();
   if (!scan.holder) throw InputError("scan", "holder", "calibration needs the holder's spheres (missing)");
@@ -134,8 +135,10 @@ ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& ca
   std::vector<FirstGuess> guesses;
   for (const GeometryView& v : calibrated.views) {
     FirstGuess g;
-    if (v.status == ViewStatus::ok && v.P) g.T_camera_holder = v.P->decompose().T_camera_frame;
-    else g.reason = "not calibrated in the given geometry" + (v.reason.empty() ? std::string() : ": " + v.reason);
+    if (v.status == ViewStatus::ok && v.P)
+      g.T_camera_holder = v.P->decompose().T_camera_frame;
+    else
+      g.reason = "not calibrated in the given geometry" + (v.reason.empty() ? std::string() : ": " + v.reason);
     guesses.push_back(g);
   }
   return calibrate_views(scan, guesses, options, progress, nullptr);

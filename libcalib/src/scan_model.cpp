@@ -6,20 +6,25 @@ namespace ctk {
 
 const char* effect_name(Effect e) {
   switch (e) {
-    case Effect::robot_base_frame: return "robot_base_frame";
-    case Effect::holder_mount: return "holder_mount";
-    case Effect::joint_offsets: return "joint_offsets";
-    case Effect::source_drift: return "source_drift";
-    case Effect::sphere_positions: return "sphere_positions";
-    case Effect::detector_distortion: return "detector_distortion";
-    case Effect::detector_intrinsics: return "detector_intrinsics";
+    case Effect::robot_base_frame:
+      return "robot_base_frame";
+    case Effect::holder_mount:
+      return "holder_mount";
+    case Effect::joint_offsets:
+      return "joint_offsets";
+    case Effect::source_drift:
+      return "source_drift";
+    case Effect::sphere_positions:
+      return "sphere_positions";
+    case Effect::detector_distortion:
+      return "detector_distortion";
+    case Effect::detector_intrinsics:
+      return "detector_intrinsics";
   }
   return "?";
 }
 
-bool needs_robot(Effect e) {
-  return e == Effect::robot_base_frame || e == Effect::holder_mount || e == Effect::joint_offsets;
-}
+bool needs_robot(Effect e) { return e == Effect::robot_base_frame || e == Effect::holder_mount || e == Effect::joint_offsets; }
 
 namespace {
 Rigid offset_rigid(const double* p) {

@@ -100,7 +100,8 @@ struct RobotPrior {
     Tv.template topRightCorner<3, 1>() = t;
     T qt[panda::kJointCount];
     for (int j = 0; j < panda::kJointCount; ++j) qt[j] = T(q[static_cast<std::size_t>(j)]) + joints[j];
-    const Eigen::Matrix<T, 4, 4> before_flange = T_camera_base.cast<T>() * offset_matrix(base) * panda::forward_kinematics_matrix(qt);
+    const Eigen::Matrix<T, 4, 4> before_flange =
+        T_camera_base.cast<T>() * offset_matrix(base) * panda::forward_kinematics_matrix(qt);
     const Eigen::Matrix<T, 4, 4> after_flange = offset_matrix(mount) * T_flange_holder.cast<T>();
     const Eigen::Matrix<T, 4, 4> N = rigid_inverse(before_flange) * Tv * rigid_inverse(after_flange);
     const Mat3<T> NR = N.template topLeftCorner<3, 3>();
@@ -141,16 +142,25 @@ struct SphereGauge {
 // Parameter blocks shared by all views, laid out so Ceres can hold pointers into them.
 struct GlobalBlocks {
   EffectParameters p;
-  explicit GlobalBlocks(const EffectParameters& start, std::size_t spheres) : p(start) { p.spheres.resize(spheres, Eigen::Vector3d::Zero()); }
+  explicit GlobalBlocks(const EffectParameters& start, std::size_t spheres) : p(start) {
+    p.spheres.resize(spheres, Eigen::Vector3d::Zero());
+  }
   double* block(Effect e, std::size_t sphere = 0) {
     switch (e) {
-      case Effect::robot_base_frame: return p.base;
-      case Effect::holder_mount: return p.mount;
-      case Effect::joint_offsets: return p.joints;
-      case Effect::source_drift: return p.drift;
-      case Effect::detector_intrinsics: return p.intrinsics;
-      case Effect::detector_distortion: return p.distortion;
-      case Effect::sphere_positions: return p.spheres[sphere].data();
+      case Effect::robot_base_frame:
+        return p.base;
+      case Effect::holder_mount:
+        return p.mount;
+      case Effect::joint_offsets:
+        return p.joints;
+      case Effect::source_drift:
+        return p.drift;
+      case Effect::detector_intrinsics:
+        return p.intrinsics;
+      case Effect::detector_distortion:
+        return p.distortion;
+      case Effect::sphere_positions:
+        return p.spheres[sphere].data();
     }
     return nullptr;
   }
@@ -159,12 +169,16 @@ struct GlobalBlocks {
 int block_size(Effect e) {
   switch (e) {
     case Effect::robot_base_frame:
-    case Effect::holder_mount: return 6;
-    case Effect::joint_offsets: return 7;
-    case Effect::source_drift: return 2;
+    case Effect::holder_mount:
+      return 6;
+    case Effect::joint_offsets:
+      return 7;
+    case Effect::source_drift:
+      return 2;
     case Effect::detector_intrinsics:
     case Effect::detector_distortion:
-    case Effect::sphere_positions: return 3;
+    case Effect::sphere_positions:
+      return 3;
   }
   return 0;
 }
@@ -179,12 +193,24 @@ Eigen::VectorXd plausible_scale(Effect e) {
   Eigen::VectorXd s(block_size(e));
   switch (e) {
     case Effect::robot_base_frame:
-    case Effect::holder_mount: s << 5 * deg, 5 * deg, 5 * deg, 50, 50, 50; break;  // rad, mm
-    case Effect::joint_offsets: s.setConstant(5 * deg); break;
-    case Effect::source_drift: s << 10, 10; break;                                  // mm per 100 views
-    case Effect::detector_intrinsics: s << 50, 50, 200; break;                       // px
-    case Effect::detector_distortion: s << 50, 200, 200; break;                      // px
-    case Effect::sphere_positions: s.resize(0); break;  // fixed by the sphere gauge instead
+    case Effect::holder_mount:
+      s << 5 * deg, 5 * deg, 5 * deg, 50, 50, 50;
+      break;  // rad, mm
+    case Effect::joint_offsets:
+      s.setConstant(5 * deg);
+      break;
+    case Effect::source_drift:
+      s << 10, 10;
+      break;  // mm per 100 views
+    case Effect::detector_intrinsics:
+      s << 50, 50, 200;
+      break;  // px
+    case Effect::detector_distortion:
+      s << 50, 200, 200;
+      break;  // px
+    case Effect::sphere_positions:
+      s.resize(0);
+      break;  // fixed by the sphere gauge instead
   }
   return s;
 }
@@ -206,14 +232,25 @@ void add_view(ceres::Problem& problem, const ScanObservations& o, const ViewObse
   const Eigen::Matrix3d R0 = v.T_calibrated.linear();
   for (std::size_t i = 0; i < v.spheres.size(); ++i) {
     const auto k = static_cast<std::size_t>(v.spheres[i]);
-    auto* f = new ImageResidual{R0, s.holder.spheres_mm[k], v.measured_px[i], s.K, s.detector.pitch_u_mm, s.detector.pitch_v_mm,
-                                static_cast<double>(v.view), 1.0 / centre_sigma(o, v), s.source_drift_mm_per_100_views};
+    auto* f = new ImageResidual{R0,
+                                s.holder.spheres_mm[k],
+                                v.measured_px[i],
+                                s.K,
+                                s.detector.pitch_u_mm,
+                                s.detector.pitch_v_mm,
+                                static_cast<double>(v.view),
+                                1.0 / centre_sigma(o, v),
+                                s.source_drift_mm_per_100_views};
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ImageResidual, 2, 6, 3, 3, 3, 2>(f), nullptr, pose,
                              g.block(Effect::sphere_positions, k), g.block(Effect::detector_intrinsics),
                              g.block(Effect::detector_distortion), g.block(Effect::source_drift));
   }
   if (s.robot && v.joints) {
-    auto* f = new RobotPrior{R0, *v.joints, s.T_camera_base.matrix(), s.T_flange_holder.matrix(), o.robot_sigma_mm / std::sqrt(3.0),
+    auto* f = new RobotPrior{R0,
+                             *v.joints,
+                             s.T_camera_base.matrix(),
+                             s.T_flange_holder.matrix(),
+                             o.robot_sigma_mm / std::sqrt(3.0),
                              o.robot_sigma_deg * kDegree / std::sqrt(3.0)};
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RobotPrior, 6, 6, 6, 6, 7>(f), nullptr, pose,
                              g.block(Effect::robot_base_frame), g.block(Effect::holder_mount), g.block(Effect::joint_offsets));
@@ -241,8 +278,15 @@ void collect_view(const ScanObservations& o, const ViewObservations& v, const do
   out.residual_px[slot].clear();
   for (std::size_t i = 0; i < v.spheres.size(); ++i) {
     const auto k = static_cast<std::size_t>(v.spheres[i]);
-    const ImageResidual f{R0, o.setup.holder.spheres_mm[k], v.measured_px[i], o.setup.K, o.setup.detector.pitch_u_mm,
-                          o.setup.detector.pitch_v_mm, static_cast<double>(v.view), 1.0, o.setup.source_drift_mm_per_100_views};
+    const ImageResidual f{R0,
+                          o.setup.holder.spheres_mm[k],
+                          v.measured_px[i],
+                          o.setup.K,
+                          o.setup.detector.pitch_u_mm,
+                          o.setup.detector.pitch_v_mm,
+                          static_cast<double>(v.view),
+                          1.0,
+                          o.setup.source_drift_mm_per_100_views};
     double r[2];
     f(pose, p.spheres[k].data(), p.intrinsics, p.distortion, p.drift, r);
     // f gives model - measured; the residual shown is measured - model.
@@ -252,8 +296,12 @@ void collect_view(const ScanObservations& o, const ViewObservations& v, const do
   const double image = sq / (centre_sigma(o, v) * centre_sigma(o, v));
   double prior = 0;
   if (o.setup.robot && v.joints) {
-    const RobotPrior f{R0, *v.joints, o.setup.T_camera_base.matrix(), o.setup.T_flange_holder.matrix(),
-                       o.robot_sigma_mm / std::sqrt(3.0), o.robot_sigma_deg * kDegree / std::sqrt(3.0)};
+    const RobotPrior f{R0,
+                       *v.joints,
+                       o.setup.T_camera_base.matrix(),
+                       o.setup.T_flange_holder.matrix(),
+                       o.robot_sigma_mm / std::sqrt(3.0),
+                       o.robot_sigma_deg * kDegree / std::sqrt(3.0)};
     double r[6];
     f(pose, p.base, p.mount, p.joints, r);
     for (double x : r) prior += x * x;
@@ -367,8 +415,10 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
     ceres::Covariance covariance(co);
     if (static_cast<int>(blocks.size()) > 0 && covariance.Compute(blocks, &problem)) {
       out.covariance.resize(size, size);
-      if (!covariance.GetCovarianceMatrixInTangentSpace(blocks, out.covariance.data())) out.covariance.resize(0, 0);
-      else out.covariance.transposeInPlace();  // Ceres writes row-major
+      if (!covariance.GetCovarianceMatrixInTangentSpace(blocks, out.covariance.data()))
+        out.covariance.resize(0, 0);
+      else
+        out.covariance.transposeInPlace();  // Ceres writes row-major
     }
   }
   return out;

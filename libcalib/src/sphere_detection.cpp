@@ -35,8 +35,9 @@ bool refine_centroid(const Image& im, const Eigen::Vector2d& guess, double radiu
       for (int c = c0; c <= c1; ++c) {
         const double du = c - centre.x(), dv = r - centre.y();
         if (std::hypot(du, dv) > inner) continue;
-        const double w = im.pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c)] -
-                         (plane(0) + plane(1) * du + plane(2) * dv);
+        const double w =
+            im.pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c)] -
+            (plane(0) + plane(1) * du + plane(2) * dv);
         if (w <= 0) continue;
         sum += w * Eigen::Vector2d(c, r);
         weight += w;

@@ -58,8 +58,10 @@ std::vector<int> assign_min_cost(const Eigen::MatrixXd& input) {
   for (int j = 1; j <= m; ++j) {
     const int r = row_of[static_cast<std::size_t>(j)];
     if (r == 0) continue;
-    if (transposed) result[static_cast<std::size_t>(j - 1)] = r - 1;
-    else result[static_cast<std::size_t>(r - 1)] = j - 1;
+    if (transposed)
+      result[static_cast<std::size_t>(j - 1)] = r - 1;
+    else
+      result[static_cast<std::size_t>(r - 1)] = j - 1;
   }
   return result;
 }
@@ -86,7 +88,8 @@ std::vector<Eigen::Vector2d> candidate_shifts(const std::vector<Eigen::Vector2d>
     int s = 0;
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx)
-        if (x + dx >= 0 && y + dy >= 0 && x + dx < size && y + dy < size) s += votes[static_cast<std::size_t>((y + dy) * size + x + dx)];
+        if (x + dx >= 0 && y + dy >= 0 && x + dx < size && y + dy < size)
+          s += votes[static_cast<std::size_t>((y + dy) * size + x + dx)];
     return s;
   };
   for (int y = 0; y < size; ++y)
@@ -96,7 +99,8 @@ std::vector<Eigen::Vector2d> candidate_shifts(const std::vector<Eigen::Vector2d>
       bool peak = true;
       for (int dy = -1; dy <= 1 && peak; ++dy)
         for (int dx = -1; dx <= 1 && peak; ++dx)
-          if ((dx || dy) && x + dx >= 0 && y + dy >= 0 && x + dx < size && y + dy < size && summed(x + dx, y + dy) > s) peak = false;
+          if ((dx || dy) && x + dx >= 0 && y + dy >= 0 && x + dx < size && y + dy < size && summed(x + dx, y + dy) > s)
+            peak = false;
       if (peak) peaks.push_back({s, y * size + x});
     }
   std::sort(peaks.begin(), peaks.end(), std::greater<>());
@@ -138,7 +142,8 @@ std::vector<SphereMatch> match_spheres(const std::vector<Eigen::Vector2d>& predi
   for (std::size_t i = 0; i < spheres.size(); ++i) {
     const int j = pick[i];
     if (j < 0) continue;
-    const double d = (detections[static_cast<std::size_t>(j)].uv - predicted[static_cast<std::size_t>(spheres[i])] - shift).norm();
+    const double d =
+        (detections[static_cast<std::size_t>(j)].uv - predicted[static_cast<std::size_t>(spheres[i])] - shift).norm();
     if (d <= gate_px) matches.push_back({spheres[i], j, d});
   }
   return matches;

@@ -23,7 +23,11 @@ class WindowCost : public ceres::CostFunction {
  public:
   WindowCost(std::vector<Eigen::Vector2d> offsets, std::vector<double> values, std::vector<double> shape, int balls,
              int subsamples)
-      : offsets_(std::move(offsets)), values_(std::move(values)), shape_(std::move(shape)), balls_(balls), subsamples_(subsamples) {
+      : offsets_(std::move(offsets)),
+        values_(std::move(values)),
+        shape_(std::move(shape)),
+        balls_(balls),
+        subsamples_(subsamples) {
     mutable_parameter_block_sizes()->assign({2 * balls, 2 * balls, 4});
     set_num_residuals(static_cast<int>(values_.size()));
   }
@@ -88,7 +92,7 @@ class WindowCost : public ceres::CostFunction {
  private:
   std::vector<Eigen::Vector2d> offsets_;  // pixel centres relative to the window's reference point
   std::vector<double> values_;
-  std::vector<double> shape_;             // the known background shape, pixel-averaged (0 if none)
+  std::vector<double> shape_;  // the known background shape, pixel-averaged (0 if none)
   int balls_;
   int subsamples_;
 };
@@ -117,12 +121,12 @@ class PixelAverages {
     const double lowest = std::min({centre, a, b, d, e}), highest = std::max({centre, a, b, d, e});
     const double mean = 0.25 * (a + b + d + e);
     const bool starts_here = (lowest == 0) != (highest == 0);
-    if (!starts_here && std::abs(mean - centre) <= 2e-3 * std::max(std::abs(lowest), std::abs(highest))) return (2 * centre + mean) / 3;
+    if (!starts_here && std::abs(mean - centre) <= 2e-3 * std::max(std::abs(lowest), std::abs(highest)))
+      return (2 * centre + mean) / 3;
     constexpr int kSubsamples = 4;
     double sum = 0;
     for (int i = 0; i < kSubsamples; ++i)
-      for (int j = 0; j < kSubsamples; ++j)
-        sum += shape_({c - 0.5 + (j + 0.5) / kSubsamples, r - 0.5 + (i + 0.5) / kSubsamples});
+      for (int j = 0; j < kSubsamples; ++j) sum += shape_({c - 0.5 + (j + 0.5) / kSubsamples, r - 0.5 + (i + 0.5) / kSubsamples});
     return sum / (kSubsamples * kSubsamples);
   }
 

@@ -111,7 +111,8 @@ void recover_missed_spheres(const Image& image, const Prediction& p, double radi
       measured.push_back(found[m]);
       if (distortion) found[m].uv = distortion->ideal_from_measured(found[m].uv);
       detections.push_back(found[m]);
-      matches.push_back({static_cast<int>(members[m]), static_cast<int>(detections.size() - 1), (found[m].uv - p.uv[members[m]]).norm()});
+      matches.push_back(
+          {static_cast<int>(members[m]), static_cast<int>(detections.size() - 1), (found[m].uv - p.uv[members[m]]).norm()});
     }
   }
 }
@@ -123,19 +124,21 @@ void CalibrationOptions::validate() const {
   require_option(max_rms_px > 0, "CalibrationOptions.max_rms_px", "a number above 0", max_rms_px);
   require_option(search_px > 0, "CalibrationOptions.search_px", "a number above 0", search_px);
   require_option(robust_px > 0, "CalibrationOptions.robust_px", "a number above 0", robust_px);
-  require_option(max_first_guess_error_deg > 0 && max_first_guess_error_deg <= 180, "CalibrationOptions.max_first_guess_error_deg",
-                 "a number in (0, 180]", max_first_guess_error_deg);
+  require_option(max_first_guess_error_deg > 0 && max_first_guess_error_deg <= 180,
+                 "CalibrationOptions.max_first_guess_error_deg", "a number in (0, 180]", max_first_guess_error_deg);
 }
 
 ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, const Rigid& initial, const Holder& holder,
-                               const Detector& detector, const CalibrationOptions& o, const std::optional<RadialDistortion>& distortion) {
+                               const Detector& detector, const CalibrationOptions& o,
+                               const std::optional<RadialDistortion>& distortion) {
   o.validate();
   ViewCalibration out;
   // Projected sphere radius at the holder's depth.
   const double depth = (K.row(2) * initial.translation())(0);
   if (!(depth > holder.sphere_diameter_mm)) {
     std::ostringstream r;
-    r << "no pose: the first guess puts the holder's centre " << depth << " mm from the source along the beam (behind it or at it)";
+    r << "no pose: the first guess puts the holder's centre " << depth
+      << " mm from the source along the beam (behind it or at it)";
     out.reason = r.str();
     return out;
   }
@@ -220,8 +223,8 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   };
   const int visible = static_cast<int>(std::count(first.usable.begin(), first.usable.end(), true));
   Attempt best = attempt(Eigen::Vector2d::Zero());
-  const bool first_guess_holds = static_cast<int>(best.matches.size()) >= std::max(o.min_spheres, visible / 2) &&
-                                 best.fit.rms_px <= o.max_rms_px;
+  const bool first_guess_holds =
+      static_cast<int>(best.matches.size()) >= std::max(o.min_spheres, visible / 2) && best.fit.rms_px <= o.max_rms_px;
   if (!first_guess_holds) {
     // Among the shifts, the one matching most spheres; near-ties (within 10 %) go to the lower RMS.
     for (const auto& shift : candidate_shifts(first.uv, first.usable, detections, o.search_px, 8)) {

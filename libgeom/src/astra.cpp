@@ -30,7 +30,8 @@ ConeVec to_cone_vec(const ProjectionMatrix& P, const Detector& detector, double 
 ProjectionMatrix from_cone_vec(const ConeVec& vec, const Detector& detector, double mm_per_unit) {
   auto at = [&](int i) -> Eigen::Vector3d {
     return Eigen::Vector3d(vec[static_cast<std::size_t>(i)], vec[static_cast<std::size_t>(i + 1)],
-                           vec[static_cast<std::size_t>(i + 2)]) * mm_per_unit;
+                           vec[static_cast<std::size_t>(i + 2)]) *
+           mm_per_unit;
   };
   const Eigen::Vector3d s = at(0), d = at(3), u = at(6), v = at(9);
   const Eigen::Vector2d c = detector.centre_px();

@@ -11,8 +11,7 @@ bool Detector::contains(const Eigen::Vector2d& uv, double margin_px) const {
 }
 
 Intrinsics Intrinsics::from_setup(double sdd_mm, const Detector& detector, const Eigen::Vector2d& principal_point_px) {
-  return {sdd_mm / detector.pitch_u_mm, sdd_mm / detector.pitch_v_mm, 0.0, principal_point_px.x(),
-          principal_point_px.y()};
+  return {sdd_mm / detector.pitch_u_mm, sdd_mm / detector.pitch_v_mm, 0.0, principal_point_px.x(), principal_point_px.y()};
 }
 
 Eigen::Matrix3d Intrinsics::K() const {

@@ -25,7 +25,8 @@ InputError::InputError(std::string file, std::string where, const std::string& w
 void require_regular_file(const std::filesystem::path& file) {
   std::error_code ec;
   if (std::filesystem::is_regular_file(file, ec)) return;
-  throw InputError(file.string(), "", std::filesystem::exists(file, ec) ? "not a regular file (a folder, a pipe or a device)" : "no such file");
+  throw InputError(file.string(), "",
+                   std::filesystem::exists(file, ec) ? "not a regular file (a folder, a pipe or a device)" : "no such file");
 }
 
 }  // namespace ctk

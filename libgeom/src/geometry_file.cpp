@@ -12,9 +12,12 @@ const char* kFormat = "ctk-geometry/1";
 
 const char* to_string(ViewStatus status) {
   switch (status) {
-    case ViewStatus::ok: return "ok";
-    case ViewStatus::rejected: return "rejected";
-    case ViewStatus::skipped: return "skipped";
+    case ViewStatus::ok:
+      return "ok";
+    case ViewStatus::rejected:
+      return "rejected";
+    case ViewStatus::skipped:
+      return "skipped";
   }
   return "?";
 }
@@ -51,10 +54,14 @@ Geometry read_geometry(const std::filesystem::path& file) {
     view.index = v.at("index").integer();
     if (auto p = v.find("projection")) view.projection = p->string();
     const std::string status = v.at("status").string();
-    if (status == "ok") view.status = ViewStatus::ok;
-    else if (status == "rejected") view.status = ViewStatus::rejected;
-    else if (status == "skipped") view.status = ViewStatus::skipped;
-    else v.at("status").fail("expected \"ok\", \"rejected\" or \"skipped\", got \"" + status + "\"");
+    if (status == "ok")
+      view.status = ViewStatus::ok;
+    else if (status == "rejected")
+      view.status = ViewStatus::rejected;
+    else if (status == "skipped")
+      view.status = ViewStatus::skipped;
+    else
+      v.at("status").fail("expected \"ok\", \"rejected\" or \"skipped\", got \"" + status + "\"");
     if (auto r = v.find("reason")) view.reason = r->string();
     if (auto P = v.find("P")) {
       const auto values = P->numbers(12);

@@ -56,19 +56,21 @@ JointLog JointLog::read(const std::filesystem::path& path, int view_count) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     const std::string where = "line " + std::to_string(line_number);
     const auto cells = split_csv(line);
-    if (cells.size() != 8) throw InputError(file, where, "expected 8 values (view and 7 joints), got " + std::to_string(cells.size()));
+    if (cells.size() != 8)
+      throw InputError(file, where, "expected 8 values (view and 7 joints), got " + std::to_string(cells.size()));
     const double view_value = parse_number(cells[0], file, where + ", column view");
     if (view_value != std::floor(view_value)) throw InputError(file, where + ", column view", "expected a whole view index");
     const int view = static_cast<int>(view_value);
     if (view < 0 || view >= view_count)
       throw InputError(file, where + ", column view",
-                       "view " + std::to_string(view) + " outside the scan's projections (count " +
-                           std::to_string(view_count) + "): the joint log does not match projections.count");
+                       "view " + std::to_string(view) + " outside the scan's projections (count " + std::to_string(view_count) +
+                           "): the joint log does not match projections.count");
     if (log.row_of_view_[static_cast<std::size_t>(view)] >= 0)
       throw InputError(file, where, "view " + std::to_string(view) + " appears twice");
     panda::Joints q{};
     for (int j = 0; j < panda::kJointCount; ++j)
-      q[static_cast<std::size_t>(j)] = parse_number(cells[static_cast<std::size_t>(j + 1)], file, where + ", column q" + std::to_string(j + 1));
+      q[static_cast<std::size_t>(j)] =
+          parse_number(cells[static_cast<std::size_t>(j + 1)], file, where + ", column q" + std::to_string(j + 1));
     log.add(view, q);
   }
   return log;

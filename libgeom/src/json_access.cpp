@@ -65,7 +65,8 @@ nlohmann::json read_json_file(const std::filesystem::path& file) {
   // Where in the text a problem sits: "line L, column C (key 'k')".
   auto position = [&](std::size_t offset) {
     offset = std::min(offset, text.size());
-    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(offset), '\n'));
+    const std::size_t line =
+        1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(offset), '\n'));
     const std::size_t line_start = offset == 0 ? std::string::npos : text.rfind('\n', offset - 1);
     const std::size_t column = offset - (line_start == std::string::npos ? 0 : line_start + 1) + 1;
     std::string where = "line " + std::to_string(line) + ", column " + std::to_string(column);
@@ -121,7 +122,8 @@ std::optional<JsonNode> JsonNode::find(std::string_view key) const {
 
 JsonNode JsonNode::at(std::size_t index) const {
   if (!value_->is_array()) fail("expected an array, got " + type_name(*value_));
-  if (index >= value_->size()) fail("has " + std::to_string(value_->size()) + " elements, index " + std::to_string(index) + " requested");
+  if (index >= value_->size())
+    fail("has " + std::to_string(value_->size()) + " elements, index " + std::to_string(index) + " requested");
   return JsonNode((*value_)[index], file_, path_ + "[" + std::to_string(index) + "]", warnings_);
 }
 
@@ -155,7 +157,8 @@ double JsonNode::positive_number() const {
 double JsonNode::length_mm() const {
   const double v = positive_number();
   if (v < kShortestLengthMm || v > kLongestLengthMm)
-    fail("expected a length between " + shortest(kShortestLengthMm) + " and " + shortest(kLongestLengthMm) + " mm, got " + shortest(v));
+    fail("expected a length between " + shortest(kShortestLengthMm) + " and " + shortest(kLongestLengthMm) + " mm, got " +
+         shortest(v));
   return v;
 }
 
@@ -202,7 +205,8 @@ Eigen::Vector3d JsonNode::vector3() const {
 Eigen::Vector3d JsonNode::position_mm() const {
   const Eigen::Vector3d p = vector3();
   if (p.cwiseAbs().maxCoeff() > kLongestLengthMm)
-    fail("expected coordinates within " + shortest(kLongestLengthMm) + " mm of the origin, got " + shortest(p.cwiseAbs().maxCoeff()));
+    fail("expected coordinates within " + shortest(kLongestLengthMm) + " mm of the origin, got " +
+         shortest(p.cwiseAbs().maxCoeff()));
   return p;
 }
 

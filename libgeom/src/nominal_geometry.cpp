@@ -9,8 +9,10 @@ std::vector<NominalView> nominal_views(const ScanDescription& scan) {
   if (scan.matrices) {
     for (std::size_t i = 0; i < out.size(); ++i) {
       const auto& v = scan.matrices->geometry.views[i];
-      if (v.status == ViewStatus::ok && v.P) out[i].P = v.P;
-      else out[i].reason = v.reason.empty() ? "no matrix for this view" : v.reason;
+      if (v.status == ViewStatus::ok && v.P)
+        out[i].P = v.P;
+      else
+        out[i].reason = v.reason.empty() ? "no matrix for this view" : v.reason;
     }
     return out;
   }

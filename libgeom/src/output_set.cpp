@@ -125,7 +125,8 @@ void OutputSet::publish() {
   }
 }
 
-StagedFolder::StagedFolder(fs::path target, std::vector<std::string> owned) : target_(std::move(target)), owned_(std::move(owned)) {
+StagedFolder::StagedFolder(fs::path target, std::vector<std::string> owned)
+    : target_(std::move(target)), owned_(std::move(owned)) {
   // A target that is a symbolic link to a folder: the folder is replaced (beside it, on its file
   // system), the link stays.
   const fs::path absolute = fs::weakly_canonical(fs::absolute(target_));

@@ -54,9 +54,7 @@ ProjectionMatrix::Decomposition ProjectionMatrix::decompose() const {
   return d;
 }
 
-Eigen::Vector3d ProjectionMatrix::source_position() const {
-  return -P_.leftCols<3>().partialPivLu().solve(P_.col(3));
-}
+Eigen::Vector3d ProjectionMatrix::source_position() const { return -P_.leftCols<3>().partialPivLu().solve(P_.col(3)); }
 
 Eigen::Vector3d ProjectionMatrix::principal_ray() const { return P_.block<1, 3>(2, 0).transpose().normalized(); }
 

@@ -26,9 +26,7 @@ Eigen::Vector3d rotation_vector(const Eigen::Matrix3d& R) {
   return aa.axis() * aa.angle();
 }
 
-double rotation_angle_deg(const Eigen::Matrix3d& R) {
-  return Eigen::AngleAxisd(R).angle() * 180.0 / M_PI;
-}
+double rotation_angle_deg(const Eigen::Matrix3d& R) { return Eigen::AngleAxisd(R).angle() * 180.0 / M_PI; }
 
 bool is_rotation(const Eigen::Matrix3d& R, double tolerance) {
   return (R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= tolerance &&
@@ -38,8 +36,7 @@ bool is_rotation(const Eigen::Matrix3d& R, double tolerance) {
 Rigid rigid_from_json(const JsonNode& node) {
   node.warn_unknown_keys({"R", "t_mm"});
   const Eigen::Matrix3d R = node.at("R").matrix3();
-  if (!is_rotation(R, 1e-6))
-    node.at("R").fail("not a rotation matrix (must be orthonormal with determinant +1 to 1e-6)");
+  if (!is_rotation(R, 1e-6)) node.at("R").fail("not a rotation matrix (must be orthonormal with determinant +1 to 1e-6)");
   return make_rigid(R, node.at("t_mm").position_mm());
 }
 

@@ -91,7 +91,8 @@ void RunFiles::check() const {
   }
   std::map<fs::path, const Entry*> written;
   for (const Entry& out : outputs_) {
-    if (const auto it = by_place.find(out.place); it != by_place.end()) refuse(out, "the input " + named(it->second->what, it->second->path));
+    if (const auto it = by_place.find(out.place); it != by_place.end())
+      refuse(out, "the input " + named(it->second->what, it->second->path));
     bool exists = false;
     const auto id = identity(out.place, exists);
     if (exists)
@@ -113,7 +114,8 @@ void RunFiles::check() const {
     const std::string prefix = family.place.string();
     for (const Entry& in : inputs_)
       if (starts_and_ends(in.place.string(), prefix, family.suffix))
-        refuse(family, "the input " + named(in.what, in.path) + " (it writes " + family.path.string() + "*" + family.suffix + ")");
+        refuse(family,
+               "the input " + named(in.what, in.path) + " (it writes " + family.path.string() + "*" + family.suffix + ")");
     for (const Entry& out : outputs_)
       if (starts_and_ends(out.place.string(), prefix, family.suffix))
         refuse(out, "a file of " + named(family.what, fs::path(family.path.string() + "*" + family.suffix)) + " of the same run");

@@ -71,7 +71,8 @@ Detector read_detector(const JsonNode& node, Eigen::Vector2d* principal_point) {
   if (principal_point) {
     const auto pp = node.at("principal_point_px").numbers(2);
     // Off the detector is possible (an offset detector); a kilometre off is a damaged number.
-    if (std::abs(pp[0] * d.pitch_u_mm) > JsonNode::kLongestLengthMm || std::abs(pp[1] * d.pitch_v_mm) > JsonNode::kLongestLengthMm)
+    if (std::abs(pp[0] * d.pitch_u_mm) > JsonNode::kLongestLengthMm ||
+        std::abs(pp[1] * d.pitch_v_mm) > JsonNode::kLongestLengthMm)
       node.at("principal_point_px").fail("expected a point within 1e+06 mm of the detector's first pixel");
     *principal_point = {pp[0], pp[1]};
   }
@@ -163,12 +164,14 @@ ProjectionCensus require_projection_files(const ScanDescription& scan, const std
   const ProjectionCensus census = take_projection_census(scan);
   const int count = scan.projections.count;
   if (census.first_present.empty())
-    throw InputError(file, key, "none of the " + std::to_string(count) + " projection files exists (the first would be " +
-                                    census.first_missing.string() + ")");
+    throw InputError(file, key,
+                     "none of the " + std::to_string(count) + " projection files exists (the first would be " +
+                         census.first_missing.string() + ")");
   if (census.missing > count / 2)
-    throw InputError(file, key, std::to_string(census.missing) + " of the " + std::to_string(count) +
-                                    " projection files do not exist (the first is " + census.first_missing.string() +
-                                    "): is the count or the file pattern wrong?");
+    throw InputError(file, key,
+                     std::to_string(census.missing) + " of the " + std::to_string(count) +
+                         " projection files do not exist (the first is " + census.first_missing.string() +
+                         "): is the count or the file pattern wrong?");
   return census;
 }
 
@@ -251,7 +254,10 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
     j["source_drift_mm_per_100_views"] = {scan.source_drift_mm_per_100_views.x(), scan.source_drift_mm_per_100_views.y()};
   const auto& p = scan.projections;
   json proj;
-  if (p.file_names.empty()) proj["files"] = p.files_pattern; else proj["files"] = p.file_names;
+  if (p.file_names.empty())
+    proj["files"] = p.files_pattern;
+  else
+    proj["files"] = p.file_names;
   proj["count"] = p.count;
   proj["kind"] = p.kind == ProjectionKind::counts ? "counts" : "line_integrals";
   if (p.kind == ProjectionKind::counts) {
@@ -272,12 +278,11 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
     const auto& h = *scan.holder;
     json spheres = json::array();
     for (const auto& s : h.spheres_mm) spheres.push_back({s.x(), s.y(), s.z()});
-    j["holder"] = {{"helix",
-                    {{"radius_mm", h.helix.radius_mm},
-                     {"rho_rad_per_mm", h.helix.rho_rad_per_mm},
-                     {"phase_rad", h.helix.phase_rad}}},
-                   {"sphere_diameter_mm", h.sphere_diameter_mm},
-                   {"spheres_mm", spheres}};
+    j["holder"] = {
+        {"helix",
+         {{"radius_mm", h.helix.radius_mm}, {"rho_rad_per_mm", h.helix.rho_rad_per_mm}, {"phase_rad", h.helix.phase_rad}}},
+        {"sphere_diameter_mm", h.sphere_diameter_mm},
+        {"spheres_mm", spheres}};
     if (h.wall)
       j["holder"]["wall"] = {{"inner_radius_mm", h.wall->inner_radius_mm}, {"outer_radius_mm", h.wall->outer_radius_mm}};
   }

@@ -16,7 +16,8 @@ std::vector<ConeVec> circular_cone_vecs(const CircularOrbit& orbit) {
   if (orbit.sense != 1 && orbit.sense != -1) throw std::invalid_argument("circular orbit: the sense must be +1 or -1");
   const Detector& det = orbit.detector;
   // The principal point's offset from the detector's centre, in mm along columns and rows.
-  const Eigen::Vector2d offset_mm = (det.centre_px() - orbit.principal_point_px).cwiseProduct(Eigen::Vector2d(det.pitch_u_mm, det.pitch_v_mm));
+  const Eigen::Vector2d offset_mm =
+      (det.centre_px() - orbit.principal_point_px).cwiseProduct(Eigen::Vector2d(det.pitch_u_mm, det.pitch_v_mm));
   std::vector<ConeVec> vecs;
   for (double angle : orbit.angles_rad) {
     const double t = orbit.sense * angle;
@@ -62,11 +63,11 @@ Eigen::Matrix3d described_to_stored(StoredOrientation orientation, const Detecto
   return A;
 }
 
-ImportedScan import_matrices(const Detector& detector, const std::vector<ProjectionMatrix>& matrices,
-                             ProjectionSet projections, const fs::path& scan_file) {
+ImportedScan import_matrices(const Detector& detector, const std::vector<ProjectionMatrix>& matrices, ProjectionSet projections,
+                             const fs::path& scan_file) {
   if (static_cast<int>(matrices.size()) != projections.count)
-    throw std::invalid_argument("import: " + std::to_string(matrices.size()) + " matrices for " + std::to_string(projections.count) +
-                                " projections");
+    throw std::invalid_argument("import: " + std::to_string(matrices.size()) + " matrices for " +
+                                std::to_string(projections.count) + " projections");
   const fs::path folder = fs::absolute(scan_file).parent_path();
   auto relative = [&](const std::string& name) { return fs::absolute(name).lexically_proximate(folder).string(); };
   if (!projections.files_pattern.empty()) projections.files_pattern = relative(projections.files_pattern);

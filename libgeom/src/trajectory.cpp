@@ -22,9 +22,9 @@ std::vector<Eigen::Matrix3d> circular_rotations(const Eigen::Vector3d& axis, int
 
 Eigen::Matrix3d rotation_looking_along(const Eigen::Vector3d& direction) {
   const Eigen::Vector3d z = direction.normalized();
-  Eigen::Vector3d up = Eigen::Vector3d::UnitZ() - z.z() * z;   // holder axis, perpendicular to the beam
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ() - z.z() * z;        // holder axis, perpendicular to the beam
   if (up.norm() < 1e-6) up = Eigen::Vector3d::UnitX() - z.x() * z;  // looking along the axis
-  const Eigen::Vector3d y = -up.normalized();                   // camera +y is image "down"
+  const Eigen::Vector3d y = -up.normalized();                       // camera +y is image "down"
   const Eigen::Vector3d x = y.cross(z);
   Eigen::Matrix3d R;
   R.row(0) = x.transpose();
@@ -35,7 +35,7 @@ Eigen::Matrix3d rotation_looking_along(const Eigen::Vector3d& direction) {
 
 namespace {
 Healpix_Base base(int nside) { return Healpix_Base(nside, RING, SET_NSIDE); }
-}
+}  // namespace
 
 HealpixSphere::HealpixSphere(int nside) : nside_(nside) {
   if (nside <= 0 || nside > (1 << 13)) throw std::invalid_argument("HealpixSphere: Nside must be in 1..8192");

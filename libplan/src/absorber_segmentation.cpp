@@ -22,7 +22,8 @@ AbsorberSegmentation segment_absorbers(const Volume& x, const SegmentationOption
       for (int i = 0; i < n[0]; ++i) {
         const Eigen::Vector3d p = x.layout.centre_of(i, j, k);
         const double r = p.head<2>().norm();
-        if (options.region.contains(p)) inside.push_back(x.index(i, j, k));
+        if (options.region.contains(p))
+          inside.push_back(x.index(i, j, k));
         else if (r >= options.wall_inner_mm && r <= options.wall_outer_mm && std::abs(p.z()) <= options.region.half_height_mm)
           wall.push_back(x.at(i, j, k));
       }

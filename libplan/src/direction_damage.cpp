@@ -43,8 +43,8 @@ Volume cropped_to_absorbers(const Volume& mask) {
 }  // namespace
 
 ProjectionMatrix virtual_view(const Eigen::Vector3d& direction, const Intrinsics& K, double source_to_isocentre_mm) {
-  return ProjectionMatrix::compose(K, make_rigid(rotation_looking_along(direction.normalized()),
-                                                 Eigen::Vector3d(0, 0, source_to_isocentre_mm)));
+  return ProjectionMatrix::compose(
+      K, make_rigid(rotation_looking_along(direction.normalized()), Eigen::Vector3d(0, 0, source_to_isocentre_mm)));
 }
 
 std::vector<DirectionDamage> direction_damage(const AbsorberSegmentation& segmentation,
@@ -55,9 +55,9 @@ std::vector<DirectionDamage> direction_damage(const AbsorberSegmentation& segmen
   // Frame the box from every direction: its farthest corner from the holder origin, magnified.
   double reach_mm = 0;
   for (int corner = 0; corner < 8; ++corner) {
-    const Eigen::Vector3d c = box.layout.centre_of((corner & 1) ? box.layout.size[0] - 1 : 0,
-                                                   (corner & 2) ? box.layout.size[1] - 1 : 0,
-                                                   (corner & 4) ? box.layout.size[2] - 1 : 0);
+    const Eigen::Vector3d c =
+        box.layout.centre_of((corner & 1) ? box.layout.size[0] - 1 : 0, (corner & 2) ? box.layout.size[1] - 1 : 0,
+                             (corner & 4) ? box.layout.size[2] - 1 : 0);
     reach_mm = std::max(reach_mm, c.norm() + box.layout.voxel_mm.maxCoeff());
   }
   const double magnification = g.source_to_detector_mm / (g.source_to_isocentre_mm - reach_mm);
@@ -80,7 +80,8 @@ std::vector<DirectionDamage> direction_damage(const AbsorberSegmentation& segmen
     std::partial_sort(shadow.begin(), shadow.begin() + static_cast<std::ptrdiff_t>(top), shadow.end(), std::greater<>());
     double sum = 0;
     for (std::size_t i = 0; i < top; ++i) sum += shadow[i];
-    damage[v] = {sum / static_cast<double>(top), static_cast<double>(shadow.size()) / static_cast<double>(paths.pixels_per_view())};
+    damage[v] = {sum / static_cast<double>(top),
+                 static_cast<double>(shadow.size()) / static_cast<double>(paths.pixels_per_view())};
   }
   return damage;
 }

@@ -7,8 +7,8 @@
 
 namespace ctk {
 
-std::vector<double> tangent_edge_demand(const Volume& x, const SampleRegion& region, const std::vector<Eigen::Vector3d>& directions,
-                                        const EdgeTangencyOptions& options) {
+std::vector<double> tangent_edge_demand(const Volume& x, const SampleRegion& region,
+                                        const std::vector<Eigen::Vector3d>& directions, const EdgeTangencyOptions& options) {
   if (!(options.tangent_width_deg > 0 && options.tangent_width_deg < 90))
     throw std::invalid_argument("tangent_edge_demand: the tangent width must lie between 0 and 90 deg");
   const HealpixSphere sphere(options.normal_nside);

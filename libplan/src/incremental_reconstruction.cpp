@@ -28,9 +28,11 @@ void IncrementalReconstruction::add_view(const ProjectionMatrix& P, const Image&
     throw std::invalid_argument("add_view: the image is not the detector's size");
   matrices_.push_back(binned_matrix(P, options_.binning));
   append_view(b_, binned_image(line_integrals, options_.binning));
-  const Image w = weights.pixels.empty()
-                      ? Image{coarse_.cols, coarse_.rows, std::vector<float>(static_cast<std::size_t>(coarse_.cols) * static_cast<std::size_t>(coarse_.rows), 1.0f)}
-                      : binned_image(weights, options_.binning);
+  const Image w =
+      weights.pixels.empty()
+          ? Image{coarse_.cols, coarse_.rows,
+                  std::vector<float>(static_cast<std::size_t>(coarse_.cols) * static_cast<std::size_t>(coarse_.rows), 1.0f)}
+          : binned_image(weights, options_.binning);
   append_view(w_, w);
   // The residual A x - b of the new view: its forward projection through the current volume (none
   // is needed before the first update, when the volume is still zero).

@@ -71,13 +71,17 @@ void write_plan_map_png(const PlanningResult& r, const std::filesystem::path& pn
   std::vector<double> density;
   for (const CandidateWeight& w : r.weights) density.push_back(w.density);
   cv::Mat picture;
-  const cv::Mat damage = direction_map(r, r.damage_mm, "directions (equal-area); colour: predicted absorber path; . scout, o planned, x refused or not calibrated");
-  const cv::Mat wanted = direction_map(r, density, "colour: view density the sample's edges want, least to most (from the last coarse volume)");
+  const cv::Mat damage =
+      direction_map(r, r.damage_mm,
+                    "directions (equal-area); colour: predicted absorber path; . scout, o planned, x refused or not calibrated");
+  const cv::Mat wanted =
+      direction_map(r, density, "colour: view density the sample's edges want, least to most (from the last coarse volume)");
   cv::vconcat(damage, wanted, picture);
   write_png_atomically(picture, png);
 }
 
-void write_trajectory_comparison_png(const std::vector<ComparedTrajectory>& t, const Volume& truth, const std::filesystem::path& png) {
+void write_trajectory_comparison_png(const std::vector<ComparedTrajectory>& t, const Volume& truth,
+                                     const std::filesystem::path& png) {
   if (t.empty() || t.front().quality.profiles.empty()) return;
   const std::array<int, 3> through = t.front().quality.profiles.front().through;
   const float ceiling = 1.5f * preview_ceiling(truth);
@@ -101,8 +105,9 @@ void write_trajectory_comparison_png(const std::vector<ComparedTrajectory>& t, c
   cv::hconcat(top, slices);
   // One chart: every trajectory's x profile and the truth's.
   const LineProfile& first = t.front().quality.profiles.front();
-  Chart chart(width - 110, 220, {0, static_cast<double>(first.truth.size()), 0, 1.05 * hi,
-                                 "profile along x through the sample's centre (grey: truth)", "voxel", "1/mm"});
+  Chart chart(width - 110, 220,
+              {0, static_cast<double>(first.truth.size()), 0, 1.05 * hi,
+               "profile along x through the sample's centre (grey: truth)", "voxel", "1/mm"});
   const cv::Scalar colours[] = {colour::blue, colour::orange, colour::green, colour::red};
   auto draw = [&](const std::vector<float>& p, const cv::Scalar& c) {
     for (std::size_t s = 1; s < p.size(); ++s) chart.line(s - 1.0, p[s - 1], static_cast<double>(s), p[s], c, 1);

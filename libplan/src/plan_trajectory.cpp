@@ -79,10 +79,12 @@ class Loop {
     g.source_to_isocentre_mm = s_.setup.source_to_isocentre_mm;
     g.source_to_detector_mm = s_.setup.source_to_detector_mm;
     damage_.clear();
-    for (const DirectionDamage& d : direction_damage(segmentation_, planner_.candidates(), g)) damage_.push_back(d.longest_path_mm);
+    for (const DirectionDamage& d : direction_damage(segmentation_, planner_.candidates(), g))
+      damage_.push_back(d.longest_path_mm);
     planner_.set_damage(segmentation_.voxels > 0 ? damage_ : std::vector<double>{});
     if (o_.planner.edge_tangency_weight > 0)
-      planner_.set_edge_demand(tangent_edge_demand(recon_.volume(), o_.segmentation.region, planner_.candidates(), o_.edge_tangency));
+      planner_.set_edge_demand(
+          tangent_edge_demand(recon_.volume(), o_.segmentation.region, planner_.candidates(), o_.edge_tangency));
     return seconds_since(start);
   }
 

@@ -23,7 +23,8 @@ std::array<int, 3> centre_of_mass_voxel(const Volume& truth, const SampleRegion&
 
 TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const SampleRegion& region,
                                      const std::array<int, 3>& through, float absorber_above_per_mm) {
-  if (!(x.layout == truth.layout)) throw std::invalid_argument("trajectory_quality: the truth must have the reconstruction's layout");
+  if (!(x.layout == truth.layout))
+    throw std::invalid_argument("trajectory_quality: the truth must have the reconstruction's layout");
   TrajectoryQuality q;
   const auto& n = x.layout.size;
   // An absorber voxel, or a face neighbour of one (partial volume, the absorber's own blur).
@@ -31,7 +32,8 @@ TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const
     const int step[7][3] = {{0, 0, 0}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     for (const auto& s : step) {
       const int a = i + s[0], b = j + s[1], c = k + s[2];
-      if (a >= 0 && b >= 0 && c >= 0 && a < n[0] && b < n[1] && c < n[2] && truth.at(a, b, c) > absorber_above_per_mm) return true;
+      if (a >= 0 && b >= 0 && c >= 0 && a < n[0] && b < n[1] && c < n[2] && truth.at(a, b, c) > absorber_above_per_mm)
+        return true;
     }
     return false;
   };
@@ -62,7 +64,8 @@ TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const
         for (int i = di; i < n[0]; ++i) {
           const float t0 = truth.at(i - di, j - dj, k - dk), t1 = truth.at(i, j, k);
           if (std::abs(t1 - t0) < 1e-6f) continue;
-          if (!region.contains(x.layout.centre_of(i, j, k)) || !region.contains(x.layout.centre_of(i - di, j - dj, k - dk))) continue;
+          if (!region.contains(x.layout.centre_of(i, j, k)) || !region.contains(x.layout.centre_of(i - di, j - dj, k - dk)))
+            continue;
           all_gradient += std::abs(x.at(i, j, k) - x.at(i - di, j - dj, k - dk)) / x.layout.voxel_mm[axis];
           all_truth += std::abs(t1 - t0) / x.layout.voxel_mm[axis];
           ++edges;

@@ -41,7 +41,8 @@ std::vector<CandidateWeight> ViewPlanner::weights() const {
       if (d.dot(u) >= cos_unreachable) w[c].reach = 0;
     // Where the edges want views more densely, the spacing they should have shrinks with the
     // square root of the density (views per area).
-    if (!edge_demand_.empty()) w[c].density = (1 - options_.edge_tangency_weight) + options_.edge_tangency_weight * edge_demand_[c];
+    if (!edge_demand_.empty())
+      w[c].density = (1 - options_.edge_tangency_weight) + options_.edge_tangency_weight * edge_demand_[c];
     double nearest = 1e300;
     for (const Eigen::Vector3d& a : acquired_) nearest = std::min(nearest, line_distance_rad(d, a));
     const double spacings = nearest / g0 * std::sqrt(w[c].density);

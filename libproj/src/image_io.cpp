@@ -37,21 +37,23 @@ Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>
   if (auto tiff = read_plain_tiff(file, expected, kMostPixels)) {
     if (written_by)
       *written_by = tiff->description.rfind(kWrittenBy, 0) == 0 ? tiff->description.substr(std::string_view(kWrittenBy).size())
-                                                                 : std::string();
+                                                                : std::string();
     return std::move(tiff->image);
   }
   auto in = ImageInput::open(file.string());
   if (!in) throw InputError(file.string(), "", "cannot read the image: " + OIIO::geterror());
   const ImageSpec& spec = in->spec();
   if (expected && (spec.width != expected->first || spec.height != expected->second || spec.depth > 1))
-    throw InputError(file.string(), "", "image is " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
-                                            " pixels, the scan declares " + std::to_string(expected->first) + " x " +
-                                            std::to_string(expected->second));
+    throw InputError(file.string(), "",
+                     "image is " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
+                         " pixels, the scan declares " + std::to_string(expected->first) + " x " +
+                         std::to_string(expected->second));
   if (spec.width <= 0 || spec.height <= 0 || spec.depth > 1 ||
       static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height) > kMostPixels)
-    throw InputError(file.string(), "", "the header claims " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
-                                            (spec.depth > 1 ? " x " + std::to_string(spec.depth) : "") +
-                                            " pixels: not a projection (damaged header?)");
+    throw InputError(file.string(), "",
+                     "the header claims " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
+                         (spec.depth > 1 ? " x " + std::to_string(spec.depth) : "") +
+                         " pixels: not a projection (damaged header?)");
   Image image;
   if (written_by) {
     const std::string said = spec.get_string_attribute("ImageDescription");
@@ -64,10 +66,10 @@ Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>
   if (!in->read_image(0, 0, 0, 1, TypeDesc::FLOAT, image.pixels.data()) || in->has_error())
     throw InputError(file.string(), "", "cannot read the pixels (truncated or damaged?): " + in->geterror());
   // OIIO scales integer types to [0, 1] when converting to float; keep detector counts instead.
-  const double scale = spec.format == TypeDesc::UINT16 ? 65535.0
-                       : spec.format == TypeDesc::UINT8 ? 255.0
+  const double scale = spec.format == TypeDesc::UINT16   ? 65535.0
+                       : spec.format == TypeDesc::UINT8  ? 255.0
                        : spec.format == TypeDesc::UINT32 ? 4294967295.0
-                                                        : 1.0;
+                                                         : 1.0;
   if (scale != 1.0)
     for (auto& p : image.pixels) p = static_cast<float>(std::round(p * scale));
   return image;
@@ -102,9 +104,8 @@ void write_image_float(const Image& image, const fs::path& file) {
 
 void write_image_uint16(const Image& counts, const fs::path& file) {
   std::vector<std::uint16_t> pixels(counts.pixels.size());
-  std::transform(counts.pixels.begin(), counts.pixels.end(), pixels.begin(), [](float c) {
-    return static_cast<std::uint16_t>(std::lround(std::clamp(c, 0.0f, 65535.0f)));
-  });
+  std::transform(counts.pixels.begin(), counts.pixels.end(), pixels.begin(),
+                 [](float c) { return static_cast<std::uint16_t>(std::lround(std::clamp(c, 0.0f, 65535.0f))); });
   write_single_image(counts.cols, counts.rows, TypeDesc::UINT16, pixels.data(), file);
 }
 

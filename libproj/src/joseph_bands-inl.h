@@ -68,7 +68,8 @@ struct QuadBand {
     const std::size_t n = hn::Lanes(d);
     const float* p = first_of_pairs(kk, cc, bb);
     const float* q = second_of_pairs(kk, cc, bb) - 1;
-    return hn::Add(hn::ConcatEven(d, hn::LoadU(d, p + n), hn::LoadU(d, p)), hn::ConcatOdd(d, hn::LoadU(d, q + n), hn::LoadU(d, q)));
+    return hn::Add(hn::ConcatEven(d, hn::LoadU(d, p + n), hn::LoadU(d, p)),
+                   hn::ConcatOdd(d, hn::LoadU(d, q + n), hn::LoadU(d, q)));
   }
 #endif
   float at(int kk, int cc, int bb) const { return *first_of_pairs(kk, cc, bb) + *second_of_pairs(kk, cc, bb); }
@@ -171,8 +172,10 @@ struct QuadScatter {
       hn::Store(hn::IfThenElseZero(hn::RebindMask(di, active), at), di, index[i]);
       for (auto& wq : w) wq = hn::Mul(wq, value);
       // The quads (w0, w2, w1, w3) of lanes 4m .. 4m + 3 of each 128-bit block.
-      const auto lo = hn::BitCast(dd, hn::InterleaveLower(df, w[0], w[2])), hi = hn::BitCast(dd, hn::InterleaveUpper(df, w[0], w[2]));
-      const auto lo1 = hn::BitCast(dd, hn::InterleaveLower(df, w[1], w[3])), hi1 = hn::BitCast(dd, hn::InterleaveUpper(df, w[1], w[3]));
+      const auto lo = hn::BitCast(dd, hn::InterleaveLower(df, w[0], w[2])),
+                 hi = hn::BitCast(dd, hn::InterleaveUpper(df, w[0], w[2]));
+      const auto lo1 = hn::BitCast(dd, hn::InterleaveLower(df, w[1], w[3])),
+                 hi1 = hn::BitCast(dd, hn::InterleaveUpper(df, w[1], w[3]));
       float* out = weight[i];
       hn::Store(hn::BitCast(df, hn::InterleaveLower(dd, lo, lo1)), df, out);
       hn::Store(hn::BitCast(df, hn::InterleaveUpper(dd, lo, lo1)), df, out + N);

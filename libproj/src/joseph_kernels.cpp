@@ -26,8 +26,8 @@ namespace hn = hwy::HWY_NAMESPACE;
 // `sum` plus the forward samples of bundle b over slices [k_lo, k_hi] in order, not yet times
 // the path length.
 template <class DF>
-HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_RESTRICT volume, const Bundle& b,
-                                     int k_lo, int k_hi, hn::Vec<DF> sum, Rows fetch) {
+HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_RESTRICT volume, const Bundle& b, int k_lo,
+                                     int k_hi, hn::Vec<DF> sum, Rows fetch) {
   const auto all = hn::FirstN(df, hn::Lanes(df));
   for (int k = k_lo; k <= k_hi; ++k) {
     if (k >= b.in_lo && k <= b.in_hi) {
@@ -60,8 +60,8 @@ HWY_INLINE hn::Vec<DF> march_forward(DF df, const RayTable& t, const float* HWY_
 // permutes and updating the rows whole, one slice at a time: on the Zen 4 it took 1.12-1.3x
 // longer than this scatter, with or without its rows asked for ahead; benchmarks/paired.py.)
 template <class DF>
-HWY_INLINE void march_back(DF df, const RayTable& t, const Bundle& b, hn::Vec<DF> value, hn::Mask<DF> lanes, int k_lo,
-                           int k_hi, float* HWY_RESTRICT volume, Rows fetch) {
+HWY_INLINE void march_back(DF df, const RayTable& t, const Bundle& b, hn::Vec<DF> value, hn::Mask<DF> lanes, int k_lo, int k_hi,
+                           float* HWY_RESTRICT volume, Rows fetch) {
   for (int k = k_lo; k <= k_hi; ++k) {
     if (k >= b.in_lo && k <= b.in_hi) {  // every interior slice of this call at once
       const int last = std::min(k_hi, b.in_hi);
@@ -272,8 +272,7 @@ HWY_INLINE void forward_strip(DF df, const RayTable& t, const float* HWY_RESTRIC
 }
 
 template <class DF>
-HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, StripWorkspace& w,
-                           float* HWY_RESTRICT volume) {
+HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, StripWorkspace& w, float* HWY_RESTRICT volume) {
   XStrip& s = w.strip;
   RayTable& local = w.local;
   prepare_strip(df, t, s, local);
@@ -293,8 +292,8 @@ HWY_INLINE void back_strip(DF df, const RayTable& t, int k_begin, int k_end, Str
           march_back(df, local, b, value, all, std::max(k_lo, b.k_lo), std::min(k_hi, b.k_hi), tile.data, Rows::cached);
         } else {
           const Bundle& b = in_volume[i];
-          const auto on_axis = hn::RebindMask(df, hn::Eq(hn::LoadU(hn::RebindToSigned<DF>(), t.axis.data() + r),
-                                                         hn::Zero(hn::RebindToSigned<DF>())));
+          const auto on_axis = hn::RebindMask(
+              df, hn::Eq(hn::LoadU(hn::RebindToSigned<DF>(), t.axis.data() + r), hn::Zero(hn::RebindToSigned<DF>())));
           march_back(df, t, b, value, on_axis, std::max(k_lo, b.k_lo), std::min(k_hi, b.k_hi), volume, Rows::fetch_ahead);
         }
       }
@@ -368,7 +367,8 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
         const int first = std::max(k0, b.k_lo), last = std::min(k1, b.k_hi);
         if (first > last) continue;
         float* acc = sums.data() + i * kMaxLanes;
-        hn::StoreU(hn::Add(hn::LoadU(df, acc), march_forward(df, t, volume, b, first, last, hn::Zero(df), Rows::fetch_ahead)), df, acc);
+        hn::StoreU(hn::Add(hn::LoadU(df, acc), march_forward(df, t, volume, b, first, last, hn::Zero(df), Rows::fetch_ahead)), df,
+                   acc);
       }
     }
     for (std::size_t i = 0; i < in_volume.size(); ++i)
@@ -383,8 +383,9 @@ void ForwardRays(const RayTable& t, const float* HWY_RESTRICT volume, float* HWY
           in_volume.push_back(b);
           return;
         }
-        hn::StoreU(hn::Mul(march_forward(df, t, volume, b, b.k_lo, b.k_hi, hn::Zero(df), Rows::fetch_ahead), hn::LoadU(df, t.weight.data() + r)), df,
-                   out + r);
+        hn::StoreU(hn::Mul(march_forward(df, t, volume, b, b.k_lo, b.k_hi, hn::Zero(df), Rows::fetch_ahead),
+                           hn::LoadU(df, t.weight.data() + r)),
+                   df, out + r);
       },
       [&] { forward_strip(df, t, volume, w, out); });
   march_chunks();
@@ -396,10 +397,10 @@ struct BackWorkspace {
   std::vector<Bundle> in_volume;  // bundles along y or z, every lane on the axis
   std::vector<Bundle> along_x;    // the strips' bundles, in the table's order (kBands)
 #if HWY_TARGET != HWY_SCALAR
-  BundleGroups groups;            // bundles by the part of the volume they cross
+  BundleGroups groups;  // bundles by the part of the volume they cross
 #endif
-  std::vector<Bundle> left;       // bundles along x whose strips of columns did not pay
-  std::vector<QuadBand> chunks;   // one group's bands, chunk by chunk
+  std::vector<Bundle> left;      // bundles along x whose strips of columns did not pay
+  std::vector<QuadBand> chunks;  // one group's bands, chunk by chunk
   std::vector<float> band_floats;
 };
 
@@ -616,7 +617,8 @@ void back_rays(const RayTable& t, int axis, int k_begin, int k_end, float* volum
 }
 void prepare_bundles(RayTable& t, std::size_t begin, std::size_t end) { HWY_DYNAMIC_DISPATCH(PrepareBundles)(t, begin, end); }
 std::size_t bundle_count(const RayTable& t) {
-  return static_cast<std::size_t>(t.views) * static_cast<std::size_t>(t.view_stride) / static_cast<std::size_t>(simd_float_lanes());
+  return static_cast<std::size_t>(t.views) * static_cast<std::size_t>(t.view_stride) /
+         static_cast<std::size_t>(simd_float_lanes());
 }
 const char* simd_target_name() { return HWY_DYNAMIC_DISPATCH(TargetName)(); }
 int simd_float_lanes() { return HWY_DYNAMIC_DISPATCH(FloatLanes)(); }

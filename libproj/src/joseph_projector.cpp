@@ -25,7 +25,8 @@ constexpr int kBackTableRays = 65536;
 
 void ProjectorOptions::validate() const {
   require_option(threads >= 0, "ProjectorOptions.threads", "at least 0 (0: all OpenMP threads)", threads);
-  require_option(rows_per_block >= 0, "ProjectorOptions.rows_per_block", "at least 0 (0: the default for the views)", rows_per_block);
+  require_option(rows_per_block >= 0, "ProjectorOptions.rows_per_block", "at least 0 (0: the default for the views)",
+                 rows_per_block);
 }
 
 JosephProjector::JosephProjector(ProjectorOptions options) : options_(options) { options_.validate(); }
@@ -101,8 +102,7 @@ struct ViewPaths {
   std::vector<detail::LanePath> path;
   detail::SlabLines dealt;
   int most_lanes = 0;
-  ViewPaths(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout, int cols, int rows,
-            int rows_per_block) {
+  ViewPaths(const std::vector<ProjectionMatrix>& views, const VolumeLayout& layout, int cols, int rows, int rows_per_block) {
     for (const auto& P : views) {
       rays.push_back(view_rays(P, layout));
       path.push_back(detail::LanePath::for_view(rays.back(), layout, cols, rows));
@@ -192,9 +192,8 @@ TableAxes axes_fewest_first(const std::vector<AxisSamples>& samples, int buffer)
   TableAxes t;
   for (const AxisSamples& s : samples)
     for (std::size_t a = 0; a < 3; ++a) t.samples[a] += s.of_table[buffer][a];
-  std::stable_sort(t.order.begin(), t.order.end(), [&](int p, int q) {
-    return t.samples[static_cast<std::size_t>(p)] < t.samples[static_cast<std::size_t>(q)];
-  });
+  std::stable_sort(t.order.begin(), t.order.end(),
+                   [&](int p, int q) { return t.samples[static_cast<std::size_t>(p)] < t.samples[static_cast<std::size_t>(q)]; });
   return t;
 }
 
@@ -252,7 +251,8 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
       const float* pixel = pixel_of(y, v, path, lines.line_begin + row, lane);
       const std::size_t e = first + static_cast<std::size_t>(r);
       table.value[e] = pixel ? *pixel : 0.0f;
-      if (table.k_last[e] >= table.k_first[e]) on_axis[static_cast<std::size_t>(table.axis[e])] += table.k_last[e] - table.k_first[e] + 1;
+      if (table.k_last[e] >= table.k_first[e])
+        on_axis[static_cast<std::size_t>(table.axis[e])] += table.k_last[e] - table.k_first[e] + 1;
     }
     if (begin < filled)
       detail::prepare_bundles(table, (first + static_cast<std::size_t>(begin)) / static_cast<std::size_t>(lanes),

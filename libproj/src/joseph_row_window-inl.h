@@ -107,7 +107,8 @@ HWY_INLINE bool interpolate_window(DF df, const RayTable& t, const float* HWY_RE
   const auto dc = hn::Sub(hn::IfThenElse(inside, p.ic, hn::Set(di, c0)), hn::Set(di, c0));
   if (!fits_window(di, pos, dc)) return false;
   const std::ptrdiff_t sc = t.stride_c[r];
-  const float* row = volume + static_cast<std::ptrdiff_t>(k - t.origin_a) * t.stride_a[r] + static_cast<std::ptrdiff_t>(c0) * sc + x0;
+  const float* row =
+      volume + static_cast<std::ptrdiff_t>(k - t.origin_a) * t.stride_a[r] + static_cast<std::ptrdiff_t>(c0) * sc + x0;
   hn::Vec<DF> weight[4];
   bilinear_weights(p, weight);
   sample = hn::IfThenElseZero(hn::RebindMask(df, inside), window_sample(df, row, sc, pos, dc, weight));
@@ -140,7 +141,8 @@ HWY_INLINE hn::Vec<DF> add_rim_samples(DF df, const RayTable& t, const float* HW
     }
     for (int i = 0; i < count; ++i) {
       hn::Vec<DF> sample;
-      if (!b.window || !interpolate_window(df, t, volume, b.r, k0 + i, sample)) sample = interpolate_pairs(df, volume, corners[i]);
+      if (!b.window || !interpolate_window(df, t, volume, b.r, k0 + i, sample))
+        sample = interpolate_pairs(df, volume, corners[i]);
       sum = hn::Add(sum, sample);
     }
   }
@@ -165,8 +167,8 @@ HWY_INLINE void prefetch_window(const float* row, std::ptrdiff_t sc, bool row_up
 // position's overflow fix-up, see BundlePositionAvx2; clamps and compares done twice, masks
 // rebuilt). A lookup in the 16-voxel window is two permutes (vpermps reads the low three bits
 // of each index) and a blend on bit 3 moved to the sign.
-HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r, int k_lo,
-                                          int k_hi, __m256 sum, Rows fetch) {
+HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r, int k_lo, int k_hi,
+                                          __m256 sum, Rows fetch) {
   constexpr int N = 8;
   const std::ptrdiff_t sc = t.stride_c[r];
   const std::ptrdiff_t slice = t.stride_a[r];
@@ -189,10 +191,10 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
       position.at(kf, ib, ic, fbi, fci);
       // x0 and c0 as window_origin finds them, kept in vectors (no lane extractions and scalar
       // clamps on the way to the rows: 4-8 % of a view's forward instructions, benchmarks/paired.py).
-      const __m256i x0 = _mm256_min_epi32(
-          _mm256_max_epi32(_mm256_min_epi32(_mm256_broadcastd_epi32(_mm256_castsi256_si128(ib)), _mm256_permutevar8x32_epi32(ib, last_lane)),
-                           _mm256_setzero_si256()),
-          x_max_v);
+      const __m256i x0 = _mm256_min_epi32(_mm256_max_epi32(_mm256_min_epi32(_mm256_broadcastd_epi32(_mm256_castsi256_si128(ib)),
+                                                                            _mm256_permutevar8x32_epi32(ib, last_lane)),
+                                                           _mm256_setzero_si256()),
+                                          x_max_v);
       __m256i c0 = _mm256_min_epi32(ic, _mm256_permute2x128_si256(ic, ic, 1));
       c0 = _mm256_min_epi32(c0, _mm256_shuffle_epi32(c0, _MM_SHUFFLE(1, 0, 3, 2)));
       c0 = _mm256_min_epi32(c0, _mm256_shuffle_epi32(c0, _MM_SHUFFLE(2, 3, 0, 1)));
@@ -243,7 +245,8 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
       // weigh() with bilinear_weights(), unrolled.
       const __m256 sample = _mm256_fmadd_ps(
           c11, _mm256_mul_ps(fbv, fcv),
-          _mm256_fmadd_ps(c01, _mm256_mul_ps(gb, fcv), _mm256_fmadd_ps(c10, _mm256_mul_ps(fbv, gc), _mm256_mul_ps(c00, _mm256_mul_ps(gb, gc)))));
+          _mm256_fmadd_ps(c01, _mm256_mul_ps(gb, fcv),
+                          _mm256_fmadd_ps(c10, _mm256_mul_ps(fbv, gc), _mm256_mul_ps(c00, _mm256_mul_ps(gb, gc)))));
       sum = _mm256_add_ps(sum, sample);
     }
   }
@@ -259,8 +262,8 @@ HWY_INLINE __m256 add_window_samples_avx2(const RayTable& t, const float* HWY_RE
 // the Zen 3, benchmarks/README.md, benchmarks/paired.py). With Rows::fetch_ahead, the first pass also asks
 // for the rows (prefetch_span).
 template <class DF>
-HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r,
-                                          int k_lo, int k_hi, hn::Vec<DF> sum, Rows fetch) {
+HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float* HWY_RESTRICT volume, std::size_t r, int k_lo,
+                                          int k_hi, hn::Vec<DF> sum, Rows fetch) {
 #if HWY_TARGET == HWY_AVX2
   return hn::Vec<DF>{add_window_samples_avx2(t, volume, r, k_lo, k_hi, sum.raw, fetch)};
 #else
@@ -286,7 +289,8 @@ HWY_INLINE hn::Vec<DF> add_window_samples(DF df, const RayTable& t, const float*
       hn::Store(p.fb, df, fb[i]);
       hn::Store(p.fc, df, fc[i]);
       row[i] = volume + static_cast<std::ptrdiff_t>(k0 + i - origin_a) * slice + static_cast<std::ptrdiff_t>(c0) * sc + x0;
-      if (fetch == Rows::fetch_ahead) prefetch_window<2 * static_cast<int>(HWY_LANES(float))>(row[i], sc, !hn::AllFalse(di, hn::Gt(dci, hn::Zero(di))));
+      if (fetch == Rows::fetch_ahead)
+        prefetch_window<2 * static_cast<int>(HWY_LANES(float))>(row[i], sc, !hn::AllFalse(di, hn::Gt(dci, hn::Zero(di))));
     }
     for (int i = 0; i < count; ++i) {
       hn::Vec<DF> sample;

@@ -202,7 +202,7 @@ template <class DF>
 HWY_INLINE void pair_weights(DF df, hn::Vec<hn::RebindToSigned<DF>> i, hn::Vec<hn::RebindToSigned<DF>> n2, hn::Vec<DF> w0,
                              hn::Vec<DF> w1, hn::Vec<DF>& first, hn::Vec<DF>& second) {
   const auto low = hn::RebindMask(df, hn::Lt(i, hn::Zero(hn::RebindToSigned<DF>())));  // corner i + 1 at j
-  const auto high = hn::RebindMask(df, hn::Gt(i, n2));  // corner i at j + 1
+  const auto high = hn::RebindMask(df, hn::Gt(i, n2));                                 // corner i at j + 1
   first = hn::IfThenElse(low, w1, hn::IfThenZeroElse(high, w0));
   second = hn::IfThenZeroElse(low, hn::IfThenElse(high, w0, w1));
 }
@@ -349,8 +349,8 @@ HWY_INLINE Bundle table_bundle(const RayTable& t, std::size_t r, std::size_t n, 
 // The two floats at volume[index] and volume[index + 1] for every lane, as (first, second): one
 // 64-bit gather per pair instead of two 32-bit ones (gathers cost per element loaded).
 template <class DF>
-HWY_INLINE void gather_pairs(DF df, const float* HWY_RESTRICT volume, hn::Vec<hn::RebindToSigned<DF>> index,
-                             hn::Vec<DF>& first, hn::Vec<DF>& second) {
+HWY_INLINE void gather_pairs(DF df, const float* HWY_RESTRICT volume, hn::Vec<hn::RebindToSigned<DF>> index, hn::Vec<DF>& first,
+                             hn::Vec<DF>& second) {
 #if HWY_TARGET == HWY_SCALAR
   first = hn::GatherIndex(df, volume, index);
   second = hn::GatherIndex(df, volume, hn::Add(index, hn::Set(hn::RebindToSigned<DF>(), 1)));
@@ -388,7 +388,6 @@ HWY_INLINE hn::Vec<DF> interpolate_pairs(DF df, const float* HWY_RESTRICT volume
   return weigh(v0, v1, v2, v3, c.weight);
 }
 
-
 // v[0] += w[0] and v[1] += w[1]: a pair of floats, with one load, add and store where the
 // target has 64-bit vectors.
 HWY_INLINE void add_pair(float* HWY_RESTRICT v, const float* HWY_RESTRICT w) {
@@ -399,7 +398,8 @@ HWY_INLINE void add_pair(float* HWY_RESTRICT v, const float* HWY_RESTRICT w) {
   // With VEX encoding, w's load folds into the add as four floats: one instruction fewer per pair
   // (w[2] and w[3] are read, never used; the weight buffers carry a spare slice for the last
   // lane's).
-  _mm_storel_pi(reinterpret_cast<__m64*>(v), _mm_add_ps(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(v))), _mm_loadu_ps(w)));
+  _mm_storel_pi(reinterpret_cast<__m64*>(v),
+                _mm_add_ps(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(v))), _mm_loadu_ps(w)));
 #else
   const hn::CappedTag<float, 2> d2;
   hn::StoreU(hn::Add(hn::LoadU(d2, v), hn::LoadU(d2, w)), d2, v);
@@ -488,7 +488,7 @@ HWY_INLINE void scatter_add_rim_slices(DF df, const RayTable& t, const Bundle& b
   const hn::RebindToSigned<DF> di;
   const int N = static_cast<int>(hn::Lanes(df));
   HWY_ALIGN std::int32_t index[kRimBatch][4][kMaxLanes];  // pairs: index[i][0] and [i][2] only
-  HWY_ALIGN float weight[kRimBatch + 1][4][kMaxLanes];   // pairs: weight[i][q][2l + (0, 1)], q = 0, 2; + 1: add_pair
+  HWY_ALIGN float weight[kRimBatch + 1][4][kMaxLanes];    // pairs: weight[i][q][2l + (0, 1)], q = 0, 2; + 1: add_pair
   std::uint32_t active[kRimBatch];
   for (int k0 = k_lo; k0 <= k_hi; k0 += kRimBatch) {
     const int count = std::min(kRimBatch, k_hi - k0 + 1);

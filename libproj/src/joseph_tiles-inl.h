@@ -155,7 +155,8 @@ struct NextChunk {
     const int z_next = z + dz;
     if (k < 0 || z_next < 0 || z_next >= g.nz) return 0;
     const std::ptrdiff_t floats = k + dy * g.stride_y + z_next * g.stride_z;
-    return reinterpret_cast<std::uintptr_t>(volume) + static_cast<std::uintptr_t>(floats * static_cast<std::ptrdiff_t>(sizeof(float)));
+    return reinterpret_cast<std::uintptr_t>(volume) +
+           static_cast<std::uintptr_t>(floats * static_cast<std::ptrdiff_t>(sizeof(float)));
   }
   // Asks for the next chunk's line for this chunk's line at y of a row (next_row: row()). y + dy
   // is not tested: a line past the row is the next row's, and past the volume's first or last
@@ -164,7 +165,8 @@ struct NextChunk {
   HWY_INLINE void ask(std::uintptr_t next_row, const XGrid& g, int y) const {
     if (next_row == 0) return;
     const std::ptrdiff_t floats = static_cast<std::ptrdiff_t>(y) * g.stride_y;
-    hwy::Prefetch(reinterpret_cast<const float*>(next_row + static_cast<std::uintptr_t>(floats * static_cast<std::ptrdiff_t>(sizeof(float)))));
+    hwy::Prefetch(reinterpret_cast<const float*>(
+        next_row + static_cast<std::uintptr_t>(floats * static_cast<std::ptrdiff_t>(sizeof(float)))));
   }
 };
 
@@ -233,7 +235,7 @@ HWY_INLINE void fill_tile(const float* HWY_RESTRICT volume, const XGrid g, const
       __m256 r[8];
       const int y = tile.y0 + yb;
       const std::ptrdiff_t at = tile.k0 + k8 + y * g.stride_y + z * g.stride_z;  // row j at + j stride_y, if inside
-      if (z_in && n == 8 && y >= 0 && y + 8 <= g.ny) {  // the usual block: whole and inside
+      if (z_in && n == 8 && y >= 0 && y + 8 <= g.ny) {                           // the usual block: whole and inside
         for (int j = 0; j < 8; ++j) {
           r[j] = _mm256_loadu_ps(volume + at + j * g.stride_y);
           if (k8 == 0) next.ask(next_row, g, y + j);
@@ -291,12 +293,11 @@ HWY_INLINE void add_tile(const TileLike tile, const XGrid g, float* HWY_RESTRICT
 #elif HWY_TARGET == HWY_AVX2
     for_each_block8(tile, [&](int k8, int n, __m256i lanes, int yb) {
       __m256 r[8];
-      for (int kk = 0; kk < 8; ++kk)
-        r[kk] = kk < n ? tile.load(hn::Full256<float>(), k8 + kk, zz, yb).raw : _mm256_setzero_ps();
+      for (int kk = 0; kk < 8; ++kk) r[kk] = kk < n ? tile.load(hn::Full256<float>(), k8 + kk, zz, yb).raw : _mm256_setzero_ps();
       transpose8(r);
       const int y = tile.y0 + yb;
       const std::ptrdiff_t at = tile.k0 + k8 + y * g.stride_y + z * g.stride_z;  // row j at + j stride_y, if inside
-      if (n == 8 && y >= 0 && y + 8 <= g.ny) {  // the usual block: whole and inside
+      if (n == 8 && y >= 0 && y + 8 <= g.ny) {                                   // the usual block: whole and inside
         for (int j = 0; j < 8; ++j) {
           float* v = volume + at + j * g.stride_y;
           _mm256_storeu_ps(v, _mm256_add_ps(_mm256_loadu_ps(v), r[j]));
@@ -317,8 +318,7 @@ HWY_INLINE void add_tile(const TileLike tile, const XGrid g, float* HWY_RESTRICT
     for (int kk = 0; kk < tile.slices; ++kk)
       for (int yy = 0; yy < tile.width; ++yy) {
         const int y = tile.y0 + yy;
-        if (y >= 0 && y < g.ny)
-          volume[tile.k0 + kk + y * g.stride_y + z * g.stride_z] += tile.at(kk, zz, yy);
+        if (y >= 0 && y < g.ny) volume[tile.k0 + kk + y * g.stride_y + z * g.stride_z] += tile.at(kk, zz, yy);
       }
     ask_for_next_lines(volume, g, tile, z, next);
 #endif

@@ -77,7 +77,7 @@ HWY_EXPORT(LineIntegrals);
 void counts_to_line_integrals(const Image& counts, const Image& flat, const Image& dark, float* p, float* w,
                               std::size_t& clamped) {
   clamped += HWY_DYNAMIC_DISPATCH(detail::LineIntegrals)(counts.pixels.data(), flat.pixels.data(), dark.pixels.data(),
-                                                        counts.pixels.size(), p, w);
+                                                         counts.pixels.size(), p, w);
 }
 
 }  // namespace ctk

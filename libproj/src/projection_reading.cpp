@@ -16,8 +16,9 @@ Image read_scan_image(const ScanDescription& scan, const std::filesystem::path& 
   std::string written_by;
   Image image = read_image(file, scan.detector.cols, scan.detector.rows, &written_by);
   if (!scan.written_by_run.empty() && !written_by.empty() && written_by != scan.written_by_run)
-    throw InputError(file.string(), "", "was written by ctk run " + written_by + ", the scan by run " + scan.written_by_run +
-                                            ": the folder mixes two runs' files");
+    throw InputError(file.string(), "",
+                     "was written by ctk run " + written_by + ", the scan by run " + scan.written_by_run +
+                         ": the folder mixes two runs' files");
   return image;
 }
 

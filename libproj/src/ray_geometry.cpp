@@ -52,8 +52,10 @@ MarchedRay march_ray(const ViewRays& rays, const VolumeLayout& layout, double u,
   clip(m.pb_mid, m.beta_b, -1.0, layout.size[static_cast<std::size_t>(b)], k_mid, k_lo, k_hi);
   clip(m.pc_mid, m.beta_c, -1.0, layout.size[static_cast<std::size_t>(c)], k_mid, k_lo, k_hi);
   // Only points in front of the source: t = (k - s_a) / d_a > 0.
-  if (d[a] > 0) k_lo = std::max(k_lo, std::floor(rays.source[a]) + 1);
-  else k_hi = std::min(k_hi, std::ceil(rays.source[a]) - 1);
+  if (d[a] > 0)
+    k_lo = std::max(k_lo, std::floor(rays.source[a]) + 1);
+  else
+    k_hi = std::min(k_hi, std::ceil(rays.source[a]) - 1);
   if (k_lo <= k_hi) {
     m.k_first = static_cast<int>(k_lo);
     m.k_last = static_cast<int>(k_hi);

@@ -88,8 +88,7 @@ void RayTable::shape(int view_count, int row_count, int lanes) {
   slot_rows.assign(static_cast<std::size_t>(views), rows);
   const auto n = static_cast<std::size_t>(views) * static_cast<std::size_t>(view_stride);
   for (auto* v : {&pb_mid, &beta_b, &pc_mid, &beta_c, &weight, &k_mid, &value}) v->assign(n, 0.0f);
-  for (auto* v : {&k_first, &k_last, &axis, &stride_a, &stride_b, &stride_c, &n_b, &n_c, &in_first, &in_last})
-    v->assign(n, 0);
+  for (auto* v : {&k_first, &k_last, &axis, &stride_a, &stride_b, &stride_c, &n_b, &n_c, &in_first, &in_last}) v->assign(n, 0);
   empty(0, n);
 }
 

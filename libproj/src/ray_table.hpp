@@ -45,13 +45,13 @@ struct Bundle {
 // those gathers but measured no faster (benchmarks/README.md, benchmarks/paired.py).
 struct LanePath {
   Eigen::Vector3d central_ray = Eigen::Vector3d::UnitZ();  // the ray through the detector's centre
-  int axis = 2;                   // its dominant axis, the one the path is chosen for
-  bool along_u = true;            // the major axis is u (columns)
-  double slope = 0;               // minor pixels per lane, |slope| <= 1
-  int major_first = 0, majors = 1;  // the footprint's pixels along the major axis (lanes per line)
-  int minors = 1;                   // detector pixels along the minor axis
-  int line_first = 0, lines = 1;    // line numbers in use (none when the footprint misses the detector)
-  bool whole_detector = true;       // the footprint holds every pixel: the lines cover the detector
+  int axis = 2;                                            // its dominant axis, the one the path is chosen for
+  bool along_u = true;                                     // the major axis is u (columns)
+  double slope = 0;                                        // minor pixels per lane, |slope| <= 1
+  int major_first = 0, majors = 1;                         // the footprint's pixels along the major axis (lanes per line)
+  int minors = 1;                                          // detector pixels along the minor axis
+  int line_first = 0, lines = 1;                           // line numbers in use (none when the footprint misses the detector)
+  bool whole_detector = true;                              // the footprint holds every pixel: the lines cover the detector
   // The pixels whose rays can touch the volume: the bounding rectangle of the volume's box, grown
   // by a voxel (bilinear samples reach that far), projected on the detector. Rays elsewhere
   // project to zero and are never prepared (a small volume on a large detector would otherwise
@@ -114,8 +114,8 @@ struct RayTable {
   /// The rays of lines [line_begin, line_begin + rows) of one view in slot `slot`, numbered
   /// r = row * row_stride + lane; fills r in [ray_begin, ray_end) only, so threads can fill one
   /// table together. Bundles with no pixel on the detector are left empty.
-  void fill(const ViewRays& rays, const VolumeLayout& layout, int slot, const LanePath& path, int line_begin,
-            int ray_begin, int ray_end);
+  void fill(const ViewRays& rays, const VolumeLayout& layout, int slot, const LanePath& path, int line_begin, int ray_begin,
+            int ray_end);
   /// Marks entries [begin, end) empty: they touch nothing and project to zero.
   void empty(std::size_t begin, std::size_t end);
 };
@@ -129,8 +129,8 @@ struct PreparedRays {
 };
 /// The rays through pixels (u[l], v[l]), l < count <= kMaxLanes (u and v readable up to
 /// kMaxLanes), SIMD across rays; origin_b and origin_c are the table's grid origin.
-void prepare_rays(const ViewRays& rays, const VolumeLayout& layout, int origin_b, int origin_c, const double* u,
-                  const double* v, int count, PreparedRays& out);
+void prepare_rays(const ViewRays& rays, const VolumeLayout& layout, int origin_b, int origin_c, const double* u, const double* v,
+                  int count, PreparedRays& out);
 /// The pixels (u[l], v[l]) of lanes lane + min(l, count - 1), l < kMaxLanes, of a line (as
 /// LanePath::pixel finds them), for prepare_rays.
 void lane_pixels(const LanePath& path, int line, int lane, int count, double* u, double* v);

@@ -166,8 +166,9 @@ void StoreRays(const PreparedRays& p, const VolumeLayout& layout, int count, Ray
     const auto is0 = hn::Eq(axis, hn::Zero(di)), is1 = hn::Eq(axis, hn::Set(di, 1));
     // The value for axis 0, 1 or 2 in each lane.
     const auto pick = [&](std::ptrdiff_t x, std::ptrdiff_t y, std::ptrdiff_t z) {
-      return hn::IfThenElse(is0, hn::Set(di, static_cast<std::int32_t>(x)),
-                            hn::IfThenElse(is1, hn::Set(di, static_cast<std::int32_t>(y)), hn::Set(di, static_cast<std::int32_t>(z))));
+      return hn::IfThenElse(
+          is0, hn::Set(di, static_cast<std::int32_t>(x)),
+          hn::IfThenElse(is1, hn::Set(di, static_cast<std::int32_t>(y)), hn::Set(di, static_cast<std::int32_t>(z))));
     };
     store_float(t.pb_mid, to_float(p.pb_mid));
     store_float(t.beta_b, to_float(p.beta_b));
@@ -200,8 +201,8 @@ namespace ctk::detail {
 HWY_EXPORT(LanePixels);
 HWY_EXPORT(PrepareRays);
 HWY_EXPORT(StoreRays);
-void prepare_rays(const ViewRays& rays, const VolumeLayout& layout, int origin_b, int origin_c, const double* u,
-                  const double* v, int count, PreparedRays& out) {
+void prepare_rays(const ViewRays& rays, const VolumeLayout& layout, int origin_b, int origin_c, const double* u, const double* v,
+                  int count, PreparedRays& out) {
   HWY_DYNAMIC_DISPATCH(PrepareRays)(rays, layout, origin_b, origin_c, u, v, count, out);
 }
 void lane_pixels(const LanePath& path, int line, int lane, int count, double* u, double* v) {

@@ -36,7 +36,6 @@ void visit_ray(const MarchedRay& m, const VolumeLayout& layout, Visit&& visit) {
   }
 }
 
-
 }  // namespace
 
 void forward_project_reference(const Volume& x, const std::vector<ProjectionMatrix>& views, ProjectionStack& y) {
@@ -46,8 +45,7 @@ void forward_project_reference(const Volume& x, const std::vector<ProjectionMatr
     for (int row = 0; row < y.rows; ++row) {
       for (int col = 0; col < y.cols; ++col) {
         double sum = 0;
-        visit_ray(march_ray(rays, x.layout, col, row), x.layout,
-                  [&](std::size_t i, double w) { sum += w * x.data[i]; });
+        visit_ray(march_ray(rays, x.layout, col, row), x.layout, [&](std::size_t i, double w) { sum += w * x.data[i]; });
         y.at(v, row, col) = static_cast<float>(sum);
       }
     }

@@ -11,12 +11,12 @@ namespace {
 // A view's slabs: the plane through its source and the volume's centre that holds axis b (its
 // lanes' axis), and where each of its lines' planes lies.
 struct LinePlanes {
-  int axis = 0;         // the central ray's dominant axis a
+  int axis = 0;                                      // the central ray's dominant axis a
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // of the central plane, on the positive side of c
-  double tilt = 0;      // that normal's angle from axis c towards a (0 in circular trajectories about c)
-  double heading = 0;   // the central ray's angle from a towards b: where the view looks within its slab
+  double tilt = 0;     // that normal's angle from axis c towards a (0 in circular trajectories about c)
+  double heading = 0;  // the central ray's angle from a towards b: where the view looks within its slab
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();  // the central ray's
-  std::vector<double> offset;  // per line: its plane's signed distance from the centre (voxels)
+  std::vector<double> offset;                           // per line: its plane's signed distance from the centre (voxels)
 };
 
 LinePlanes line_planes(const ViewRays& rays, const LanePath& path, const VolumeLayout& layout) {
@@ -24,7 +24,8 @@ LinePlanes line_planes(const ViewRays& rays, const LanePath& path, const VolumeL
   const Eigen::Vector3d& centre_ray = path.central_ray;
   p.axis = path.axis;
   const int c = other_axes(p.axis)[1];
-  const Eigen::Vector3d centre = 0.5 * (Eigen::Vector3d(layout.size[0], layout.size[1], layout.size[2]) - Eigen::Vector3d::Ones());
+  const Eigen::Vector3d centre =
+      0.5 * (Eigen::Vector3d(layout.size[0], layout.size[1], layout.size[2]) - Eigen::Vector3d::Ones());
   const auto ray = [&](double major, double minor) {
     return path.along_u ? Eigen::Vector3d(rays.d0 + major * rays.du + minor * rays.dv)
                         : Eigen::Vector3d(rays.d0 + minor * rays.du + major * rays.dv);
@@ -73,8 +74,9 @@ std::vector<int> slab_order(const std::vector<LinePlanes>& planes) {
       const LinePlanes& p = planes[static_cast<std::size_t>(v)];
       if (p.offset.empty()) continue;  // in no slab
       // Planes, whichever way their normals turn.
-      if (last) length += std::min((p.normal - last->normal).norm(), (p.normal + last->normal).norm()) +
-                          0.01 * (p.direction - last->direction).norm();
+      if (last)
+        length += std::min((p.normal - last->normal).norm(), (p.normal + last->normal).norm()) +
+                  0.01 * (p.direction - last->direction).norm();
       last = &p;
     }
     return length;
@@ -87,7 +89,7 @@ std::vector<int> slab_order(const std::vector<LinePlanes>& planes) {
 SlabLines slab_lines(const std::vector<ViewRays>& rays, const std::vector<LanePath>& paths, const VolumeLayout& layout,
                      int rows_per_block) {
   std::vector<LinePlanes> planes;
-  std::vector<double> steps;  // each view's mean step between lines
+  std::vector<double> steps;                // each view's mean step between lines
   double lowest = 1e300, highest = -1e300;  // the outermost lines
   double lines = 0;                         // of every view
   for (std::size_t v = 0; v < rays.size(); ++v) {

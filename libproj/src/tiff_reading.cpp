@@ -58,7 +58,8 @@ std::optional<TiffImage> read_plain_tiff(const fs::path& file, const std::option
   if (!tif) return std::nullopt;
 
   std::uint32_t cols = 0, rows = 0;
-  std::uint16_t samples = 1, bits = 1, format = SAMPLEFORMAT_UINT, planar = PLANARCONFIG_CONTIG, photometric = PHOTOMETRIC_MINISBLACK;
+  std::uint16_t samples = 1, bits = 1, format = SAMPLEFORMAT_UINT, planar = PLANARCONFIG_CONTIG,
+                photometric = PHOTOMETRIC_MINISBLACK;
   TIFFGetField(tif.get(), TIFFTAG_IMAGEWIDTH, &cols);
   TIFFGetField(tif.get(), TIFFTAG_IMAGELENGTH, &rows);
   TIFFGetFieldDefaulted(tif.get(), TIFFTAG_SAMPLESPERPIXEL, &samples);
@@ -66,16 +67,16 @@ std::optional<TiffImage> read_plain_tiff(const fs::path& file, const std::option
   TIFFGetFieldDefaulted(tif.get(), TIFFTAG_SAMPLEFORMAT, &format);
   TIFFGetFieldDefaulted(tif.get(), TIFFTAG_PLANARCONFIG, &planar);
   TIFFGetField(tif.get(), TIFFTAG_PHOTOMETRIC, &photometric);
-  const bool plain_samples = (format == SAMPLEFORMAT_UINT && (bits == 8 || bits == 16 || bits == 32)) ||
-                             (format == SAMPLEFORMAT_IEEEFP && bits == 32);
+  const bool plain_samples =
+      (format == SAMPLEFORMAT_UINT && (bits == 8 || bits == 16 || bits == 32)) || (format == SAMPLEFORMAT_IEEEFP && bits == 32);
   if (TIFFIsTiled(tif.get()) || samples != 1 || planar != PLANARCONFIG_CONTIG || photometric != PHOTOMETRIC_MINISBLACK ||
       !plain_samples || cols == 0 || rows == 0)
     return std::nullopt;
 
   if (expected && (cols != static_cast<std::uint32_t>(expected->first) || rows != static_cast<std::uint32_t>(expected->second)))
-    throw InputError(file.string(), "", "image is " + std::to_string(cols) + " x " + std::to_string(rows) +
-                                            " pixels, the scan declares " + std::to_string(expected->first) + " x " +
-                                            std::to_string(expected->second));
+    throw InputError(file.string(), "",
+                     "image is " + std::to_string(cols) + " x " + std::to_string(rows) + " pixels, the scan declares " +
+                         std::to_string(expected->first) + " x " + std::to_string(expected->second));
   if (static_cast<std::size_t>(cols) * rows > most_pixels) return std::nullopt;  // the general reader words the refusal
 
   TiffImage out;
@@ -90,7 +91,8 @@ std::optional<TiffImage> read_plain_tiff(const fs::path& file, const std::option
   rows_per_strip = std::clamp<std::uint32_t>(rows_per_strip, 1, rows);
   std::vector<unsigned char> strip(row_bytes * rows_per_strip);
   const auto fail = [&](const std::string& what) {
-    return InputError(file.string(), "", "cannot read the pixels (truncated or damaged?): " + what + (error.empty() ? "" : " (" + error + ")"));
+    return InputError(file.string(), "",
+                      "cannot read the pixels (truncated or damaged?): " + what + (error.empty() ? "" : " (" + error + ")"));
   };
   for (std::uint32_t row = 0, index = 0; row < rows; row += rows_per_strip, ++index) {
     const std::uint32_t strip_rows = std::min(rows_per_strip, rows - row);
@@ -98,10 +100,14 @@ std::optional<TiffImage> read_plain_tiff(const fs::path& file, const std::option
     if (TIFFReadEncodedStrip(tif.get(), index, strip.data(), want) != want) throw fail("strip " + std::to_string(index));
     float* dst = out.image.pixels.data() + static_cast<std::size_t>(row) * cols;
     const std::size_t count = static_cast<std::size_t>(strip_rows) * cols;
-    if (format == SAMPLEFORMAT_IEEEFP) widen<float>(strip.data(), count, dst);
-    else if (bits == 8) widen<std::uint8_t>(strip.data(), count, dst);
-    else if (bits == 16) widen<std::uint16_t>(strip.data(), count, dst);
-    else widen<std::uint32_t>(strip.data(), count, dst);
+    if (format == SAMPLEFORMAT_IEEEFP)
+      widen<float>(strip.data(), count, dst);
+    else if (bits == 8)
+      widen<std::uint8_t>(strip.data(), count, dst);
+    else if (bits == 16)
+      widen<std::uint16_t>(strip.data(), count, dst);
+    else
+      widen<std::uint32_t>(strip.data(), count, dst);
   }
   return out;
 }

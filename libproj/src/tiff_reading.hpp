@@ -22,7 +22,7 @@ struct TiffImage {
 /// not such a TIFF (or libtiff cannot open it): the caller reads it the general way. The size is
 /// checked against `expected` before any pixel is allocated (InputError naming the file), and a
 /// strip that does not decode is an InputError naming it too.
-std::optional<TiffImage> read_plain_tiff(const std::filesystem::path& file,
-                                         const std::optional<std::pair<int, int>>& expected, std::size_t most_pixels);
+std::optional<TiffImage> read_plain_tiff(const std::filesystem::path& file, const std::optional<std::pair<int, int>>& expected,
+                                         std::size_t most_pixels);
 
 }  // namespace ctk

@@ -88,8 +88,8 @@ HWY_INLINE hn::Vec<DF> row_values(DF df, const VoxelRow& r, hn::Vec<DF> i) {
   const auto minus_one = hn::Set(df, -1.0f), one = hn::Set(df, 1.0f), zero = hn::Zero(df);
   // Footprints touching the detector: -1 <= floor(u) <= cols - 1 (NaN compares false).
   const auto uf = hn::Floor(u), vf = hn::Floor(v);
-  const auto touches = hn::And(in_front, hn::And(hn::And(hn::Ge(uf, minus_one), hn::Le(uf, last_u)),
-                                                 hn::And(hn::Ge(vf, minus_one), hn::Le(vf, last_v))));
+  const auto touches = hn::And(
+      in_front, hn::And(hn::And(hn::Ge(uf, minus_one), hn::Le(uf, last_u)), hn::And(hn::Ge(vf, minus_one), hn::Le(vf, last_v))));
   const auto u0 = hn::IfThenElse(touches, uf, zero), v0 = hn::IfThenElse(touches, vf, zero);
   const auto fu = hn::IfThenElseZero(touches, hn::Sub(u, uf)), fv = hn::IfThenElseZero(touches, hn::Sub(v, vf));
   // Corner weights, zero for corners off the detector.
@@ -106,7 +106,8 @@ HWY_INLINE hn::Vec<DF> row_values(DF df, const VoxelRow& r, hn::Vec<DF> i) {
     g00 = hn::GatherIndex(df, r.image, hn::Add(row0, iu0)), g10 = hn::GatherIndex(df, r.image, hn::Add(row0, iu1));
     g01 = hn::GatherIndex(df, r.image, hn::Add(row1, iu0)), g11 = hn::GatherIndex(df, r.image, hn::Add(row1, iu1));
   }
-  const auto value = hn::MulAdd(wv0, hn::MulAdd(wu0, g00, hn::Mul(wu1, g10)), hn::Mul(wv1, hn::MulAdd(wu0, g01, hn::Mul(wu1, g11))));
+  const auto value =
+      hn::MulAdd(wv0, hn::MulAdd(wu0, g00, hn::Mul(wu1, g10)), hn::Mul(wv1, hn::MulAdd(wu0, g01, hn::Mul(wu1, g11))));
   return hn::Mul(value, hn::Mul(hn::Set(df, r.scale2), hn::Mul(inv, inv)));
 }
 

@@ -71,8 +71,12 @@ Mismatch mismatch(const FanSinogram& s, int period, double u0, int sense, int st
       const double wv = f - i0;
       const int c0 = std::min(static_cast<int>(std::floor(mirrored)), s.cols - 2);
       const double wc = mirrored - c0;
-      auto at = [&](int view, int col) { return static_cast<double>(s.values[static_cast<std::size_t>(view) * static_cast<std::size_t>(s.cols) + static_cast<std::size_t>(col)]); };
-      const double other = (1 - wv) * ((1 - wc) * at(i0, c0) + wc * at(i0, c0 + 1)) + wv * ((1 - wc) * at(i1, c0) + wc * at(i1, c0 + 1));
+      auto at = [&](int view, int col) {
+        return static_cast<double>(
+            s.values[static_cast<std::size_t>(view) * static_cast<std::size_t>(s.cols) + static_cast<std::size_t>(col)]);
+      };
+      const double other =
+          (1 - wv) * ((1 - wc) * at(i0, c0) + wc * at(i0, c0 + 1)) + wv * ((1 - wc) * at(i1, c0) + wc * at(i1, c0 + 1));
       const double d = row[u] - other;
       acc += d * d;
       ++n;
@@ -131,8 +135,8 @@ ConjugateRayEstimate conjugate_ray_u0(const FanSinogram& s, double start_px, dou
     throw std::invalid_argument("conjugate_ray_u0: pitch, SDD and the angular step must be set");
   const int period = static_cast<int>(std::lround(2 * M_PI / std::abs(s.step_rad)));
   if (std::abs(period * std::abs(s.step_rad) - 2 * M_PI) > 1e-3 * std::abs(s.step_rad) * period || s.views < period)
-    throw std::invalid_argument("conjugate_ray_u0: the views must cover a full turn in equal steps (" + std::to_string(s.views) + " views of " +
-                                std::to_string(std::abs(s.step_rad) * 180 / M_PI) + " deg)");
+    throw std::invalid_argument("conjugate_ray_u0: the views must cover a full turn in equal steps (" + std::to_string(s.views) +
+                                " views of " + std::to_string(std::abs(s.step_rad) * 180 / M_PI) + " deg)");
   ConjugateRayEstimate out;
   double best = std::numeric_limits<double>::infinity(), best_other = best;
   for (int sense : {+1, -1}) {

@@ -23,7 +23,8 @@ VolumeLayout default_volume_layout(const ScanDescription& scan, const std::vecto
   if (scan.holder) {
     size = {count(60.0), count(60.0), count(122.0)};  // the helix holder: a 60 x 60 x 122 mm box
   } else {
-    const double across = std::max(scan.detector.cols * scan.detector.pitch_u_mm, scan.detector.rows * scan.detector.pitch_v_mm) * demagnify;
+    const double across =
+        std::max(scan.detector.cols * scan.detector.pitch_u_mm, scan.detector.rows * scan.detector.pitch_v_mm) * demagnify;
     size = {count(across), count(across), count(scan.detector.rows * scan.detector.pitch_v_mm * demagnify)};
   }
   return VolumeLayout::centred(size, Eigen::Vector3d::Constant(voxel));

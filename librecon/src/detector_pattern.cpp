@@ -46,8 +46,7 @@ DetectorPattern mean_pattern(const ProjectionStack& images, const std::vector<in
       }
       const double mean = s / count;
       p.mean[pixel] = mean;
-      if (views.size() > 1)
-        p.standard_error[pixel] = std::sqrt(std::max(s2 / count - mean * mean, 0.0) / (count - 1));
+      if (views.size() > 1) p.standard_error[pixel] = std::sqrt(std::max(s2 / count - mean * mean, 0.0) / (count - 1));
     }
   return p;
 }

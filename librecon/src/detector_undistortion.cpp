@@ -7,8 +7,7 @@
 
 namespace ctk {
 
-DetectorUndistortion::DetectorUndistortion(int cols, int rows, const RadialDistortion& distortion)
-    : cols_(cols), rows_(rows) {
+DetectorUndistortion::DetectorUndistortion(int cols, int rows, const RadialDistortion& distortion) : cols_(cols), rows_(rows) {
   if (cols <= 0 || rows <= 0) throw std::invalid_argument("DetectorUndistortion: empty detector");
   const std::size_t n = static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows);
   measured_u_.resize(n);
@@ -31,8 +30,8 @@ void DetectorUndistortion::apply(const float* measured, float* ideal, Outside ou
   cv::Mat out(rows_, cols_, CV_32FC1, ideal);
   const cv::Mat map_u(rows_, cols_, CV_32FC1, const_cast<float*>(measured_u_.data()));
   const cv::Mat map_v(rows_, cols_, CV_32FC1, const_cast<float*>(measured_v_.data()));
-  cv::remap(in, out, map_u, map_v, cv::INTER_LINEAR,
-            outside == Outside::zero ? cv::BORDER_CONSTANT : cv::BORDER_REPLICATE, cv::Scalar(0));
+  cv::remap(in, out, map_u, map_v, cv::INTER_LINEAR, outside == Outside::zero ? cv::BORDER_CONSTANT : cv::BORDER_REPLICATE,
+            cv::Scalar(0));
 }
 
 }  // namespace ctk

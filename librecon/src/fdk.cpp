@@ -29,8 +29,10 @@ std::vector<float> ramp_filter_spectrum(int n, double da, RampWindow window) {
   for (int k = 0; k < n; ++k) {
     const int m = std::min(k, n - k);
     double h = 0;
-    if (m == 0) h = 1.0 / (4 * da * da);
-    else if (m % 2 == 1) h = -1.0 / (M_PI * M_PI * m * m * da * da);
+    if (m == 0)
+      h = 1.0 / (4 * da * da);
+    else if (m % 2 == 1)
+      h = -1.0 / (M_PI * M_PI * m * m * da * da);
     kernel.at<float>(0, k) = static_cast<float>(h * da);  // times da: the convolution's measure
   }
   cv::Mat spectrum;
@@ -99,8 +101,7 @@ CircularTrajectory fit_circular_trajectory(const std::vector<ProjectionMatrix>& 
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return c.angles_rad[a] < c.angles_rad[b]; });
   const std::size_t n = order.size();
   std::vector<double> gap_after(n);
-  for (std::size_t i = 0; i < n; ++i)
-    gap_after[i] = wrap_2pi(c.angles_rad[order[(i + 1) % n]] - c.angles_rad[order[i]]);
+  for (std::size_t i = 0; i < n; ++i) gap_after[i] = wrap_2pi(c.angles_rad[order[(i + 1) % n]] - c.angles_rad[order[i]]);
   const std::size_t widest = static_cast<std::size_t>(std::max_element(gap_after.begin(), gap_after.end()) - gap_after.begin());
   const double typical = kTwoPi / static_cast<double>(n);
   const bool full_turn = gap_after[widest] < 1.5 * typical;
@@ -109,8 +110,8 @@ CircularTrajectory fit_circular_trajectory(const std::vector<ProjectionMatrix>& 
   for (std::size_t i = 0; i < n; ++i) {
     const double before = gap_after[(i + n - 1) % n], after = gap_after[i];
     double w = 0.5 * (before + after);
-    if (!full_turn && i == widest) w = 0.5 * before;                 // last view of the arc
-    if (!full_turn && (i + n - 1) % n == widest) w = 0.5 * after;    // first view of the arc
+    if (!full_turn && i == widest) w = 0.5 * before;               // last view of the arc
+    if (!full_turn && (i + n - 1) % n == widest) w = 0.5 * after;  // first view of the arc
     c.step_rad[order[i]] = w;
   }
   if (!full_turn) {
@@ -184,7 +185,8 @@ void fdk_reconstruct(const std::vector<ProjectionMatrix>& views, ProjectionStack
     cv::Mat filtered;
     cv::dft(spectrum, filtered, cv::DFT_ROWS | cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
     for (int r = 0; r < rows; ++r)
-      for (int col = 0; col < cols; ++col) b.at(static_cast<int>(v), r, col) = filtered.at<float>(r, col) * static_cast<float>(c.step_rad[v]);
+      for (int col = 0; col < cols; ++col)
+        b.at(static_cast<int>(v), r, col) = filtered.at<float>(r, col) * static_cast<float>(c.step_rad[v]);
   });
 
   // Voxel-driven back projection, weighted by (R / depth)^2.

@@ -8,7 +8,8 @@ namespace ctk {
 namespace {
 
 // P' = P * (rotation by `angle` about `axis` through `centre`), in the frame P maps from.
-ProjectionMatrix rotated_about(const ProjectionMatrix& P, const Eigen::Vector3d& axis, const Eigen::Vector3d& centre, double angle) {
+ProjectionMatrix rotated_about(const ProjectionMatrix& P, const Eigen::Vector3d& axis, const Eigen::Vector3d& centre,
+                               double angle) {
   const Eigen::Matrix3d R = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
   Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
   T.topLeftCorner<3, 3>() = R;

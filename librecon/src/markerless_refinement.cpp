@@ -60,13 +60,20 @@ bool unobservable_on_one_row(const std::string& name) {
 std::vector<Candidate> make_candidates(const Eigen::Vector2d& nominal_pp, const RefinementOptions& o, bool one_row) {
   const double arc = o.nominal_blur_arc_deg > 0 ? o.nominal_blur_arc_deg : 2.0;
   std::vector<Candidate> all = {
-      {"detector_offset", true,
+      {"detector_offset",
+       true,
        {{"u0_px", 0.5, -10, 10, [](State& s) -> double& { return s.geometry.du_px; }, 1.0, nominal_pp.x()},
         {"v0_px", 0.5, -10, 10, [](State& s) -> double& { return s.geometry.dv_px; }, 1.0, nominal_pp.y()}}},
-      {"detector_roll", true, {{"roll_deg", 0.1 * kDeg, -2 * kDeg, 2 * kDeg, [](State& s) -> double& { return s.geometry.roll_rad; }, 1 / kDeg}}},
-      {"axis_tilt", true, {{"tilt_deg", 0.25 * kDeg, -2 * kDeg, 2 * kDeg, [](State& s) -> double& { return s.geometry.tilt_rad; }, 1 / kDeg}}},
+      {"detector_roll",
+       true,
+       {{"roll_deg", 0.1 * kDeg, -2 * kDeg, 2 * kDeg, [](State& s) -> double& { return s.geometry.roll_rad; }, 1 / kDeg}}},
+      {"axis_tilt",
+       true,
+       {{"tilt_deg", 0.25 * kDeg, -2 * kDeg, 2 * kDeg, [](State& s) -> double& { return s.geometry.tilt_rad; }, 1 / kDeg}}},
       {"magnification", true, {{"sdd_scale", 0.005, 0.97, 1.03, [](State& s) -> double& { return s.geometry.sdd_scale; }}}},
-      {"angular_blur", false, {{"arc_deg", arc / 4 * kDeg, 0.0, 2 * arc * kDeg, [](State& s) -> double& { return s.model.blur_arc_rad; }, 1 / kDeg}}},
+      {"angular_blur",
+       false,
+       {{"arc_deg", arc / 4 * kDeg, 0.0, 2 * arc * kDeg, [](State& s) -> double& { return s.model.blur_arc_rad; }, 1 / kDeg}}},
       {"beam_hardening", false, {{"c2", 0.03, -0.2, 0.2, [](State& s) -> double& { return s.model.hardening_c2; }}}},
       {"pixel_gain", false, {}, Candidate::Pattern::per_pixel},
       {"column_gain", false, {}, Candidate::Pattern::per_column},
@@ -77,8 +84,7 @@ std::vector<Candidate> make_candidates(const Eigen::Vector2d& nominal_pp, const 
     if (it == all.end()) throw std::invalid_argument("markerless refinement: unknown effect '" + name + "'");
     if (one_row && unobservable_on_one_row(it->name)) continue;
     chosen.push_back(*it);
-    if (one_row)
-      std::erase_if(chosen.back().knobs, [](const Knob& k) { return unobservable_on_one_row(k.key); });
+    if (one_row) std::erase_if(chosen.back().knobs, [](const Knob& k) { return unobservable_on_one_row(k.key); });
   }
   return chosen;
 }
@@ -86,12 +92,14 @@ std::vector<Candidate> make_candidates(const Eigen::Vector2d& nominal_pp, const 
 bool contains(const std::vector<std::string>& v, const std::string& x) { return std::find(v.begin(), v.end(), x) != v.end(); }
 
 double sum(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); }
-double rms(const std::vector<double>& mean_squares) { return std::sqrt(sum(mean_squares) / static_cast<double>(mean_squares.size())); }
+double rms(const std::vector<double>& mean_squares) {
+  return std::sqrt(sum(mean_squares) / static_cast<double>(mean_squares.size()));
+}
 
 struct KnobFit {
   double value = 0;
   double standard_error = std::numeric_limits<double>::quiet_NaN();  // unknown when the cost is not a parabola
-  bool at_edge = false;  // the cost kept falling to the end of the allowed range
+  bool at_edge = false;                                              // the cost kept falling to the end of the allowed range
 };
 
 // Scans one knob over five settings on the fit views, moving the window (by at most its width)
@@ -118,7 +126,8 @@ KnobFit fit_knob(const ConsistencyProbe& probe, State state, const Knob& knob) {
     if (std::isnan(vertex)) vertex = x[lowest];
     // The minimum lies beyond an end of the window when the cost falls towards that end.
     const int beyond = lowest == 0 && vertex <= x.front() ? -1 : lowest + 1 == x.size() && vertex >= x.back() ? +1 : 0;
-    const bool window_at_bound = (beyond < 0 && x.front() <= knob.lower + 1e-12) || (beyond > 0 && x.back() >= knob.upper - 1e-12);
+    const bool window_at_bound =
+        (beyond < 0 && x.front() <= knob.lower + 1e-12) || (beyond > 0 && x.back() >= knob.upper - 1e-12);
     if (beyond != 0 && !window_at_bound && scan < kScans - 1) {
       // Far from its minimum a cost is rarely a parabola (a misplaced axis doubles edges: the
       // cost grows about linearly), so an extrapolated vertex may lie anywhere: move the window
@@ -220,8 +229,9 @@ Trial fit_detector_pattern(const ConsistencyProbe& probe, const State& current, 
   t.effect.z = paired_z(judge_before, t.judge_after);
   if (log) {
     std::ostringstream line;
-    line << candidate.name << ": pattern RMS " << t.effect.parameters["pattern_rms"].get<double>() << " (noise " << noise << "), largest "
-         << largest << "; held-out RMS " << t.effect.heldout_rms_before << " -> " << t.effect.heldout_rms_after << " (z " << t.effect.z << ")";
+    line << candidate.name << ": pattern RMS " << t.effect.parameters["pattern_rms"].get<double>() << " (noise " << noise
+         << "), largest " << largest << "; held-out RMS " << t.effect.heldout_rms_before << " -> " << t.effect.heldout_rms_after
+         << " (z " << t.effect.z << ")";
     log(line.str());
   }
   return t;
@@ -255,8 +265,9 @@ Trial try_candidate(const ConsistencyProbe& probe, const State& current, const s
   }
   t.undetermined = measured == 0;
   if (!unmeasured.empty())
-    t.effect.note = "no well-curved minimum of the held-out cost in " + unmeasured +
-                    (t.undetermined ? ": not a measurement, so not accepted" : ": not observable here, kept at its starting value");
+    t.effect.note =
+        "no well-curved minimum of the held-out cost in " + unmeasured +
+        (t.undetermined ? ": not a measurement, so not accepted" : ": not observable here, kept at its starting value");
   if (candidate.name == "detector_offset" && candidate.knobs.size() > 1)
     t.effect.note += std::string(t.effect.note.empty() ? "" : "; ") +
                      "v0 (the central row) is weakly observable in a circular scan: its uncertainty is the view-to-view "
@@ -274,8 +285,9 @@ Trial try_candidate(const ConsistencyProbe& probe, const State& current, const s
     line << " " << knob->key << " " << reported << " +- " << f.standard_error * std::abs(knob->report_scale);
     if (f.at_edge) {
       t.at_edge = true;
-      t.effect.note = "the fit ran to the end of the physically plausible range: the candidate absorbs something else "
-                      "(the coarse prediction's own blur or streaks), so it is not accepted";
+      t.effect.note =
+          "the fit ran to the end of the physically plausible range: the candidate absorbs something else "
+          "(the coarse prediction's own blur or streaks), so it is not accepted";
     }
   }
   line << "; held-out RMS " << t.effect.heldout_rms_before << " -> " << t.effect.heldout_rms_after << " (z " << t.effect.z << ")";
@@ -288,8 +300,8 @@ Trial try_candidate(const ConsistencyProbe& probe, const State& current, const s
 void RefinementOptions::validate() const {
   require_option(z_accept > 0, "RefinementOptions.z_accept", "a number above 0", z_accept);
   require_option(max_rounds >= 1, "RefinementOptions.max_rounds", "at least 1", max_rounds);
-  require_option(sharpness_tolerance >= 0 && sharpness_tolerance < 1, "RefinementOptions.sharpness_tolerance", "a number in [0, 1)",
-                 sharpness_tolerance);
+  require_option(sharpness_tolerance >= 0 && sharpness_tolerance < 1, "RefinementOptions.sharpness_tolerance",
+                 "a number in [0, 1)", sharpness_tolerance);
   require_option(nominal_blur_arc_deg >= 0, "RefinementOptions.nominal_blur_arc_deg", "at least 0", nominal_blur_arc_deg);
 }
 
@@ -343,8 +355,9 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
       Volume after = probe.reconstruct_all(trials[i].after.geometry, trials[i].after.model, fine);
       const double s_after = edge_sharpness(after);
       if (trials[i].can_blur && s_after < (1 - options.sharpness_tolerance) * sharpness) {
-        trials[i].effect.note = "held-out views improve, but the reconstruction's edges blur (sharpness " + std::to_string(sharpness) +
-                                " -> " + std::to_string(s_after) + " per mm): the candidate compensates the yardstick, not the geometry";
+        trials[i].effect.note = "held-out views improve, but the reconstruction's edges blur (sharpness " +
+                                std::to_string(sharpness) + " -> " + std::to_string(s_after) +
+                                " per mm): the candidate compensates the yardstick, not the geometry";
         dropped[i] = true;
         if (log) log("not accepted " + trials[i].effect.name + ": " + trials[i].effect.note);
         continue;
@@ -370,7 +383,9 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
         win.effect.confounded_with.push_back(trials[i].effect.name);
     state = win.after;
     judge = win.judge_after;
-    if (log) log("accepted " + win.effect.name + "; sharpness " + std::to_string(win.effect.sharpness_before) + " -> " + std::to_string(sharpness));
+    if (log)
+      log("accepted " + win.effect.name + "; sharpness " + std::to_string(win.effect.sharpness_before) + " -> " +
+          std::to_string(sharpness));
     result.effects.push_back(win.effect);
     // Candidates whose fit ran to the edge, had no minimum or blurred the volume are not tried again;
     // nor, once a detector pattern is in the model, the other description of it (it would replace it).
@@ -380,7 +395,8 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
       if (i == *winner) continue;
       const bool alternative = pattern_won && remaining[i].pattern != Candidate::Pattern::none;
       if (alternative)
-        trials[i].effect.note = "another description of the detector pattern, which " + win.effect.name + " describes in the model";
+        trials[i].effect.note =
+            "another description of the detector pattern, which " + win.effect.name + " describes in the model";
       if (alternative || dropped[i] || trials[i].at_edge || trials[i].undetermined || round == options.max_rounds)
         rejected.push_back(trials[i].effect);
       else
@@ -391,8 +407,9 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
   for (auto& e : rejected) {
     if (e.note.empty()) e.note = "the held-out views do not improve beyond chance";
     if (e.name == "angular_blur")
-      e.note += "; in a circular scan at constant speed, views blurred over an arc are exact projections of the "
-                "rotation-averaged object, so blur is not observable by consistency, only in resolution";
+      e.note +=
+          "; in a circular scan at constant speed, views blurred over an arc are exact projections of the "
+          "rotation-averaged object, so blur is not observable by consistency, only in resolution";
     result.effects.push_back(e);
   }
   result.geometry = state.geometry;
@@ -441,7 +458,8 @@ nlohmann::json refinement_to_json(const RefinementResult& r) {
   for (const auto& [what, why] : r.not_observable) not_observable.push_back({{"parameter", what}, {"reason", why}});
   return {{"format", "ctk-diagnosis/1"},
           {"mode", "markerless"},
-          {"baseline", {{"views_ok", r.views}, {"heldout_projection_rms", r.heldout_rms_before}, {"sharpness_per_mm", r.sharpness_before}}},
+          {"baseline",
+           {{"views_ok", r.views}, {"heldout_projection_rms", r.heldout_rms_before}, {"sharpness_per_mm", r.sharpness_before}}},
           {"final", {{"heldout_projection_rms", r.heldout_rms_after}, {"sharpness_per_mm", r.sharpness_after}}},
           {"effects", effects},
           {"yardstick", {{"prediction_smoothing", r.prediction_smoothing}}},

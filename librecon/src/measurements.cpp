@@ -47,9 +47,9 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
   for (int i : geometry.ok_views()) {
     const GeometryView& v = geometry.views[static_cast<std::size_t>(i)];
     if (v.index < 0 || v.index >= scan.projections.count)
-      throw InputError(geometry.source(), json_key("views[" + std::to_string(i) + "].index"),
-                       "view " + std::to_string(v.index) + " is not in the scan (0 .. " +
-                           std::to_string(scan.projections.count - 1) + ")");
+      throw InputError(
+          geometry.source(), json_key("views[" + std::to_string(i) + "].index"),
+          "view " + std::to_string(v.index) + " is not in the scan (0 .. " + std::to_string(scan.projections.count - 1) + ")");
     const std::string key = "views[" + std::to_string(i) + "]";
     if (std::find(m.view_indices.begin(), m.view_indices.end(), v.index) != m.view_indices.end())
       throw InputError(geometry.source(), json_key(key + ".index"), "view " + std::to_string(v.index) + " is described twice");
@@ -57,8 +57,9 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
     // centred, must lie in front of the source.
     if (!(v.P->matrix()(2, 3) > 0))
       throw InputError(geometry.source(), json_key(key + ".P"),
-                       "puts the holder origin " + std::to_string(v.P->matrix()(2, 3)) + " mm from the source along the beam (behind it): "
-                       "a matrix of the wrong sign?");
+                       "puts the holder origin " + std::to_string(v.P->matrix()(2, 3)) +
+                           " mm from the source along the beam (behind it): "
+                           "a matrix of the wrong sign?");
     m.view_indices.push_back(v.index);
     m.matrices.push_back(*v.P);
   }
@@ -110,7 +111,8 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
     const auto i = static_cast<std::size_t>(k);
     const std::string view = "view " + std::to_string(m.view_indices[i]) + ": ";
     m.clamped_pixels += clamped[i];
-    if (clamped[i] > 0) m.notes.push_back(view + std::to_string(clamped[i]) + " pixels clamped (counts at or below dark, or above the flat)");
+    if (clamped[i] > 0)
+      m.notes.push_back(view + std::to_string(clamped[i]) + " pixels clamped (counts at or below dark, or above the flat)");
     if (static_cast<double>(masked[i]) > kMostMaskedFraction * static_cast<double>(pixels)) {
       m.left_out.push_back(view + std::to_string(masked[i]) + " of " + std::to_string(pixels) +
                            " pixels are not finite numbers (NaN or infinite): left out");

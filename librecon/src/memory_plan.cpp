@@ -10,9 +10,12 @@ namespace ctk {
 
 const char* to_string(ReconstructionMethod m) {
   switch (m) {
-    case ReconstructionMethod::wls_cg: return "wls-cg";
-    case ReconstructionMethod::sirt: return "sirt";
-    case ReconstructionMethod::fdk: return "fdk";
+    case ReconstructionMethod::wls_cg:
+      return "wls-cg";
+    case ReconstructionMethod::sirt:
+      return "sirt";
+    case ReconstructionMethod::fdk:
+      return "fdk";
   }
   return "?";
 }
@@ -33,12 +36,11 @@ std::string MemoryPlan::describe() const {
   return out.str();
 }
 
-MemoryPlan plan_memory(ReconstructionMethod method, const VolumeLayout& layout, int views, int rows, int cols,
-                       bool weighted) {
+MemoryPlan plan_memory(ReconstructionMethod method, const VolumeLayout& layout, int views, int rows, int cols, bool weighted) {
   MemoryPlan plan;
   plan.volume_bytes = layout.voxel_count() * sizeof(float);
-  plan.stack_bytes = static_cast<std::size_t>(views) * static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols) *
-                     sizeof(float);
+  plan.stack_bytes =
+      static_cast<std::size_t>(views) * static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols) * sizeof(float);
   switch (method) {
     case ReconstructionMethod::wls_cg:
       plan.volumes = 4;

@@ -45,8 +45,13 @@ double measured_from_linear(double y, double c2) {
 
 ConsistencyProbe::ConsistencyProbe(const ProjectionStack& b, std::vector<ProjectionMatrix> nominal, const Detector& detector,
                                    const VolumeLayout& layout, ConsistencySplit split)
-    : b_(b), nominal_(std::move(nominal)), detector_(detector), layout_(layout), split_(std::move(split)),
-      orbit_(fit_circular_trajectory(nominal_)), row_margin_(b.rows / 10) {}
+    : b_(b),
+      nominal_(std::move(nominal)),
+      detector_(detector),
+      layout_(layout),
+      split_(std::move(split)),
+      orbit_(fit_circular_trajectory(nominal_)),
+      row_margin_(b.rows / 10) {}
 
 Volume ConsistencyProbe::reconstruct(const std::vector<int>& views, const std::vector<ProjectionMatrix>& matrices,
                                      const ForwardModel& model, const VolumeLayout& layout) const {
@@ -75,8 +80,8 @@ std::vector<double> ConsistencyProbe::judge_costs(const GlobalGeometry& geometry
   return costs(split_.judge, geometry, model, judge_residuals);
 }
 
-std::vector<double> ConsistencyProbe::costs(const std::vector<int>& held_out, const GlobalGeometry& geometry, const ForwardModel& model,
-                                            ProjectionStack* residuals) const {
+std::vector<double> ConsistencyProbe::costs(const std::vector<int>& held_out, const GlobalGeometry& geometry,
+                                            const ForwardModel& model, ProjectionStack* residuals) const {
   const std::vector<ProjectionMatrix> matrices = apply_global_geometry(geometry, nominal_, orbit_);
   const Volume x = reconstruct(split_.reconstruct, matrices, model, layout_);
 
@@ -126,7 +131,8 @@ Eigen::Vector2d ConsistencyProbe::nominal_principal_point() const {
   return {K.u0_px, K.v0_px};
 }
 
-Volume ConsistencyProbe::reconstruct_all(const GlobalGeometry& geometry, const ForwardModel& model, const VolumeLayout& layout) const {
+Volume ConsistencyProbe::reconstruct_all(const GlobalGeometry& geometry, const ForwardModel& model,
+                                         const VolumeLayout& layout) const {
   std::vector<int> all(static_cast<std::size_t>(b_.views));
   for (int k = 0; k < b_.views; ++k) all[static_cast<std::size_t>(k)] = k;
   return reconstruct(all, apply_global_geometry(geometry, nominal_, orbit_), model, layout);
@@ -137,9 +143,11 @@ double edge_sharpness(const Volume& x) {
   const int k = n[2] / 2;
   std::vector<float> d;
   for (int j = 0; j < n[1]; ++j)
-    for (int i = 0; i + 1 < n[0]; ++i) d.push_back(std::abs(x.at(i + 1, j, k) - x.at(i, j, k)) / static_cast<float>(x.layout.voxel_mm.x()));
+    for (int i = 0; i + 1 < n[0]; ++i)
+      d.push_back(std::abs(x.at(i + 1, j, k) - x.at(i, j, k)) / static_cast<float>(x.layout.voxel_mm.x()));
   for (int j = 0; j + 1 < n[1]; ++j)
-    for (int i = 0; i < n[0]; ++i) d.push_back(std::abs(x.at(i, j + 1, k) - x.at(i, j, k)) / static_cast<float>(x.layout.voxel_mm.y()));
+    for (int i = 0; i < n[0]; ++i)
+      d.push_back(std::abs(x.at(i, j + 1, k) - x.at(i, j, k)) / static_cast<float>(x.layout.voxel_mm.y()));
   if (d.empty()) return 0;
   const std::size_t top = std::max<std::size_t>(1, d.size() / 100);
   std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(top), d.end(), std::greater<>());

@@ -22,8 +22,8 @@ void SirtOptions::validate() const {
   require_option(relaxation > 0 && relaxation < 2, "SirtOptions.relaxation", "a number in (0, 2)", relaxation);
 }
 
-SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
-                        Volume& x, const SirtOptions& o, const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
+SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b, Volume& x,
+                        const SirtOptions& o, const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
   o.validate();
   auto start = std::chrono::steady_clock::now();
   ProjectionStack row_weight(b.views, b.rows, b.cols), residual(b.views, b.rows, b.cols);
@@ -65,7 +65,8 @@ SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMa
     if (on_iteration) on_iteration(log);
     if (it == o.iterations) break;
 #pragma omp parallel for schedule(static)
-    for (std::ptrdiff_t i = 0; i < n_rays; ++i) residual.data[static_cast<std::size_t>(i)] *= row_weight.data[static_cast<std::size_t>(i)];
+    for (std::ptrdiff_t i = 0; i < n_rays; ++i)
+      residual.data[static_cast<std::size_t>(i)] *= row_weight.data[static_cast<std::size_t>(i)];
     A.back(residual, views, update);
     const float relax = static_cast<float>(o.relaxation);
 #pragma omp parallel for schedule(static)

@@ -39,12 +39,17 @@ void write_solver_state(const SolverSnapshot& s, const nlohmann::json& run, cons
   std::vector<std::size_t> lengths;
   for (const FloatBuffer* v : s.vectors) lengths.push_back(v->size());
   const auto& l = s.x.layout;
-  const nlohmann::json head = {
-      {"format", kFormat},   {"solver", s.solver}, {"iteration", s.iteration}, {"log", log}, {"scalars", s.scalars},
-      {"vector_lengths", lengths},
-      {"volume", {{"size", l.size}, {"voxel_mm", {l.voxel_mm.x(), l.voxel_mm.y(), l.voxel_mm.z()}},
-                  {"origin_mm", {l.origin_mm.x(), l.origin_mm.y(), l.origin_mm.z()}}}},
-      {"run", run}};
+  const nlohmann::json head = {{"format", kFormat},
+                               {"solver", s.solver},
+                               {"iteration", s.iteration},
+                               {"log", log},
+                               {"scalars", s.scalars},
+                               {"vector_lengths", lengths},
+                               {"volume",
+                                {{"size", l.size},
+                                 {"voxel_mm", {l.voxel_mm.x(), l.voxel_mm.y(), l.voxel_mm.z()}},
+                                 {"origin_mm", {l.origin_mm.x(), l.origin_mm.y(), l.origin_mm.z()}}}},
+                               {"run", run}};
   // Saved now, not with the run's outputs: it must survive the run being stopped.
   const OutputSet::Outside now;
   write_file_atomically(file, [&](std::ostream& out) {
@@ -59,7 +64,8 @@ SolverState read_solver_state(const fs::path& file, nlohmann::json& run) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string(), "", "cannot open the solver state");
   std::string line;
-  if (!std::getline(in, line) || line.size() > (1u << 26)) throw InputError(file.string(), "", "not a ctk solver state (no header line)");
+  if (!std::getline(in, line) || line.size() > (1u << 26))
+    throw InputError(file.string(), "", "not a ctk solver state (no header line)");
   nlohmann::json head;
   try {
     head = nlohmann::json::parse(line);
@@ -81,7 +87,8 @@ SolverState read_solver_state(const fs::path& file, nlohmann::json& run) {
   VolumeLayout layout;
   const auto size = volume.at("size").numbers(3);
   for (std::size_t a = 0; a < 3; ++a) {
-    if (!(size[a] >= 1 && size[a] <= 1e5 && size[a] == std::floor(size[a]))) volume.at("size").fail("expected three voxel counts");
+    if (!(size[a] >= 1 && size[a] <= 1e5 && size[a] == std::floor(size[a])))
+      volume.at("size").fail("expected three voxel counts");
     layout.size[a] = static_cast<int>(size[a]);
   }
   layout.voxel_mm = volume.at("voxel_mm").vector3();
@@ -94,10 +101,13 @@ SolverState read_solver_state(const fs::path& file, nlohmann::json& run) {
   for (std::size_t n : lengths) expected += n;
   const std::uintmax_t data_bytes = fs::file_size(file) - line.size() - 1;
   if (data_bytes != expected * sizeof(float))
-    throw InputError(file.string(), "", "holds " + std::to_string(data_bytes) + " bytes of vectors, its header announces " +
-                                            std::to_string(expected * sizeof(float)) + " (a truncated or damaged state)");
+    throw InputError(file.string(), "",
+                     "holds " + std::to_string(data_bytes) + " bytes of vectors, its header announces " +
+                         std::to_string(expected * sizeof(float)) + " (a truncated or damaged state)");
   s.x = Volume(layout);
-  auto read = [&](FloatBuffer& v) { in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(float))); };
+  auto read = [&](FloatBuffer& v) {
+    in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(float)));
+  };
   read(s.x.data);
   for (std::size_t n : lengths) {
     s.vectors.emplace_back(n);

@@ -29,8 +29,8 @@ void WlsOptions::validate() const {
 }
 
 SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
-                          const ProjectionStack* weights, Volume& x, const WlsOptions& o,
-                          const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
+                          const ProjectionStack* weights, Volume& x, const WlsOptions& o, const IterationCallback& on_iteration,
+                          const Checkpointing* checkpointing) {
   ProjectionStack residual(b.views, b.rows, b.cols);
   if (!(checkpointing && checkpointing->resume)) {  // a continued run takes its residual from the state
     const bool cold = std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; });

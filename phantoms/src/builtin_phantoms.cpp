@@ -37,15 +37,15 @@ Phantom helix_holder_phantom(const Holder& holder) {
   const double height = 118.0;
   // A holder declared without its wall is simulated on the reference holder's tube.
   const HolderWall wall = holder.wall.value_or(*reference_helix_holder().wall);
-  p.primitives.push_back(Primitive::cylinder(Vector3d::Zero(), wall.outer_radius_mm, height, kIdentity, material::pom,
-                                             "POM tube"));
-  p.primitives.push_back(Primitive::cylinder(Vector3d::Zero(), wall.inner_radius_mm, height, kIdentity, -material::pom,
-                                             "POM tube bore"));
+  p.primitives.push_back(
+      Primitive::cylinder(Vector3d::Zero(), wall.outer_radius_mm, height, kIdentity, material::pom, "POM tube"));
+  p.primitives.push_back(
+      Primitive::cylinder(Vector3d::Zero(), wall.inner_radius_mm, height, kIdentity, -material::pom, "POM tube bore"));
   made_of(p, 0, "pom");
   const std::size_t spheres = p.primitives.size();
   for (std::size_t k = 0; k < holder.spheres_mm.size(); ++k)
-    p.primitives.push_back(Primitive::sphere(holder.spheres_mm[k], 0.5 * holder.sphere_diameter_mm,
-                                             material::aluminium, "sphere " + std::to_string(k)));
+    p.primitives.push_back(Primitive::sphere(holder.spheres_mm[k], 0.5 * holder.sphere_diameter_mm, material::aluminium,
+                                             "sphere " + std::to_string(k)));
   made_of(p, spheres, "aluminium");
   return p;
 }
@@ -53,18 +53,15 @@ Phantom helix_holder_phantom(const Holder& holder) {
 Phantom shepp_logan_phantom(double s, double mu) {
   // Modified Shepp-Logan (Toft's higher-contrast densities), 3-D ellipsoid table on [-1, 1]^3:
   // density, semi-axes, centre, rotation about w (deg), then tilt about u (deg).
-  struct Row { double density, a, b, c, x, y, z, phi, psi; };
+  struct Row {
+    double density, a, b, c, x, y, z, phi, psi;
+  };
   static const Row table[] = {
-      {1.0, 0.6900, 0.920, 0.810, 0.00, 0.000, 0.00, 0, 0},
-      {-0.8, 0.6624, 0.874, 0.780, 0.00, -0.0184, 0.00, 0, 0},
-      {-0.2, 0.1100, 0.310, 0.220, 0.22, 0.000, 0.00, -18, 10},
-      {-0.2, 0.1600, 0.410, 0.280, -0.22, 0.000, 0.00, 18, 10},
-      {0.1, 0.2100, 0.250, 0.410, 0.00, 0.350, -0.15, 0, 0},
-      {0.1, 0.0460, 0.046, 0.050, 0.00, 0.100, 0.25, 0, 0},
-      {0.1, 0.0460, 0.046, 0.050, 0.00, -0.100, 0.25, 0, 0},
-      {0.1, 0.0460, 0.023, 0.050, -0.08, -0.605, 0.00, 0, 0},
-      {0.1, 0.0230, 0.023, 0.020, 0.00, -0.606, 0.00, 0, 0},
-      {0.1, 0.0230, 0.046, 0.020, 0.06, -0.605, 0.00, 0, 0},
+      {1.0, 0.6900, 0.920, 0.810, 0.00, 0.000, 0.00, 0, 0},     {-0.8, 0.6624, 0.874, 0.780, 0.00, -0.0184, 0.00, 0, 0},
+      {-0.2, 0.1100, 0.310, 0.220, 0.22, 0.000, 0.00, -18, 10}, {-0.2, 0.1600, 0.410, 0.280, -0.22, 0.000, 0.00, 18, 10},
+      {0.1, 0.2100, 0.250, 0.410, 0.00, 0.350, -0.15, 0, 0},    {0.1, 0.0460, 0.046, 0.050, 0.00, 0.100, 0.25, 0, 0},
+      {0.1, 0.0460, 0.046, 0.050, 0.00, -0.100, 0.25, 0, 0},    {0.1, 0.0460, 0.023, 0.050, -0.08, -0.605, 0.00, 0, 0},
+      {0.1, 0.0230, 0.023, 0.020, 0.00, -0.606, 0.00, 0, 0},    {0.1, 0.0230, 0.046, 0.020, 0.06, -0.605, 0.00, 0, 0},
   };
   Phantom p{"shepp-logan", {}};
   int k = 0;
@@ -82,8 +79,8 @@ Phantom brick_and_plate_phantom() {
   // A hollow toy brick (1.5 mm walls, open underneath) with four studs on top.
   const Vector3d brick_centre(-7, 0, 0), brick(31, 21, 31);
   p.primitives.push_back(Primitive::box(brick_centre, brick, kIdentity, mu, "brick"));
-  p.primitives.push_back(Primitive::box(brick_centre - Vector3d(0, 0, 0.75), brick - Vector3d(3, 3, 1.5), kIdentity,
-                                        -mu, "brick cavity"));
+  p.primitives.push_back(
+      Primitive::box(brick_centre - Vector3d(0, 0, 0.75), brick - Vector3d(3, 3, 1.5), kIdentity, -mu, "brick cavity"));
   for (int i = 0; i < 4; ++i) {
     const Vector3d stud = brick_centre + Vector3d(i % 2 ? 7.5 : -7.5, i / 2 ? 4.5 : -4.5, 0.5 * brick.z() + 0.9);
     p.primitives.push_back(Primitive::cylinder(stud, 2.4, 1.8, kIdentity, mu, "stud " + std::to_string(i)));
@@ -138,13 +135,11 @@ Phantom walnut_phantom() {
   Phantom p{"walnut", {}};
   const double shell = 0.030, kernel = 0.018;
   p.primitives.push_back(Primitive::ellipsoid(Vector3d::Zero(), Vector3d(15, 14, 18), kIdentity, shell, "shell"));
-  p.primitives.push_back(Primitive::ellipsoid(Vector3d::Zero(), Vector3d(13.5, 12.5, 16.5), kIdentity, -shell,
-                                              "shell cavity"));
+  p.primitives.push_back(Primitive::ellipsoid(Vector3d::Zero(), Vector3d(13.5, 12.5, 16.5), kIdentity, -shell, "shell cavity"));
   // Two kernel lobes either side of a thin septum, each folded: a stack of thin lens-shaped
   // slices turned against each other, separated by narrow gaps (attenuation only adds, so a fold
   // is made by leaving space, not by removing material).
-  p.primitives.push_back(Primitive::ellipsoid(Vector3d::Zero(), Vector3d(0.4, 12.5, 16.5), kIdentity, shell,
-                                              "septum"));
+  p.primitives.push_back(Primitive::ellipsoid(Vector3d::Zero(), Vector3d(0.4, 12.5, 16.5), kIdentity, shell, "septum"));
   for (int side = -1; side <= 1; side += 2)
     for (int slice = 0; slice < 6; ++slice) {
       const double w = -13.0 + 5.2 * slice;

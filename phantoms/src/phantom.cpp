@@ -55,10 +55,10 @@ Primitive shape_from_json(const JsonNode& node) {
     return Primitive::ellipsoid(centre, positive3("radii_mm"), R, mu, label);
   }
   if (type == "cylinder") {
-    node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "material", "rotation_vector_deg",
-                            "radius_mm", "height_mm"});
-    return Primitive::cylinder(centre, node.at("radius_mm").positive_number(), node.at("height_mm").positive_number(),
-                               R, mu, label);
+    node.warn_unknown_keys(
+        {"type", "center_mm", "attenuation_per_mm", "label", "material", "rotation_vector_deg", "radius_mm", "height_mm"});
+    return Primitive::cylinder(centre, node.at("radius_mm").positive_number(), node.at("height_mm").positive_number(), R, mu,
+                               label);
   }
   if (type == "box") {
     node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "material", "rotation_vector_deg", "size_mm"});
@@ -88,13 +88,19 @@ nlohmann::json primitive_to_json(const Primitive& p) {
   j["center_mm"] = {c.x(), c.y(), c.z()};
   const Eigen::Vector3d h = p.half_size_mm;
   switch (p.shape) {
-    case Shape::sphere: j["radius_mm"] = h.x(); break;
-    case Shape::ellipsoid: j["radii_mm"] = {h.x(), h.y(), h.z()}; break;
+    case Shape::sphere:
+      j["radius_mm"] = h.x();
+      break;
+    case Shape::ellipsoid:
+      j["radii_mm"] = {h.x(), h.y(), h.z()};
+      break;
     case Shape::cylinder:
       j["radius_mm"] = h.x();
       j["height_mm"] = 2 * h.z();
       break;
-    case Shape::box: j["size_mm"] = {2 * h.x(), 2 * h.y(), 2 * h.z()}; break;
+    case Shape::box:
+      j["size_mm"] = {2 * h.x(), 2 * h.y(), 2 * h.z()};
+      break;
   }
   if (p.shape != Shape::sphere) {
     const Eigen::Vector3d r = rotation_vector(p.pose.linear()) / kDegree;

@@ -9,31 +9,39 @@ namespace ctk {
 
 const char* to_string(Shape shape) {
   switch (shape) {
-    case Shape::sphere: return "sphere";
-    case Shape::ellipsoid: return "ellipsoid";
-    case Shape::cylinder: return "cylinder";
-    case Shape::box: return "box";
+    case Shape::sphere:
+      return "sphere";
+    case Shape::ellipsoid:
+      return "ellipsoid";
+    case Shape::cylinder:
+      return "cylinder";
+    case Shape::box:
+      return "box";
   }
   return "?";
 }
 
 Primitive Primitive::sphere(const Eigen::Vector3d& centre, double radius, double mu, std::string label) {
-  return {Shape::sphere, Eigen::Vector3d::Constant(radius), make_rigid(Eigen::Matrix3d::Identity(), centre), mu,
-          std::move(label), {}};
+  return {Shape::sphere,
+          Eigen::Vector3d::Constant(radius),
+          make_rigid(Eigen::Matrix3d::Identity(), centre),
+          mu,
+          std::move(label),
+          {}};
 }
 
-Primitive Primitive::ellipsoid(const Eigen::Vector3d& centre, const Eigen::Vector3d& radii, const Eigen::Matrix3d& R,
-                               double mu, std::string label) {
+Primitive Primitive::ellipsoid(const Eigen::Vector3d& centre, const Eigen::Vector3d& radii, const Eigen::Matrix3d& R, double mu,
+                               std::string label) {
   return {Shape::ellipsoid, radii, make_rigid(R, centre), mu, std::move(label), {}};
 }
 
-Primitive Primitive::cylinder(const Eigen::Vector3d& centre, double radius, double height, const Eigen::Matrix3d& R,
-                              double mu, std::string label) {
+Primitive Primitive::cylinder(const Eigen::Vector3d& centre, double radius, double height, const Eigen::Matrix3d& R, double mu,
+                              std::string label) {
   return {Shape::cylinder, Eigen::Vector3d(radius, radius, 0.5 * height), make_rigid(R, centre), mu, std::move(label), {}};
 }
 
-Primitive Primitive::box(const Eigen::Vector3d& centre, const Eigen::Vector3d& size, const Eigen::Matrix3d& R,
-                         double mu, std::string label) {
+Primitive Primitive::box(const Eigen::Vector3d& centre, const Eigen::Vector3d& size, const Eigen::Matrix3d& R, double mu,
+                         std::string label) {
   return {Shape::box, 0.5 * size, make_rigid(R, centre), mu, std::move(label), {}};
 }
 
@@ -76,8 +84,12 @@ double Primitive::chord_mm(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   bool hit = false;
   switch (shape) {
     case Shape::sphere:
-    case Shape::ellipsoid: hit = clip_to_unit_ball(p, d, 3, t0, t1); break;
-    case Shape::cylinder: hit = clip_to_slab(p.z(), d.z(), t0, t1) && clip_to_unit_ball(p, d, 2, t0, t1); break;
+    case Shape::ellipsoid:
+      hit = clip_to_unit_ball(p, d, 3, t0, t1);
+      break;
+    case Shape::cylinder:
+      hit = clip_to_slab(p.z(), d.z(), t0, t1) && clip_to_unit_ball(p, d, 2, t0, t1);
+      break;
     case Shape::box:
       hit = clip_to_slab(p.x(), d.x(), t0, t1) && clip_to_slab(p.y(), d.y(), t0, t1) && clip_to_slab(p.z(), d.z(), t0, t1);
       break;
@@ -89,9 +101,12 @@ bool Primitive::contains(const Eigen::Vector3d& point) const {
   const Eigen::Vector3d p = (pose.linear().transpose() * (point - pose.translation())).cwiseQuotient(half_size_mm);
   switch (shape) {
     case Shape::sphere:
-    case Shape::ellipsoid: return p.squaredNorm() <= 1;
-    case Shape::cylinder: return p.head<2>().squaredNorm() <= 1 && std::abs(p.z()) <= 1;
-    case Shape::box: return p.cwiseAbs().maxCoeff() <= 1;
+    case Shape::ellipsoid:
+      return p.squaredNorm() <= 1;
+    case Shape::cylinder:
+      return p.head<2>().squaredNorm() <= 1 && std::abs(p.z()) <= 1;
+    case Shape::box:
+      return p.cwiseAbs().maxCoeff() <= 1;
   }
   return false;
 }

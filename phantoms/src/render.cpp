@@ -18,8 +18,7 @@ struct PixelRect {
 // Pixels whose rays can meet the primitive: the projection of its bounding box, widened by a
 // pixel and by the largest shift distortion causes; the whole detector when the box reaches
 // behind the source.
-PixelRect pixels_covering(const Primitive& primitive, const ProjectionMatrix& P, const Detector& detector,
-                          double margin_px) {
+PixelRect pixels_covering(const Primitive& primitive, const ProjectionMatrix& P, const Detector& detector, double margin_px) {
   double u_min = 1e300, u_max = -1e300, v_min = 1e300, v_max = -1e300;
   for (const Eigen::Vector3d& corner : primitive.bounding_corners()) {
     if (P.depth(corner) <= 1e-6) return {0, detector.cols - 1, 0, detector.rows - 1};
@@ -48,9 +47,9 @@ double largest_distortion_shift_px(const RenderOptions& options, const Detector&
 
 // Primitives grouped by material, with how each group's attenuation scales in each energy bin.
 struct MaterialGroups {
-  std::vector<int> group_of;                // per primitive
-  std::vector<std::vector<double>> ratio;   // [group][bin]
-  std::vector<double> bin_weight;           // one bin of weight 1 when monochromatic
+  std::vector<int> group_of;               // per primitive
+  std::vector<std::vector<double>> ratio;  // [group][bin]
+  std::vector<double> bin_weight;          // one bin of weight 1 when monochromatic
 };
 
 MaterialGroups material_groups(const Phantom& phantom, const std::optional<XraySpectrum>& spectrum) {
@@ -100,8 +99,8 @@ Image render_line_integrals(const Phantom& phantom, const ProjectionMatrix& P, c
     const PixelRect rect = pixels_covering(primitive, P, detector, margin);
     for (int row = rect.row0; row <= rect.row1; ++row)
       for (int col = rect.col0; col <= rect.col1; ++col) {
-        const std::size_t pixel = static_cast<std::size_t>(row) * static_cast<std::size_t>(detector.cols) +
-                                  static_cast<std::size_t>(col);
+        const std::size_t pixel =
+            static_cast<std::size_t>(row) * static_cast<std::size_t>(detector.cols) + static_cast<std::size_t>(col);
         double* out = &sub[(pixel * group_count + group) * samples];
         for (int b = 0; b < s; ++b)
           for (int a = 0; a < s; ++a) {

@@ -17,8 +17,7 @@ std::vector<PlannedView> circular_robot_trajectory(const PandaSetup& setup, int 
   return views;
 }
 
-std::vector<PlannedView> spherical_robot_trajectory(const PandaSetup& setup,
-                                                    const std::vector<Eigen::Vector3d>& directions) {
+std::vector<PlannedView> spherical_robot_trajectory(const PandaSetup& setup, const std::vector<Eigen::Vector3d>& directions) {
   static const double rolls_deg[] = {0, 90, 180, 270, 45, 135, 225, 315};
   const Rigid T_base_camera = setup.T_camera_base.inverse();
   const Rigid T_holder_flange = setup.T_flange_holder.inverse();
@@ -28,8 +27,8 @@ std::vector<PlannedView> spherical_robot_trajectory(const PandaSetup& setup,
     PlannedView view{direction.normalized(), std::nullopt, ""};
     double best_mm = 1e300, best_deg = 1e300;
     for (double roll : rolls_deg) {
-      const Eigen::Matrix3d R = rotation_about(Eigen::Vector3d::UnitZ(), roll * M_PI / 180) *
-                                rotation_looking_along(view.direction);
+      const Eigen::Matrix3d R =
+          rotation_about(Eigen::Vector3d::UnitZ(), roll * M_PI / 180) * rotation_looking_along(view.direction);
       const Rigid T_camera_holder = make_rigid(R, Eigen::Vector3d(0, 0, setup.source_to_isocentre_mm));
       const Rigid T_base_flange = T_base_camera * T_camera_holder * T_holder_flange;
       for (const panda::Joints& start : {previous, setup.ready}) {
@@ -47,8 +46,8 @@ std::vector<PlannedView> spherical_robot_trajectory(const PandaSetup& setup,
       previous = *view.joints;
     } else {
       std::ostringstream note;
-      note << "unreachable within the joint limits at any of 8 rolls about the beam (closest: " << best_mm
-           << " mm, " << best_deg << " deg off)";
+      note << "unreachable within the joint limits at any of 8 rolls about the beam (closest: " << best_mm << " mm, " << best_deg
+           << " deg off)";
       view.note = note.str();
     }
     views.push_back(std::move(view));

@@ -48,8 +48,8 @@ ScanDescription declared_scan(const ScanSimulation& sim, const fs::path& folder,
 }
 
 // One acquired view, from the phantom to the file.
-std::size_t write_projection(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view,
-                             const RenderOptions& render, const fs::path& file) {
+std::size_t write_projection(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view, const RenderOptions& render,
+                             const fs::path& file) {
   std::size_t saturated = 0;
   const Image image = simulated_image(sim, phantom, view, render, &saturated);
   if (sim.output == SimulatedOutput::line_integrals)
@@ -100,8 +100,7 @@ RenderOptions simulated_render_options(const ScanSimulation& sim) {
   return {sim.supersampling, sim.effects.detector_distortion, sim.spectrum};
 }
 
-SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder,
-                               const std::function<void(int, int)>& progress) {
+SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder, const std::function<void(int, int)>& progress) {
   const TrueScan truth = make_true_scan(sim);
   const int view_count = static_cast<int>(truth.views.size());
   const ScanDescription scan = declared_scan(sim, folder, view_count);

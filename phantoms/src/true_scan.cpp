@@ -76,8 +76,8 @@ void draw_true_detector(const ScanSimulation& sim, TrueScan& truth, double& true
     pp += e->principal_point_error_px;
     tilt = e->tilt_deg * kDegree;
   }
-  truth.detector_matrix = tilted_detector_matrix(Intrinsics::from_setup(true_sdd, s.detector, pp), true_sdd,
-                                                 s.detector, tilt.x(), tilt.y());
+  truth.detector_matrix =
+      tilted_detector_matrix(Intrinsics::from_setup(true_sdd, s.detector, pp), true_sdd, s.detector, tilt.x(), tilt.y());
 }
 
 void draw_robot_views(const ScanSimulation& sim, TrueScan& truth, double true_sdd, std::mt19937_64& rng) {
@@ -141,7 +141,8 @@ void draw_image_effects(const ScanSimulation& sim, TrueScan& truth, std::mt19937
     const double peak = material::aluminium * sim.holder.sphere_diameter_mm;
     std::uniform_real_distribution<double> u(0.0, d.cols - 1.0), v(0.0, d.rows - 1.0);
     for (int index : acquired)
-      for (int k = 0; k < *n; ++k) truth.views[static_cast<std::size_t>(index)].blobs.push_back({u(rng), v(rng), radius_px, peak});
+      for (int k = 0; k < *n; ++k)
+        truth.views[static_cast<std::size_t>(index)].blobs.push_back({u(rng), v(rng), radius_px, peak});
   }
 }
 
@@ -170,8 +171,10 @@ TrueScan make_true_scan(const ScanSimulation& sim) {
       const GeometryView& g = sim.poses->views[v];
       TrueView view;
       view.index = static_cast<int>(v);
-      if (g.status == ViewStatus::ok) view.P = g.P;
-      else view.note = g.reason.empty() ? "not ok in the given geometry" : g.reason;
+      if (g.status == ViewStatus::ok)
+        view.P = g.P;
+      else
+        view.note = g.reason.empty() ? "not ok in the given geometry" : g.reason;
       truth.views.push_back(view);
     }
   } else {
@@ -187,16 +190,19 @@ nlohmann::json truth_to_json(const ScanSimulation& sim, const TrueScan& truth, c
   if (e.detector_intrinsics) {
     const Eigen::Matrix3d& M = truth.detector_matrix;
     // For a tilted detector M is not upper triangular; K is reported as its untilted part.
-    const Intrinsics K = Intrinsics::from_setup(sim.setup.source_to_detector_mm + e.detector_intrinsics->sdd_error_mm,
-                                                sim.setup.detector,
-                                                sim.setup.principal_point_px + e.detector_intrinsics->principal_point_error_px);
-    effects["detector_intrinsics"] = {{"fu_px", K.fu_px}, {"fv_px", K.fv_px}, {"skew_px", K.skew_px},
-                                      {"u0_px", K.u0_px}, {"v0_px", K.v0_px},
-                                      {"tilt_deg", json2(e.detector_intrinsics->tilt_deg)},
-                                      {"sdd_error_mm", e.detector_intrinsics->sdd_error_mm},
-                                      {"principal_point_error_px", json2(e.detector_intrinsics->principal_point_error_px)},
-                                      {"detector_matrix", {{M(0, 0), M(0, 1), M(0, 2)}, {M(1, 0), M(1, 1), M(1, 2)},
-                                                           {M(2, 0), M(2, 1), M(2, 2)}}}};
+    const Intrinsics K =
+        Intrinsics::from_setup(sim.setup.source_to_detector_mm + e.detector_intrinsics->sdd_error_mm, sim.setup.detector,
+                               sim.setup.principal_point_px + e.detector_intrinsics->principal_point_error_px);
+    effects["detector_intrinsics"] = {
+        {"fu_px", K.fu_px},
+        {"fv_px", K.fv_px},
+        {"skew_px", K.skew_px},
+        {"u0_px", K.u0_px},
+        {"v0_px", K.v0_px},
+        {"tilt_deg", json2(e.detector_intrinsics->tilt_deg)},
+        {"sdd_error_mm", e.detector_intrinsics->sdd_error_mm},
+        {"principal_point_error_px", json2(e.detector_intrinsics->principal_point_error_px)},
+        {"detector_matrix", {{M(0, 0), M(0, 1), M(0, 2)}, {M(1, 0), M(1, 1), M(1, 2)}, {M(2, 0), M(2, 1), M(2, 2)}}}};
   }
   if (e.detector_distortion)
     effects["detector_distortion"] = {{"k1_per_px2", e.detector_distortion->k1_per_px2},
@@ -221,9 +227,9 @@ nlohmann::json truth_to_json(const ScanSimulation& sim, const TrueScan& truth, c
   }
   if (e.source_drift_mm_per_100_views) {
     const Eigen::Vector2d mm = *e.source_drift_mm_per_100_views;
-    effects["source_drift"] = {{"drift_mm_per_100_views", json2(mm)},
-                               {"drift_px_per_100_views",
-                                {mm.x() / sim.setup.detector.pitch_u_mm, mm.y() / sim.setup.detector.pitch_v_mm}}};
+    effects["source_drift"] = {
+        {"drift_mm_per_100_views", json2(mm)},
+        {"drift_px_per_100_views", {mm.x() / sim.setup.detector.pitch_u_mm, mm.y() / sim.setup.detector.pitch_v_mm}}};
   }
   if (e.holder_sag_deg) effects["holder_sag"] = {{"max_deg", *e.holder_sag_deg}};
   if (e.source_wobble_mm) effects["source_wobble"] = {{"amplitude_mm", json2(*e.source_wobble_mm)}};
@@ -255,35 +261,39 @@ nlohmann::json truth_to_json(const ScanSimulation& sim, const TrueScan& truth, c
   nlohmann::json spheres = nlohmann::json::array();
   for (const auto& s : truth.holder.spheres_mm) spheres.push_back(json3(s));
 
-  return {{"format", "ctk-truth/1"},
-          {"geometry", geometry_file},
-          {"effects", effects},
-          {"conventions",
-           {{"robot_base_frame", "true T_camera_base = declared T_camera_base * offset (offset in base coordinates)"},
-            {"holder_mount", "true T_flange_holder = offset * declared T_flange_holder (offset in flange coordinates)"},
-            {"joint_offsets", "true joint angle = logged angle + offset"},
-            {"source_drift", "focal spot at view v displaced by v / 100 * drift in camera x, y; detector fixed"},
-            {"detector_distortion", "ideal projection x is measured at x + k1 |x - c|^2 (x - c)"},
-            {"robot_noise", "per view, between FK(joints) and the flange: Gaussian, each axis value / sqrt(3)"},
-            {"holder_sag", "the holder turns about the flange origin by max_deg * (axis x gravity), flange coordinates, gravity -z of the base"},
-            {"source_wobble", "focal spot at view v of n displaced by amplitude * cos(4 pi v / n) in camera x, y, on top of any drift"},
-            {"moving_sphere", "sphere `index` is at its true place plus (v / (n - 1)) * offset_at_last_view at view v of n (holder frame)"}}},
-          {"robot_noise", {{"translation_mm", sim.robot_noise.translation_mm}, {"rotation_deg", sim.robot_noise.rotation_deg}}},
-          {"simulation",
-           {{"supersampling", sim.supersampling},
-            {"output", sim.output == SimulatedOutput::counts ? "counts" : "line_integrals"},
-            {"flat_counts", sim.counts.flat_counts},
-            {"dark_counts", sim.counts.dark_counts},
-            {"seed", sim.seed},
-            {"holder_in_beam", sim.with_holder},
-            {"sample", sim.sample.name},
-            {"spectrum", sim.spectrum ? nlohmann::json{{"kvp", sim.spectrum->kvp},
-                                                       {"filter_al_mm", sim.spectrum->filter_al_mm},
-                                                       {"mean_energy_kev", sim.spectrum->mean_energy_kev()},
-                                                       {"bins", sim.spectrum->bins.size()}}
-                                      : nlohmann::json("monochromatic")}}},
-          {"holder_spheres_mm", spheres},
-          {"views", views}};
+  return {
+      {"format", "ctk-truth/1"},
+      {"geometry", geometry_file},
+      {"effects", effects},
+      {"conventions",
+       {{"robot_base_frame", "true T_camera_base = declared T_camera_base * offset (offset in base coordinates)"},
+        {"holder_mount", "true T_flange_holder = offset * declared T_flange_holder (offset in flange coordinates)"},
+        {"joint_offsets", "true joint angle = logged angle + offset"},
+        {"source_drift", "focal spot at view v displaced by v / 100 * drift in camera x, y; detector fixed"},
+        {"detector_distortion", "ideal projection x is measured at x + k1 |x - c|^2 (x - c)"},
+        {"robot_noise", "per view, between FK(joints) and the flange: Gaussian, each axis value / sqrt(3)"},
+        {"holder_sag",
+         "the holder turns about the flange origin by max_deg * (axis x gravity), flange coordinates, gravity -z of the base"},
+        {"source_wobble",
+         "focal spot at view v of n displaced by amplitude * cos(4 pi v / n) in camera x, y, on top of any drift"},
+        {"moving_sphere",
+         "sphere `index` is at its true place plus (v / (n - 1)) * offset_at_last_view at view v of n (holder frame)"}}},
+      {"robot_noise", {{"translation_mm", sim.robot_noise.translation_mm}, {"rotation_deg", sim.robot_noise.rotation_deg}}},
+      {"simulation",
+       {{"supersampling", sim.supersampling},
+        {"output", sim.output == SimulatedOutput::counts ? "counts" : "line_integrals"},
+        {"flat_counts", sim.counts.flat_counts},
+        {"dark_counts", sim.counts.dark_counts},
+        {"seed", sim.seed},
+        {"holder_in_beam", sim.with_holder},
+        {"sample", sim.sample.name},
+        {"spectrum", sim.spectrum ? nlohmann::json{{"kvp", sim.spectrum->kvp},
+                                                   {"filter_al_mm", sim.spectrum->filter_al_mm},
+                                                   {"mean_energy_kev", sim.spectrum->mean_energy_kev()},
+                                                   {"bins", sim.spectrum->bins.size()}}
+                                  : nlohmann::json("monochromatic")}}},
+      {"holder_spheres_mm", spheres},
+      {"views", views}};
 }
 
 Geometry true_geometry(const ScanSimulation& sim, const TrueScan& truth, const std::vector<std::string>& names) {

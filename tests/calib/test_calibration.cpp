@@ -88,9 +88,10 @@ TEST(Calibration, RecoversEveryPoseToMicrometresAcrossTheBeam) {
   const double median_rms = median_rms_of_all_ok(c);
   ASSERT_FALSE(HasFailure());
   const PoseErrors e = compare_with_truth(c, dir);
-  std::cout << "median RMS " << median_rms << " px; pose error across the beam " << e.across_rms_mm * 1000
-            << " um RMS, along " << e.along_rms_mm * 1000 << " um RMS (reported sigma " << c.views[0].translation_sigma_mm[2] * 1000
-            << " um), rotation RMS " << e.rotation_rms_deg << " deg (max " << e.rotation_max_deg << "); " << c.views.size() / c.seconds << " views/s\n";
+  std::cout << "median RMS " << median_rms << " px; pose error across the beam " << e.across_rms_mm * 1000 << " um RMS, along "
+            << e.along_rms_mm * 1000 << " um RMS (reported sigma " << c.views[0].translation_sigma_mm[2] * 1000
+            << " um), rotation RMS " << e.rotation_rms_deg << " deg (max " << e.rotation_max_deg << "); "
+            << c.views.size() / c.seconds << " views/s\n";
   EXPECT_LE(median_rms, 0.10);
   EXPECT_LE(e.across_rms_mm, 0.01);
   // The declared wall lets the spheres on its silhouette be used, and touching pairs are fitted
@@ -142,8 +143,10 @@ TEST(Calibration, SurvivesAPoorFirstGuessFalseBlobsAndBlur) {
   const ScanCalibration c = calibrate_scan(read_scan(dir / "scan.json"), {});
   int ok = 0;
   for (const auto& v : c.views) {
-    if (v.status == ViewStatus::ok) ++ok;
-    else EXPECT_FALSE(v.reason.empty());
+    if (v.status == ViewStatus::ok)
+      ++ok;
+    else
+      EXPECT_FALSE(v.reason.empty());
   }
   const PoseErrors e = compare_with_truth(c, dir);
   std::cout << ok << " of " << c.views.size() << " views; across " << e.across_rms_mm * 1000 << " um, rotation "
@@ -162,8 +165,8 @@ TEST(Calibration, KeepsItsAccuracyWithASampleInTheBeam) {
   const ScanCalibration c = calibrate_scan(read_scan(dir / "scan.json"), {});
   const double median_rms = median_rms_of_all_ok(c);
   const PoseErrors e = compare_with_truth(c, dir);
-  std::cout << "with sample 1: median RMS " << median_rms << " px, across " << e.across_rms_mm * 1000
-            << " um RMS, rotation " << e.rotation_rms_deg << " deg RMS\n";
+  std::cout << "with sample 1: median RMS " << median_rms << " px, across " << e.across_rms_mm * 1000 << " um RMS, rotation "
+            << e.rotation_rms_deg << " deg RMS\n";
   EXPECT_LE(median_rms, 0.15);
   EXPECT_LE(e.across_rms_mm, 0.01);
 }
@@ -185,8 +188,8 @@ TEST(Calibration, MeasuresAnUndeclaredHolderWallFromTheImages) {
   const ScanCalibration c = calibrate_scan(scan, {});
   const auto m = measure_holder_wall(scan, c);
   ASSERT_TRUE(m.has_value());
-  std::cout << "wall measured in " << m->views << " views: inner " << m->wall.inner_radius_mm << " +- " << m->inner_sigma_mm << ", outer "
-            << m->wall.outer_radius_mm << " +- " << m->outer_sigma_mm << " mm\n";
+  std::cout << "wall measured in " << m->views << " views: inner " << m->wall.inner_radius_mm << " +- " << m->inner_sigma_mm
+            << ", outer " << m->wall.outer_radius_mm << " +- " << m->outer_sigma_mm << " mm\n";
   EXPECT_GE(m->views, 10);
   EXPECT_NEAR(m->wall.inner_radius_mm, truth.inner_radius_mm, std::min(0.1, 4 * m->inner_sigma_mm + 0.01));
   EXPECT_NEAR(m->wall.outer_radius_mm, truth.outer_radius_mm, std::min(0.1, 4 * m->outer_sigma_mm + 0.01));
@@ -227,8 +230,8 @@ TEST(Calibration, CalibratesViewsAlongTheHolderAxisWallDeclaredOrNot) {
     }
     const PoseErrors e = compare_with_truth(c, dir);
     std::cout << (s->holder->wall ? "wall declared: " : "wall not declared: ") << ok << " views calibrated, " << required
-              << " of them 5 deg or more from the axis; across " << e.across_rms_mm * 1000 << " um, rotation " << e.rotation_rms_deg
-              << " deg RMS\n";
+              << " of them 5 deg or more from the axis; across " << e.across_rms_mm * 1000 << " um, rotation "
+              << e.rotation_rms_deg << " deg RMS\n";
     EXPECT_GE(required, 6);
     EXPECT_LE(e.across_rms_mm, 0.015);
     // Seen along its axis the pattern is a small ring: tilts are weakly fixed (0.04-0.05 deg RMS
@@ -248,7 +251,8 @@ TEST(Calibration, BadInputIsARejectionOrAClearError) {
   // reason; the batch goes on.
   {
     Geometry guesses = read_geometry(dir / "truth-geometry.json");
-    guesses.views[0].P = ProjectionMatrix::compose(scan.intrinsics(), make_rigid(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, -1360)));
+    guesses.views[0].P =
+        ProjectionMatrix::compose(scan.intrinsics(), make_rigid(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, -1360)));
     const ScanCalibration behind = recalibrate_scan(scan, guesses, {});
     EXPECT_EQ(behind.views[0].status, ViewStatus::rejected);
     EXPECT_NE(behind.views[0].reason.find("behind"), std::string::npos) << behind.views[0].reason;

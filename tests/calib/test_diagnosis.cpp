@@ -76,7 +76,8 @@ void expect_recalibration_reproduces_after(const Outcome& o, const DiagnosisOpti
   const auto& final_error = o.report.at("final");
   const auto& baseline = again.report.at("baseline");
   std::cout << "after: " << final_error.dump() << "\nrecalibrated with the corrected scan: " << baseline.dump() << "\n";
-  EXPECT_NEAR(baseline.at("rms_px").get<double>(), final_error.at("rms_px").get<double>(), 0.05 * final_error.at("rms_px").get<double>());
+  EXPECT_NEAR(baseline.at("rms_px").get<double>(), final_error.at("rms_px").get<double>(),
+              0.05 * final_error.at("rms_px").get<double>());
   if (final_error.contains("fk_translation_rms_mm")) {
     EXPECT_NEAR(baseline.at("fk_translation_rms_mm").get<double>(), final_error.at("fk_translation_rms_mm").get<double>(),
                 std::max(0.01, 0.1 * final_error.at("fk_translation_rms_mm").get<double>()));
@@ -214,9 +215,9 @@ TEST(Diagnosis, DisplacedSphereBesideRadialDistortion) {
   const auto names = accepted_names(o);
   ASSERT_EQ(names, (std::vector<std::string>{"sphere_positions", "detector_distortion"}));
   for (const auto& e : o.report.at("effects")) {
-    std::cout << e.at("name") << (e.at("accepted").get<bool>() ? " accepted" : " not accepted") << ": RMS " << e.at("rms_px_before")
-              << " -> " << e.at("rms_px_after") << " px, held out " << e.at("heldout_rms_px_before") << " -> "
-              << e.at("heldout_rms_px_after") << "\n";
+    std::cout << e.at("name") << (e.at("accepted").get<bool>() ? " accepted" : " not accepted") << ": RMS "
+              << e.at("rms_px_before") << " -> " << e.at("rms_px_after") << " px, held out " << e.at("heldout_rms_px_before")
+              << " -> " << e.at("heldout_rms_px_after") << "\n";
     if (e.at("name") == "sphere_positions") {
       const auto spheres = e.at("parameters").at("spheres");
       ASSERT_EQ(spheres.size(), 1u);
@@ -227,7 +228,8 @@ TEST(Diagnosis, DisplacedSphereBesideRadialDistortion) {
       EXPECT_NEAR(e.at("parameters").at("k1_per_px2").get<double>(), 4e-8, 1.2e-8);
     }
   }
-  std::cout << "baseline " << o.report.at("baseline").at("rms_px") << " px -> final " << o.report.at("final").at("rms_px") << " px\n";
+  std::cout << "baseline " << o.report.at("baseline").at("rms_px") << " px -> final " << o.report.at("final").at("rms_px")
+            << " px\n";
   EXPECT_LT(o.report.at("final").at("rms_px").get<double>(), 0.6 * o.report.at("baseline").at("rms_px").get<double>());
   expect_recalibration_reproduces_after(o);
 }

@@ -32,8 +32,8 @@ TEST(Helix, TangentIsTheDerivative) {
 TEST(Helix, ClosestPointOnProjectedHelixIsContinuousAndExact) {
   const Helix helix{28, 4 * M_PI / 80, 0.0};
   const Intrinsics K{2150 / 0.6, 2150 / 0.6, 0, 359.5, 359.5};
-  const auto P = ProjectionMatrix::compose(
-      K, make_rigid(rotation_about(Eigen::Vector3d(1, 0.2, 0), 1.4), Eigen::Vector3d(0.3, -0.2, 1360)));
+  const auto P =
+      ProjectionMatrix::compose(K, make_rigid(rotation_about(Eigen::Vector3d(1, 0.2, 0), 1.4), Eigen::Vector3d(0.3, -0.2, 1360)));
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> tau_dist(-38, 38), off(-0.6, 0.6);
   for (int i = 0; i < 50; ++i) {

@@ -17,10 +17,10 @@ void expect_pose(const Joints& q, const Eigen::Vector3d& p_mm, const Eigen::Quat
 
 // Peer vectors from the frankx project's kinematics test (flange frame, mm).
 TEST(PandaForwardKinematics, MatchesPublishedPeerVectors) {
-  expect_pose({0.4401378, -1.720145, -0.4573823, -2.394063, -0.6454046, 0.5917417, 0.4929689},
-              {12.91572, -219.187, 556.6107}, Eigen::Quaterniond(0.01460959, 0.9677397, -0.2340099, -0.09222686));
-  expect_pose({0.3027361, -1.755932, -0.3099454, -2.759472, -0.1217491, 2.112061, 1.139796},
-              {117.0532, -67.54467, 647.0401}, Eigen::Quaterniond(-0.406576, 0.7517108, -0.3960603, 0.3358022));
+  expect_pose({0.4401378, -1.720145, -0.4573823, -2.394063, -0.6454046, 0.5917417, 0.4929689}, {12.91572, -219.187, 556.6107},
+              Eigen::Quaterniond(0.01460959, 0.9677397, -0.2340099, -0.09222686));
+  expect_pose({0.3027361, -1.755932, -0.3099454, -2.759472, -0.1217491, 2.112061, 1.139796}, {117.0532, -67.54467, 647.0401},
+              Eigen::Quaterniond(-0.406576, 0.7517108, -0.3960603, 0.3358022));
 }
 
 TEST(PandaForwardKinematics, ZeroAndReadyPoses) {

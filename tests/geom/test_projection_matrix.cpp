@@ -98,9 +98,7 @@ TEST(ProjectionMatrix, MirroredDetectorDecomposesWithNegativeFu) {
   EXPECT_LT(max_abs_difference(ProjectionMatrix::compose(d.intrinsics, d.T_camera_frame), P), 1e-10);
 }
 
-TEST(ProjectionMatrix, SingularMatrixIsRejected) {
-  EXPECT_THROW(ProjectionMatrix(Matrix34d::Zero()), std::invalid_argument);
-}
+TEST(ProjectionMatrix, SingularMatrixIsRejected) { EXPECT_THROW(ProjectionMatrix(Matrix34d::Zero()), std::invalid_argument); }
 
 TEST(TiltedDetector, MatchesRayPlaneIntersection) {
   const Detector det{720, 720, 0.6, 0.6};
@@ -109,7 +107,8 @@ TEST(TiltedDetector, MatchesRayPlaneIntersection) {
   EXPECT_LT((tilted_detector_matrix(K, f, det, 0, 0) - K.K()).cwiseAbs().maxCoeff(), 1e-12);
   const double a = 0.02, b = -0.03;
   const Eigen::Matrix3d M = tilted_detector_matrix(K, f, det, a, b);
-  const Eigen::Matrix3d Rt = (Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(b, Eigen::Vector3d::UnitY())).toRotationMatrix();
+  const Eigen::Matrix3d Rt =
+      (Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(b, Eigen::Vector3d::UnitY())).toRotationMatrix();
   const Eigen::Vector3d c0(0, 0, f);
   for (const Eigen::Vector3d& X : {Eigen::Vector3d(10, 20, 1360), Eigen::Vector3d(-40, 5, 1300), Eigen::Vector3d(0, 0, 1)}) {
     const Eigen::Vector3d n = Rt.col(2);
@@ -147,7 +146,8 @@ TEST(Astra, PixelCentresLieWhereTheVectorsSay) {
   const Detector det{768, 972, 0.1496, 0.1496};
   const ConeVec vec{-0.0005, -66.0014, 14.9202, -0.0005, 133.0048, -29.9998, 0.14959, 0, -0.00131, 0.00131, 0, 0.14959};
   const auto P = from_cone_vec(vec, det);
-  const Eigen::Vector3d s(vec[0], vec[1], vec[2]), d(vec[3], vec[4], vec[5]), uu(vec[6], vec[7], vec[8]), vv(vec[9], vec[10], vec[11]);
+  const Eigen::Vector3d s(vec[0], vec[1], vec[2]), d(vec[3], vec[4], vec[5]), uu(vec[6], vec[7], vec[8]),
+      vv(vec[9], vec[10], vec[11]);
   for (const Eigen::Vector2d& cr : {Eigen::Vector2d(0, 0), Eigen::Vector2d(383.5, 485.5), Eigen::Vector2d(700, 12)}) {
     const Eigen::Vector3d X = d + (cr.x() - 383.5) * uu + (cr.y() - 485.5) * vv;
     EXPECT_LT((P.project(X) - cr).norm(), 1e-9);

@@ -69,13 +69,16 @@ TEST(ScanFile, ValidFileRoundTrips) {
 
 TEST(ScanFile, MissingKeyIsNamed) {
   const auto file = write_valid_scan(testing::scratch_dir());
-  expect_error_naming(file, [](nlohmann::json& j) { j["detector"].erase("rows"); }, "detector.rows");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["detector"].erase("rows"); }, "detector.rows");
 }
 
 TEST(ScanFile, WrongTypeIsNamed) {
   const auto file = write_valid_scan(testing::scratch_dir());
-  expect_error_naming(file, [](nlohmann::json& j) { j["source_to_detector_mm"] = "2150"; }, "source_to_detector_mm");
-  expect_error_naming(file, [](nlohmann::json& j) { j["detector"]["pixel_pitch_mm"] = {0.6}; }, "detector.pixel_pitch_mm");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["source_to_detector_mm"] = "2150"; }, "source_to_detector_mm");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["detector"]["pixel_pitch_mm"] = {0.6}; }, "detector.pixel_pitch_mm");
 }
 
 // Lengths no CT setup has (they overflow or make the matrices singular downstream) are refused
@@ -83,12 +86,28 @@ TEST(ScanFile, WrongTypeIsNamed) {
 TEST(ScanFile, LengthsBeyondAnySetupAreNamed) {
   const auto dir = testing::scratch_dir();
   const auto file = [&] { return write_valid_scan(dir); };  // each edit on a valid file
-  expect_error_naming(file(), [](nlohmann::json& j) { j["source_to_detector_mm"] = 1e-300; }, "source_to_detector_mm");
-  expect_error_naming(file(), [](nlohmann::json& j) { j["detector"]["pixel_pitch_mm"] = {1e300, 0.6}; }, "detector.pixel_pitch_mm[0]");
-  expect_error_naming(file(), [](nlohmann::json& j) { j["holder"]["sphere_diameter_mm"] = 1e-9; }, "holder.sphere_diameter_mm");
-  expect_error_naming(file(), [](nlohmann::json& j) { j["pose_source"]["T_camera_base"]["t_mm"] = {0, 1e300, 0}; },
-                      "pose_source.T_camera_base.t_mm");
-  expect_error_naming(file(), [](nlohmann::json& j) { j["holder"]["spheres_mm"][3] = {0, 0, -2e6}; }, "holder.spheres_mm[3]");
+  expect_error_naming(
+      file(), [](nlohmann::json& j) { j["source_to_detector_mm"] = 1e-300; }, "source_to_detector_mm");
+  expect_error_naming(
+      file(),
+      [](nlohmann::json& j) {
+        j["detector"]["pixel_pitch_mm"] = {1e300, 0.6};
+      },
+      "detector.pixel_pitch_mm[0]");
+  expect_error_naming(
+      file(), [](nlohmann::json& j) { j["holder"]["sphere_diameter_mm"] = 1e-9; }, "holder.sphere_diameter_mm");
+  expect_error_naming(
+      file(),
+      [](nlohmann::json& j) {
+        j["pose_source"]["T_camera_base"]["t_mm"] = {0, 1e300, 0};
+      },
+      "pose_source.T_camera_base.t_mm");
+  expect_error_naming(
+      file(),
+      [](nlohmann::json& j) {
+        j["holder"]["spheres_mm"][3] = {0, 0, -2e6};
+      },
+      "holder.spheres_mm[3]");
 }
 
 // A declared count that outnumbers the files on disk two to one is refused before any list of
@@ -96,7 +115,8 @@ TEST(ScanFile, LengthsBeyondAnySetupAreNamed) {
 TEST(ScanFile, ACountThatOutnumbersItsFilesIsRefused) {
   const auto dir = testing::scratch_dir();
   const auto file = write_valid_scan(dir, 12);
-  for (int v = 0; v < 10; ++v) testing::write_text(dir / ("proj_" + std::string(v < 10 ? "000" : "00") + std::to_string(v) + ".tif"), "x");
+  for (int v = 0; v < 10; ++v)
+    testing::write_text(dir / ("proj_" + std::string(v < 10 ? "000" : "00") + std::to_string(v) + ".tif"), "x");
   const ScanDescription scan = read_scan(file);
   const ProjectionCensus census = require_projection_files(scan, file.string(), "projections.count");
   EXPECT_EQ(census.missing, 2);
@@ -161,11 +181,12 @@ TEST(ScanFile, TruncatedFileIsNamedWithoutBlamingNaN) {
 TEST(ScanFile, LongFilePatternsAreCheckedWithoutCrashing) {
   const auto dir = testing::scratch_dir();
   const auto file = write_valid_scan(dir);
-  expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["files"] = std::string(30000, 'x') + "%d_%d.tif"; },
-                      "projections.files");
-  expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["files"] = std::string(30000, 'x') + ".tif"; },
-                      "projections.files");
-  expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["files"] = "proj_%4.tif"; }, "projections.files");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["projections"]["files"] = std::string(30000, 'x') + "%d_%d.tif"; }, "projections.files");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["projections"]["files"] = std::string(30000, 'x') + ".tif"; }, "projections.files");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["projections"]["files"] = "proj_%4.tif"; }, "projections.files");
 }
 
 // Readers open only regular files: a pipe named as a scan, a joint log or a cone_vec file is
@@ -174,7 +195,8 @@ TEST(ScanFile, OnlyRegularFilesAreRead) {
   const auto dir = testing::scratch_dir();
   ASSERT_EQ(::mkfifo((dir / "pipe").c_str(), 0600), 0);
   for (const auto& read : std::vector<std::function<void(const std::filesystem::path&)>>{
-           [](const std::filesystem::path& f) { read_json_file(f); }, [](const std::filesystem::path& f) { JointLog::read(f, 3); },
+           [](const std::filesystem::path& f) { read_json_file(f); },
+           [](const std::filesystem::path& f) { JointLog::read(f, 3); },
            [](const std::filesystem::path& f) { read_cone_vecs(f); }})
     for (const auto& f : {dir / "pipe", dir}) {
       try {
@@ -188,25 +210,30 @@ TEST(ScanFile, OnlyRegularFilesAreRead) {
 
 TEST(ScanFile, RotationMustBeARotation) {
   const auto file = write_valid_scan(testing::scratch_dir());
-  expect_error_naming(file, [](nlohmann::json& j) { j["pose_source"]["T_camera_base"]["R"][0][0] = 2.0; },
-                      "pose_source.T_camera_base.R");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["pose_source"]["T_camera_base"]["R"][0][0] = 2.0; }, "pose_source.T_camera_base.R");
 }
 
 TEST(ScanFile, UnreadablePathIsNamed) {
   const auto file = write_valid_scan(testing::scratch_dir());
-  expect_error_naming(file, [](nlohmann::json& j) { j["pose_source"]["joints_csv"] = "nowhere.csv"; },
-                      "pose_source.joints_csv");
-  expect_error_naming(file, [](nlohmann::json& j) {
-    j["projections"]["kind"] = "counts";
-    j["projections"]["flat"] = "flat.tif";
-    j["projections"]["dark"] = "dark.tif";
-  }, "projections.flat");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["pose_source"]["joints_csv"] = "nowhere.csv"; }, "pose_source.joints_csv");
+  expect_error_naming(
+      file,
+      [](nlohmann::json& j) {
+        j["projections"]["kind"] = "counts";
+        j["projections"]["flat"] = "flat.tif";
+        j["projections"]["dark"] = "dark.tif";
+      },
+      "projections.flat");
 }
 
 TEST(ScanFile, CountsNeedFlatAndDark) {
   const auto file = write_valid_scan(testing::scratch_dir());
-  expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["kind"] = "counts"; }, "projections.flat");
-  expect_error_naming(file, [](nlohmann::json& j) { j["projections"]["kind"] = "photons"; }, "projections.kind");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["projections"]["kind"] = "counts"; }, "projections.flat");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["projections"]["kind"] = "photons"; }, "projections.kind");
 }
 
 TEST(ScanFile, ProjectionCountMustMatchJointRows) {
@@ -255,10 +282,12 @@ TEST(ScanFile, DistortionAndDriftExtensions) {
   EXPECT_EQ(back.distortion->k1_per_px2, 2e-8);
   EXPECT_EQ(back.distortion->centre_px, Eigen::Vector2d(380, 340));
   EXPECT_EQ(back.source_offset_mm(50), Eigen::Vector3d(0.5, -0.3, 0.0));
-  expect_error_naming(file, [](nlohmann::json& j) { j["detector"]["radial_distortion"]["center_px"] = {1.0}; },
-                      "detector.radial_distortion.center_px");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["detector"]["radial_distortion"]["center_px"] = {1.0}; },
+      "detector.radial_distortion.center_px");
   write_scan(scan, file);  // each check starts from a valid file
-  expect_error_naming(file, [](nlohmann::json& j) { j["source_drift_mm_per_100_views"] = "fast"; }, "source_drift_mm_per_100_views");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["source_drift_mm_per_100_views"] = "fast"; }, "source_drift_mm_per_100_views");
 }
 
 TEST(ScanFile, HolderWallExtension) {
@@ -267,9 +296,11 @@ TEST(ScanFile, HolderWallExtension) {
   ASSERT_TRUE(scan.holder->wall);  // the reference holder declares its tube
   EXPECT_EQ(scan.holder->wall->inner_radius_mm, 25.0);
   EXPECT_EQ(scan.holder->wall->outer_radius_mm, 28.0);
-  expect_error_naming(file, [](nlohmann::json& j) { j["holder"]["wall"]["outer_radius_mm"] = 20.0; }, "holder.wall.outer_radius_mm");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["holder"]["wall"]["outer_radius_mm"] = 20.0; }, "holder.wall.outer_radius_mm");
   write_scan(scan, file);
-  expect_error_naming(file, [](nlohmann::json& j) { j["holder"]["wall"].erase("inner_radius_mm"); }, "holder.wall.inner_radius_mm");
+  expect_error_naming(
+      file, [](nlohmann::json& j) { j["holder"]["wall"].erase("inner_radius_mm"); }, "holder.wall.inner_radius_mm");
   write_scan(scan, file);
   // Without the key the holder has no wall, as before the extension.
   nlohmann::json j = read_json_file(file);

@@ -56,7 +56,9 @@ TEST(CircularImport, AxisProjectsOntoU0AndSourceCirclesAtSod) {
   // The opposite sense mirrors the orbit.
   orbit.sense = -1;
   const ProjectionMatrix Q = from_cone_vec(circular_cone_vecs(orbit)[1], orbit.detector);
-  EXPECT_LT((Q.source_position() - 1001.3 * Eigen::Vector3d(-std::sin(orbit.angles_rad[1]), std::cos(orbit.angles_rad[1]), 0)).norm(), 1e-9);
+  EXPECT_LT(
+      (Q.source_position() - 1001.3 * Eigen::Vector3d(-std::sin(orbit.angles_rad[1]), std::cos(orbit.angles_rad[1]), 0)).norm(),
+      1e-9);
 }
 
 TEST(CircularImport, OneRowDetectorAndBadNumbers) {
@@ -108,7 +110,7 @@ TEST(ConeVecImport, WalnutMatricesAgreeWithTheVectorsOnStoredPixels) {
     const ProjectionMatrix imported(to_stored * from_cone_vec(c, described).matrix());
     for (int n = 0; n < 50; ++n) {
       const Eigen::Vector3d X(coord(rng), coord(rng), coord(rng));
-      const Eigen::Vector2d cr = project_with_vectors(c, described, X);          // described (column, row)
+      const Eigen::Vector2d cr = project_with_vectors(c, described, X);            // described (column, row)
       const Eigen::Vector2d expected_stored(cr.y(), described.cols - 1 - cr.x());  // stored[767 - c][r]
       worst_vs_vectors = std::max(worst_vs_vectors, (imported.project(X) - expected_stored).norm());
       const Eigen::Vector3d p = D * X.homogeneous();

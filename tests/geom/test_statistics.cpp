@@ -24,7 +24,7 @@ TEST(Statistics, PairedZIsTheMeanImprovementInStandardErrors) {
   // Differences 1, 2, 3: mean 2, sample variance 1, standard error 1 / sqrt(3).
   EXPECT_NEAR(paired_z({5, 6, 7}, {4, 4, 4}), 2.0 * std::sqrt(3.0), 1e-12);
   EXPECT_NEAR(paired_z({4, 4, 4}, {5, 6, 7}), -2.0 * std::sqrt(3.0), 1e-12);  // worse after
-  EXPECT_DOUBLE_EQ(paired_z({3, 3}, {1, 1}), 1e9);                         // the same gain everywhere
+  EXPECT_DOUBLE_EQ(paired_z({3, 3}, {1, 1}), 1e9);                            // the same gain everywhere
   EXPECT_DOUBLE_EQ(paired_z({1, 1}, {3, 3}), -1e9);
   EXPECT_DOUBLE_EQ(paired_z({2, 5}, {2, 5}), 0.0);
   EXPECT_DOUBLE_EQ(paired_z({}, {}), 0.0);

@@ -106,7 +106,8 @@ TEST(Trajectory, SpinningCapCoversItsBandInEqualAreasWhileSpinning) {
     EXPECT_LE(polar, hi);
     within_10_deg += polar < 10 * M_PI / 180;
     if (k > 0) {  // the spin between consecutive views is the golden angle (mod 2 pi)
-      const double turn = std::remainder(std::atan2(dirs[k].y(), dirs[k].x()) - std::atan2(dirs[k - 1].y(), dirs[k - 1].x()), 2 * M_PI);
+      const double turn =
+          std::remainder(std::atan2(dirs[k].y(), dirs[k].x()) - std::atan2(dirs[k - 1].y(), dirs[k - 1].x()), 2 * M_PI);
       EXPECT_NEAR(turn, M_PI * (3 - std::sqrt(5.0)), 1e-9);
     }
   }

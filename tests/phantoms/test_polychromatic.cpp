@@ -45,7 +45,8 @@ TEST(XraySpectrum, WeightsSumToOneAndAFilterHardensTheBeam) {
   EXPECT_GT(soft.mean_energy_kev(), 35);
   EXPECT_LT(hard.mean_energy_kev(), 60);
   // Beam hardening: the effective attenuation of aluminium falls as the path grows.
-  const double thin = -std::log(hard.transmission("aluminium", 1)) / 1, thick = -std::log(hard.transmission("aluminium", 40)) / 40;
+  const double thin = -std::log(hard.transmission("aluminium", 1)) / 1,
+               thick = -std::log(hard.transmission("aluminium", 40)) / 40;
   EXPECT_LT(thick, 0.8 * thin);
   EXPECT_THROW(tube_spectrum(200, 1), std::invalid_argument);
 }
@@ -93,7 +94,8 @@ TEST(XraySpectrum, PhantomFilesCarryMaterialsAndRejectUnknownOnes) {
   EXPECT_EQ(sample.primitives.back().material, "aluminium");
   write_phantom(sample, dir / "s.json");
   const Phantom back = read_phantom(dir / "s.json");
-  for (std::size_t i = 0; i < sample.primitives.size(); ++i) EXPECT_EQ(back.primitives[i].material, sample.primitives[i].material);
+  for (std::size_t i = 0; i < sample.primitives.size(); ++i)
+    EXPECT_EQ(back.primitives[i].material, sample.primitives[i].material);
   testing::write_text(dir / "bad.json", R"({"format": "ctk-phantom/1", "primitives": [{"type": "sphere", "center_mm": [0, 0, 0],
                           "radius_mm": 1, "attenuation_per_mm": 0.1, "material": "kryptonite"}]})");
   try {

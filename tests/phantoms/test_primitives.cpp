@@ -121,8 +121,8 @@ TEST(Primitives, HolesSubtractAndContainmentMatchesTheChord) {
 TEST(Primitives, SupersamplingAveragesTransmittedIntensity) {
   // A uniform slab seen face on: every sub-ray has the same integral, so the pixel keeps it;
   // at an edge the pixel reports -log of the mean transmission, below the mean line integral.
-  const Phantom slab{"slab", {Primitive::box(Eigen::Vector3d::Zero(), Eigen::Vector3d(20, 20, 10),
-                                             Eigen::Matrix3d::Identity(), 0.3)}};
+  const Phantom slab{"slab",
+                     {Primitive::box(Eigen::Vector3d::Zero(), Eigen::Vector3d(20, 20, 10), Eigen::Matrix3d::Identity(), 0.3)}};
   const Intrinsics K = Intrinsics::from_setup(1500, kDetector, kDetector.centre_px());
   const ProjectionMatrix P = ProjectionMatrix::compose(K, make_rigid(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 1000)));
   const Image fine = render_line_integrals(slab, P, kDetector, {4, std::nullopt, std::nullopt});

@@ -99,7 +99,8 @@ TEST(ScanSimulation, WithoutEffectsOrNoiseTheTruthIsTheDeclaredGeometry) {
   declared.panda = panda;
   declared.projections.count = 5;
   const auto nominal = nominal_views(declared);
-  for (int v = 0; v < 5; ++v) EXPECT_LT(max_abs_difference(*truth.views[static_cast<std::size_t>(v)].P, *nominal[static_cast<std::size_t>(v)].P), 1e-9);
+  for (int v = 0; v < 5; ++v)
+    EXPECT_LT(max_abs_difference(*truth.views[static_cast<std::size_t>(v)].P, *nominal[static_cast<std::size_t>(v)].P), 1e-9);
 }
 
 // Intensity-weighted centroid of a blob within `radius` of `guess` (background is zero here).
@@ -128,8 +129,8 @@ TEST(ScanSimulation, TrueMatricesPutEverySphereOnItsBlobUnderUndeclaredEffects) 
   e.detector_distortion = RadialDistortion{4e-9, {350.0, 372.0}};
   e.robot_base_frame = RigidOffset{{1.0, -2.0, 0.5}, {0.1, 0.0, -0.05}};
   e.holder_mount = RigidOffset{{0.3, 0.2, -0.4}, {0.0, 0.0, 0.5}};
-  e.joint_offsets_rad = panda::Joints{0.05 * kDegree, -0.03 * kDegree, 0.02 * kDegree, 0.04 * kDegree,
-                                      -0.05 * kDegree, 0.03 * kDegree, 0.1 * kDegree};
+  e.joint_offsets_rad = panda::Joints{0.05 * kDegree,  -0.03 * kDegree, 0.02 * kDegree, 0.04 * kDegree,
+                                      -0.05 * kDegree, 0.03 * kDegree,  0.1 * kDegree};
   e.source_drift_mm_per_100_views = Eigen::Vector2d(3.0, 1.0);
   const SimulationReport report = simulate_scan(sim, dir);
   ASSERT_EQ(report.views_acquired, 4);
@@ -153,7 +154,8 @@ TEST(ScanSimulation, TrueMatricesPutEverySphereOnItsBlobUnderUndeclaredEffects) 
       if (!isolated) continue;
       const Eigen::Vector2d c = centroid(im, where[k], blob_radius + 2);
       worst = std::max(worst, (c - where[k]).norm());
-      nominal_error = std::max(nominal_error, (nominal.views[static_cast<std::size_t>(v)].P->project(sim.holder.spheres_mm[k]) - c).norm());
+      nominal_error =
+          std::max(nominal_error, (nominal.views[static_cast<std::size_t>(v)].P->project(sim.holder.spheres_mm[k]) - c).norm());
       ++measured;
     }
   }
@@ -184,7 +186,9 @@ TEST(ScanSimulation, AWanderingSourceAndAMovingSphereFollowTheScansProgress) {
     ASSERT_TRUE(view.holder.has_value());
     for (std::size_t k = 0; k < truth.holder.spheres_mm.size(); ++k) {
       const Eigen::Vector3d moved = view.holder->spheres_mm[k] - truth.holder.spheres_mm[k];
-      const Eigen::Vector3d expected = static_cast<int>(k) == truth.moving_sphere ? Eigen::Vector3d((v / 8.0) * truth.moving_sphere_end_mm) : Eigen::Vector3d::Zero();
+      const Eigen::Vector3d expected = static_cast<int>(k) == truth.moving_sphere
+                                           ? Eigen::Vector3d((v / 8.0) * truth.moving_sphere_end_mm)
+                                           : Eigen::Vector3d::Zero();
       EXPECT_LT((moved - expected).norm(), 1e-12) << "view " << v << ", sphere " << k;
     }
   }

@@ -77,7 +77,8 @@ TEST(EdgeTangency, ABallWantsEveryDirectionAlikeAndAUniformRegionNothing) {
   for (double d : tangent_edge_demand(volume_of([](const Eigen::Vector3d&) { return 0.02; }), kRegion, directions))
     EXPECT_EQ(d, 1.0);
   // Edges outside the region do not count: the plate moved 40 mm up leaves no demand.
-  const Volume outside = volume_of([](const Eigen::Vector3d& p) { return std::abs(p.x()) < 2 && std::abs(p.z() - 26) < 5 ? 0.07 : 0.0; });
+  const Volume outside =
+      volume_of([](const Eigen::Vector3d& p) { return std::abs(p.x()) < 2 && std::abs(p.z() - 26) < 5 ? 0.07 : 0.0; });
   for (double d : tangent_edge_demand(outside, SampleRegion{30.0, 15.0}, directions)) EXPECT_EQ(d, 1.0);
   EdgeTangencyOptions bad;
   bad.tangent_width_deg = 0;

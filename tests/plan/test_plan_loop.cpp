@@ -197,7 +197,8 @@ TEST(LabExchange, RequestsAndAnswersThroughFiles) {
         a.joints = {0.1, -0.2, 0.3, -2.0, 0.0, 1.5, 0.7};
         a.projection_file = std::to_string(view) + ".tif";
         // The image carries the request's direction so the test can tell the views apart.
-        write_image_uint16(Image{8, 6, std::vector<float>(48, static_cast<float>(1000 + 100 * r.direction.x()))}, dir / a.projection_file);
+        write_image_uint16(Image{8, 6, std::vector<float>(48, static_cast<float>(1000 + 100 * r.direction.x()))},
+                           dir / a.projection_file);
       }
       write_answer(dir, view, a);
     }

@@ -29,7 +29,8 @@ Volume blurred_along_x(const Volume& v) {
   const auto& n = v.layout.size;
   for (int k = 0; k < n[2]; ++k)
     for (int j = 0; j < n[1]; ++j)
-      for (int i = 1; i + 1 < n[0]; ++i) b.at(i, j, k) = 0.25f * v.at(i - 1, j, k) + 0.5f * v.at(i, j, k) + 0.25f * v.at(i + 1, j, k);
+      for (int i = 1; i + 1 < n[0]; ++i)
+        b.at(i, j, k) = 0.25f * v.at(i - 1, j, k) + 0.5f * v.at(i, j, k) + 0.25f * v.at(i + 1, j, k);
   return b;
 }
 
@@ -51,7 +52,7 @@ TEST(TrajectoryQuality, EdgeGradientsFollowContrastAndSharpness) {
   const TrajectoryQuality b = trajectory_quality(brighter, truth, region, through, kNoAbsorber);
   EXPECT_NEAR(b.edge_gradient_per_mm2, 0.12, 1e-6);
   EXPECT_NEAR(b.rmse_per_mm, 0.01 * std::sqrt(512.0 / 32768.0), 1e-6);  // 0.01 on the cube's 512 of 32768 voxels
-  EXPECT_DOUBLE_EQ(b.rmse_outside_absorbers_per_mm, b.rmse_per_mm);      // nothing is an absorber
+  EXPECT_DOUBLE_EQ(b.rmse_outside_absorbers_per_mm, b.rmse_per_mm);     // nothing is an absorber
 
   // Blurring along x halves the steps across the x faces (1/4 -> 3/4 of the step); across the y
   // and z faces the first and last columns keep 3/4 of theirs, the six between all of it:
@@ -68,10 +69,10 @@ TEST(TrajectoryQuality, RmseOutsideAbsorbersLeavesOutTheirLevelAndTheirNeighbour
   const std::array<int, 3> through = centre_of_mass_voxel(truth, region);
   Volume x = truth;
   for (float& v : x.data)
-    if (v > 0) v = 0.07f;      // the absorber's level is off, as under beam hardening
-  x.at(20, 16, 16) = 0.02f;    // a face neighbour of the cube: partial volume
-  x.at(21, 21, 16) = 0.02f;    // an edge neighbour: counted
-  x.at(3, 4, 5) = -0.01f;      // far away: counted
+    if (v > 0) v = 0.07f;    // the absorber's level is off, as under beam hardening
+  x.at(20, 16, 16) = 0.02f;  // a face neighbour of the cube: partial volume
+  x.at(21, 21, 16) = 0.02f;  // an edge neighbour: counted
+  x.at(3, 4, 5) = -0.01f;    // far away: counted
   const TrajectoryQuality q = trajectory_quality(x, truth, region, through, absorber_above);
   // 32768 voxels less the cube's 512 and the 6 x 64 face neighbours.
   EXPECT_NEAR(q.rmse_outside_absorbers_per_mm, std::sqrt((0.02 * 0.02 + 0.01 * 0.01) / (32768.0 - 512 - 384)), 1e-9);

@@ -28,8 +28,8 @@ Volume plate_sample(bool with_plate, float block_mu = 0.015f) {
         float mu = 0;
         if (std::abs(p.x() + 6) < 10 && std::abs(p.y()) < 9 && std::abs(p.z()) < 15) mu = block_mu;
         if (with_plate && std::abs(p.x() - 13) < 2 && std::abs(p.y()) < 15 && std::abs(p.z()) < 25) mu = 0.07f;
-        if (p.head<2>().norm() > 25 && p.head<2>().norm() < 28) mu = 0.027f;                   // the wall
-        if ((p - Eigen::Vector3d(0, 27.5, 3)).norm() < 1.5) mu = 0.075f;                          // a sphere
+        if (p.head<2>().norm() > 25 && p.head<2>().norm() < 28) mu = 0.027f;  // the wall
+        if ((p - Eigen::Vector3d(0, 27.5, 3)).norm() < 1.5) mu = 0.075f;      // a sphere
         v.at(i, j, k) = mu;
       }
   return v;

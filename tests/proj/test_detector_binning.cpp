@@ -20,8 +20,9 @@ TEST(DetectorBinning, ImageMeansAndMatrixAgree) {
   const Detector c = binned_detector(d, 3);
   EXPECT_EQ(c.cols, 240);
   EXPECT_DOUBLE_EQ(c.pitch_v_mm, 1.8);
-  const ProjectionMatrix P = ProjectionMatrix::compose(Intrinsics::from_setup(1500, d, Eigen::Vector2d(351.3, 302.8)),
-                                                       make_rigid(rotation_from_vector(Eigen::Vector3d(0.2, -0.4, 0.1)), Eigen::Vector3d(3, -2, 1000)));
+  const ProjectionMatrix P =
+      ProjectionMatrix::compose(Intrinsics::from_setup(1500, d, Eigen::Vector2d(351.3, 302.8)),
+                                make_rigid(rotation_from_vector(Eigen::Vector3d(0.2, -0.4, 0.1)), Eigen::Vector3d(3, -2, 1000)));
   for (const Eigen::Vector3d& X : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(30, -20, 15)}) {
     const Eigen::Vector2d uv = P.project(X), coarse = binned_matrix(P, 3).project(X);
     // Coarse pixel 0 covers fine pixels 0, 1, 2 and is centred on fine pixel 1.

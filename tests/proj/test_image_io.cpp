@@ -58,17 +58,19 @@ TEST(ImageIo, EveryTiffLayoutReadsAsOpenImageIoReadsIt) {
     int rows_per_strip;  // 0: tiles of 16 x 16
     double scale;        // counts per unit of OpenImageIO's float
   };
-  const Layout layouts[] = {{OIIO::TypeDesc::UINT16, 1, "none", 11, 65535.0}, {OIIO::TypeDesc::UINT16, 1, "zip", 3, 65535.0},
-                            {OIIO::TypeDesc::UINT16, 1, "lzw", 4, 65535.0},   {OIIO::TypeDesc::UINT8, 1, "zip", 5, 255.0},
+  const Layout layouts[] = {{OIIO::TypeDesc::UINT16, 1, "none", 11, 65535.0},     {OIIO::TypeDesc::UINT16, 1, "zip", 3, 65535.0},
+                            {OIIO::TypeDesc::UINT16, 1, "lzw", 4, 65535.0},       {OIIO::TypeDesc::UINT8, 1, "zip", 5, 255.0},
                             {OIIO::TypeDesc::UINT32, 1, "none", 2, 4294967295.0}, {OIIO::TypeDesc::FLOAT, 1, "zip", 3, 1.0},
-                            {OIIO::TypeDesc::UINT16, 1, "zip", 0, 65535.0},   {OIIO::TypeDesc::UINT16, 3, "zip", 4, 65535.0}};
+                            {OIIO::TypeDesc::UINT16, 1, "zip", 0, 65535.0},       {OIIO::TypeDesc::UINT16, 3, "zip", 4, 65535.0}};
   int n = 0;
   for (const Layout& l : layouts) {
     const auto file = dir / ("layout-" + std::to_string(n++) + ".tif");
     OIIO::ImageSpec spec(cols, rows, l.channels, l.type);
     spec.attribute("compression", l.compression);
-    if (l.rows_per_strip > 0) spec.attribute("tiff:RowsPerStrip", l.rows_per_strip);
-    else spec.tile_width = spec.tile_height = 16;
+    if (l.rows_per_strip > 0)
+      spec.attribute("tiff:RowsPerStrip", l.rows_per_strip);
+    else
+      spec.tile_width = spec.tile_height = 16;
     std::vector<float> written(static_cast<std::size_t>(cols * rows * l.channels));
     for (std::size_t i = 0; i < written.size(); ++i) written[i] = static_cast<float>((i * 7919) % 1000) / 1000.0f;
     auto out = OIIO::ImageOutput::create(file.string());
@@ -124,7 +126,7 @@ void write_lying_tiff(const std::filesystem::path& file) {
   auto put = [&](std::uint32_t value, int size) {
     for (int i = 0; i < size; ++i) bytes.push_back(static_cast<unsigned char>(value >> (8 * i)));
   };
-  const std::uint32_t entries[][3] = {{256, 4, 20000}, {257, 4, 20000}, {258, 3, 16},    {259, 3, 1},        {262, 3, 1},
+  const std::uint32_t entries[][3] = {{256, 4, 20000}, {257, 4, 20000}, {258, 3, 16},    {259, 3, 1},         {262, 3, 1},
                                       {273, 4, 200},   {277, 3, 1},     {278, 4, 20000}, {279, 4, 800000000u}};
   put(9, 2);
   for (const auto& e : entries) {
@@ -135,7 +137,8 @@ void write_lying_tiff(const std::filesystem::path& file) {
   }
   put(0, 4);
   bytes.resize(200, 0);
-  std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  std::ofstream(file, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
 
 // A header is checked against the declared detector before any pixel memory is taken, and only

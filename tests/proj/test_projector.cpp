@@ -64,8 +64,8 @@ Problem problem_with_views(const VolumeLayout& layout, int rows, int cols, doubl
                            const Eigen::Vector3d& target) {
   Problem p{layout, rows, cols, {}};
   for (const auto& v : specs)
-    p.views.push_back(view_from(v.direction.normalized(), sod, sdd, cols, rows, v.pitch, tilt.x(), tilt.y(), pp_offset,
-                                target, v.roll_deg * M_PI / 180));
+    p.views.push_back(view_from(v.direction.normalized(), sod, sdd, cols, rows, v.pitch, tilt.x(), tilt.y(), pp_offset, target,
+                                v.roll_deg * M_PI / 180));
   return p;
 }
 
@@ -86,8 +86,8 @@ Problem random_problem(std::uint64_t seed) {
   for (const Eigen::Vector3d d : {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()})
     p.views.push_back(view_from(d, sod, sdd, p.cols, p.rows, pitch, 0, 0, {0, 0}, Eigen::Vector3d::Zero()));
   // A view whose field misses most of the volume (many rays miss it entirely).
-  p.views.push_back(view_from(Eigen::Vector3d(1, 1, 0).normalized(), sod, sdd, p.cols, p.rows, pitch, 0, 0, {0, 0},
-                              Eigen::Vector3d(0, 0, 40)));
+  p.views.push_back(
+      view_from(Eigen::Vector3d(1, 1, 0).normalized(), sod, sdd, p.cols, p.rows, pitch, 0, 0, {0, 0}, Eigen::Vector3d(0, 0, 40)));
   return p;
 }
 
@@ -162,10 +162,10 @@ Problem row_window_problem() {
   p.rows = 14;
   p.cols = 52;
   const double sod = 300, sdd = 450;
-  for (const Eigen::Vector3d& d : {Eigen::Vector3d(0, 1, 0), Eigen::Vector3d(0, -1, 0.3), Eigen::Vector3d(0.2, 0.1, 1),
-                                  Eigen::Vector3d(-0.3, 1, -0.4)})
-    p.views.push_back(view_from(d.normalized(), sod, sdd, p.cols, p.rows, 1.5, 0.05, -0.08, {0.4, -0.3},
-                                Eigen::Vector3d(0.3, -0.2, 0.1)));
+  for (const Eigen::Vector3d& d :
+       {Eigen::Vector3d(0, 1, 0), Eigen::Vector3d(0, -1, 0.3), Eigen::Vector3d(0.2, 0.1, 1), Eigen::Vector3d(-0.3, 1, -0.4)})
+    p.views.push_back(
+        view_from(d.normalized(), sod, sdd, p.cols, p.rows, 1.5, 0.05, -0.08, {0.4, -0.3}, Eigen::Vector3d(0.3, -0.2, 0.1)));
   // Rays closer than a voxel (finer pixels) and farther (coarser, some lanes a row apart).
   p.views.push_back(view_from(Eigen::Vector3d(0.1, 1, 0.05).normalized(), sod, sdd, p.cols, p.rows, 1.2, 0, 0, {0, 0},
                               Eigen::Vector3d::Zero()));
@@ -219,8 +219,8 @@ TEST(JosephProjector, RaysAlongXThroughTilesAgreeWithTheReferenceAndAreAdjoint) 
 // (slab_edge); on one thread (4 slabs) too; on three (12) they stay even.
 TEST(JosephProjector, SlabsAlongXOnTileChunksAgreeWithTheReference) {
   const Problem p = problem_with_views(VolumeLayout::centred({150, 20, 16}, {1.0, 1.0, 1.0}), 16, 24, 250, 400,
-                                       {{Eigen::Vector3d(1, 0, 0), 1.6}, {Eigen::Vector3d(-1, 0.3, 0.1), 1.4}},
-                                       {0.03, -0.02}, {0.2, -0.1}, Eigen::Vector3d(0.5, 0.2, -0.3));
+                                       {{Eigen::Vector3d(1, 0, 0), 1.6}, {Eigen::Vector3d(-1, 0.3, 0.1), 1.4}}, {0.03, -0.02},
+                                       {0.2, -0.1}, Eigen::Vector3d(0.5, 0.2, -0.3));
   for (int threads : {1, 2, 3}) {
     ProjectorOptions options;
     options.threads = threads;
@@ -269,8 +269,8 @@ TEST(JosephProjector, NeighbouringSphericalViewsThroughBandsAgreeWithTheReferenc
 // through the volume instead of a tile.
 TEST(JosephProjector, StripsOverTheirBundleLimitAgreeWithTheReference) {
   const Problem p = problem_with_views(VolumeLayout::centred({30, 70, 40}, {1.0, 1.0, 1.0}), 40, 130, 250, 400,
-                                       {{Eigen::Vector3d(1, 0, 0), 0.8}, {Eigen::Vector3d(-1, 0.3, 0.2), 0.8}},
-                                       {0.02, -0.03}, {0.2, 0.1}, Eigen::Vector3d(0.3, 1.0, -0.2));
+                                       {{Eigen::Vector3d(1, 0, 0), 0.8}, {Eigen::Vector3d(-1, 0.3, 0.2), 0.8}}, {0.02, -0.03},
+                                       {0.2, 0.1}, Eigen::Vector3d(0.3, 1.0, -0.2));
   ProjectorOptions options;
   options.rows_per_block = 40;
   testing::on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 61, options), 1e-5); });
@@ -305,11 +305,10 @@ TEST(JosephProjector, DefaultTablesAreTallerWhereRaysCrossTheRowsOfTheirSlices) 
 // Oblique views with the default tables (24 lines of a 40-row detector: a full table and a
 // short one per view) against the reference, adjoint, on every SIMD target.
 TEST(JosephProjector, DefaultTablesForObliqueViewsAgreeWithTheReference) {
-  const Problem p = problem_with_views(VolumeLayout::centred({40, 36, 30}, {1.0, 1.0, 1.0}), 40, 48, 300, 450,
-                                       {{Eigen::Vector3d(0, 1, 0.5), 1.2},
-                                        {Eigen::Vector3d(1, -0.4, 0.6), 1.2, 25},
-                                        {Eigen::Vector3d(0.3, -0.5, 1), 1.2, 70}},
-                                       {0.02, -0.03}, {0.3, -0.2}, Eigen::Vector3d(0.5, -0.4, 0.3));
+  const Problem p = problem_with_views(
+      VolumeLayout::centred({40, 36, 30}, {1.0, 1.0, 1.0}), 40, 48, 300, 450,
+      {{Eigen::Vector3d(0, 1, 0.5), 1.2}, {Eigen::Vector3d(1, -0.4, 0.6), 1.2, 25}, {Eigen::Vector3d(0.3, -0.5, 1), 1.2, 70}},
+      {0.02, -0.03}, {0.3, -0.2}, Eigen::Vector3d(0.5, -0.4, 0.3));
   ASSERT_EQ(JosephProjector::default_rows_per_block(p.views, p.layout), 24);
   testing::on_every_simd_target([&] { EXPECT_LT(expect_fast_matches_reference(p, 71), 1e-5); });
 }
@@ -392,14 +391,19 @@ RandomCase random_case(std::uint64_t seed) {
   for (int v = 0; v < 3; ++v) {
     Eigen::Vector3d d(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
     const double kind = u(rng), near = 0.05 * (u(rng) - 0.5), off = 0.1 * (u(rng) - 0.5);
-    if (kind < 0.2) d = Eigen::Vector3d(1, 1 + near, off);
-    else if (kind < 0.3) d = Eigen::Vector3d(1 + near, off, 1);
-    else if (kind < 0.4) d = Eigen::Vector3d(off, 1, 1 + near);
-    else if (kind < 0.5) d = Eigen::Vector3d(1, 1, 1) + 0.05 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    if (kind < 0.2)
+      d = Eigen::Vector3d(1, 1 + near, off);
+    else if (kind < 0.3)
+      d = Eigen::Vector3d(1 + near, off, 1);
+    else if (kind < 0.4)
+      d = Eigen::Vector3d(off, 1, 1 + near);
+    else if (kind < 0.5)
+      d = Eigen::Vector3d(1, 1, 1) + 0.05 * Eigen::Vector3d(u(rng), u(rng), u(rng));
     if (u(rng) < 0.5) d = -d;
     const double roll = u(rng) < 0.3 ? 0 : 2 * M_PI * u(rng);
     const Eigen::Vector2d pp(10 * (u(rng) - 0.5), 10 * (u(rng) - 0.5));
-    const Eigen::Vector3d target = Eigen::Vector3d(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5) * size_mm * (u(rng) < 0.3 ? 1.5 : 0.3);
+    const Eigen::Vector3d target =
+        Eigen::Vector3d(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5) * size_mm * (u(rng) < 0.3 ? 1.5 : 0.3);
     const double tilt_u = 0.1 * (u(rng) - 0.5), tilt_v = 0.1 * (u(rng) - 0.5);
     p.views.push_back(view_from(d.normalized(), sod, sdd, p.cols, p.rows, pitch, tilt_u, tilt_v, pp, target, roll));
   }
@@ -507,7 +511,8 @@ TEST(JosephProjector, VoxelisedBallMatchesAnalyticChords) {
         for (int a = 0; a < ss; ++a)
           for (int b = 0; b < ss; ++b)
             for (int d = 0; d < ss; ++d) {
-              const Eigen::Vector3d s = c + 0.5 * Eigen::Vector3d((a + 0.5) / ss - 0.5, (b + 0.5) / ss - 0.5, (d + 0.5) / ss - 0.5);
+              const Eigen::Vector3d s =
+                  c + 0.5 * Eigen::Vector3d((a + 0.5) / ss - 0.5, (b + 0.5) / ss - 0.5, (d + 0.5) / ss - 0.5);
               inside += (s - centre).norm() <= radius;
             }
         x.at(i, j, k) = static_cast<float>(mu * inside / (ss * ss * ss));

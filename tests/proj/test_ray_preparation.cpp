@@ -26,16 +26,16 @@ struct View {
 View random_view(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(0, 1);
   View v;
-  v.layout = VolumeLayout::centred({10 + static_cast<int>(80 * u(rng)), 10 + static_cast<int>(80 * u(rng)),
-                                    10 + static_cast<int>(80 * u(rng))},
-                                   Eigen::Vector3d(0.5 + u(rng), 0.5 + u(rng), 0.5 + u(rng)));
+  v.layout = VolumeLayout::centred(
+      {10 + static_cast<int>(80 * u(rng)), 10 + static_cast<int>(80 * u(rng)), 10 + static_cast<int>(80 * u(rng))},
+      Eigen::Vector3d(0.5 + u(rng), 0.5 + u(rng), 0.5 + u(rng)));
   v.cols = 200, v.rows = 150;
   const double sod = u(rng) < 0.2 ? 10 + 30 * u(rng) : 200 + 800 * u(rng);
   const Detector det{v.cols, v.rows, 0.3 + 2 * u(rng), 0.3 + 2 * u(rng)};
   Eigen::Vector3d d(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
   if (u(rng) < 0.2) d = Eigen::Vector3d(0, 1, 0);
-  const Eigen::Matrix3d R = Eigen::AngleAxisd(6.3 * u(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() *
-                            rotation_looking_along(d.normalized());
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(6.3 * u(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() * rotation_looking_along(d.normalized());
   const Intrinsics K = Intrinsics::from_setup(1.5 * sod, det, det.centre_px());
   v.rays = view_rays(ProjectionMatrix::compose(K, make_rigid(R, Eigen::Vector3d(0, 0, sod))), v.layout);
   return v;

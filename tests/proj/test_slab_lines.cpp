@@ -63,7 +63,8 @@ TEST(SlabLines, EveryLineOfEveryViewIsInExactlyOneSlab) {
         ASSERT_GE(r.line_begin, 0);
         ASSERT_GT(r.lines, 0);
         ASSERT_LE(r.line_begin + r.lines, d.paths[static_cast<std::size_t>(r.view)].lines);
-        for (int line = r.line_begin; line < r.line_begin + r.lines; ++line) ++taken[static_cast<std::size_t>(r.view)][static_cast<std::size_t>(line)];
+        for (int line = r.line_begin; line < r.line_begin + r.lines; ++line)
+          ++taken[static_cast<std::size_t>(r.view)][static_cast<std::size_t>(line)];
         longest = std::max(longest, r.lines);
       }
     for (std::size_t v = 0; v < taken.size(); ++v)

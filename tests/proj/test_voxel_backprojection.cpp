@@ -45,7 +45,7 @@ TEST(VoxelBackprojection, AgreesWithTheScalarReference) {
   const std::vector<ProjectionMatrix> views = {
       view_of({1, 0.1, 0.05}, 1000, Eigen::Vector3d::Zero(), cols, rows, 1.6, 0),
       view_of({0.3, 1, 0.4}, 900, Eigen::Vector3d(3, -2, 1), cols, rows, 1.3, 30),
-      view_of({0, 0, 1}, 1000, Eigen::Vector3d(25, 0, 0), cols, rows, 1.6, 0),     // half the volume off the detector
+      view_of({0, 0, 1}, 1000, Eigen::Vector3d(25, 0, 0), cols, rows, 1.6, 0),    // half the volume off the detector
       view_of({0.2, -1, 0.1}, 8, Eigen::Vector3d::Zero(), cols, rows, 40.0, 10),  // source inside: voxels behind it
   };
   ProjectionStack q(static_cast<int>(views.size()), rows, cols);
@@ -89,7 +89,9 @@ TEST(VoxelBackprojection, AConstantImageGivesTheSumOfTheWeights) {
   const VolumeLayout layout = VolumeLayout::centred({20, 20, 20}, Eigen::Vector3d::Constant(1.0));
   const int cols = 64, rows = 64;
   std::vector<ProjectionMatrix> views;
-  for (int v = 0; v < 7; ++v) views.push_back(view_of({std::cos(0.9 * v), std::sin(0.9 * v), 0.3}, 1000, Eigen::Vector3d::Zero(), cols, rows, 1.6, 5.0 * v));
+  for (int v = 0; v < 7; ++v)
+    views.push_back(
+        view_of({std::cos(0.9 * v), std::sin(0.9 * v), 0.3}, 1000, Eigen::Vector3d::Zero(), cols, rows, 1.6, 5.0 * v));
   ProjectionStack q(static_cast<int>(views.size()), rows, cols);
   std::fill(q.data.begin(), q.data.end(), 1.0f);
   Volume x(layout);

@@ -48,7 +48,8 @@ TEST(FanBeam, OneRowOneSliceIsAdjointAndReconstructsADisc) {
   A.forward(x, views, Ax);
   A.back(y, views, Aty);
   double lhs = 0, rhs = 0, nAx = 0, ny = 0;
-  for (std::size_t i = 0; i < y.data.size(); ++i) lhs += double(Ax.data[i]) * y.data[i], nAx += double(Ax.data[i]) * Ax.data[i], ny += double(y.data[i]) * y.data[i];
+  for (std::size_t i = 0; i < y.data.size(); ++i)
+    lhs += double(Ax.data[i]) * y.data[i], nAx += double(Ax.data[i]) * Ax.data[i], ny += double(y.data[i]) * y.data[i];
   for (std::size_t i = 0; i < x.data.size(); ++i) rhs += double(x.data[i]) * Aty.data[i];
   EXPECT_GT(nAx, 0);
   EXPECT_LT(std::abs(lhs - rhs) / std::sqrt(nAx * ny), 1e-5);
@@ -58,7 +59,8 @@ TEST(FanBeam, OneRowOneSliceIsAdjointAndReconstructsADisc) {
   const double r = 15, mu = 0.02;
   ProjectionStack b(180, 1, kFan.cols);
   for (int v = 0; v < 180; ++v)
-    for (int u = 0; u < kFan.cols; ++u) b.at(v, 0, u) = static_cast<float>(mu * chord(views[static_cast<std::size_t>(v)], u, c, r));
+    for (int u = 0; u < kFan.cols; ++u)
+      b.at(v, 0, u) = static_cast<float>(mu * chord(views[static_cast<std::size_t>(v)], u, c, r));
   Volume rec(layout);
   WlsOptions o;
   o.iterations = 60;

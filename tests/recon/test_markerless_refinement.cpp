@@ -86,9 +86,9 @@ TEST(MarkerlessRefinement, ACorrectGeometryGetsNothing) {
 }
 
 // A detector whose pixels keep a fixed offset in every view (gains 0.5 % apart between the flat
-// and the projections, and one defective column 5 % off) reconstructs with rings. pixel_gain must be accepted on held-out views and find the
-// column; column_gain, which cannot describe pixel-to-pixel differences down a column, must not
-// win; nothing geometric may move. On the same scan without the pattern neither is accepted.
+// and the projections, and one defective column 5 % off) reconstructs with rings. pixel_gain must be accepted on held-out views
+// and find the column; column_gain, which cannot describe pixel-to-pixel differences down a column, must not win; nothing
+// geometric may move. On the same scan without the pattern neither is accepted.
 TEST(MarkerlessRefinement, AFixedPixelPatternIsFoundAndADefectiveColumnNamed) {
   Simulated s = simulate(0.0);
   const Detector d{96, 72, 1.2, 1.2};
@@ -160,8 +160,9 @@ TEST(MarkerlessRefinement, PepperAxisColumnFromTheDetectorCentre) {
   ASSERT_NE(offset, nullptr);
   ASSERT_TRUE(offset->accepted) << offset->note << " " << offset->parameters.dump() << " z " << offset->z;
   const double u0 = offset->parameters["u0_px"].get<double>(), v0 = offset->parameters["v0_px"].get<double>();
-  std::cout << "pepper: u0 " << u0 << " +- " << offset->uncertainty["u0_px"] << ", v0 " << v0 << " +- " << offset->uncertainty["v0_px"]
-            << "; held-out RMS " << offset->heldout_rms_before << " -> " << offset->heldout_rms_after << "\n";
+  std::cout << "pepper: u0 " << u0 << " +- " << offset->uncertainty["u0_px"] << ", v0 " << v0 << " +- "
+            << offset->uncertainty["v0_px"] << "; held-out RMS " << offset->heldout_rms_before << " -> "
+            << offset->heldout_rms_after << "\n";
   EXPECT_NEAR(u0, 119.2, 0.3);
   EXPECT_NEAR(v0, 95.3, 1.5);  // the scanner's record; weakly observable, so a loose bound
   const double v0_sigma = offset->uncertainty["v0_px"].get<double>();

@@ -101,9 +101,9 @@ TEST(Measurements, CountsToLineIntegralsFollowTheDefinitionInEveryLane) {
     dark.pixels[u] = static_cast<float>(90 + next() % 20);
     flat.pixels[u] = static_cast<float>(i % 97 == 0 ? 50 + next() % 80 : 8000 + next() % 4000);  // some flats at or below dark
     const std::uint32_t kind = next() % 10;
-    counts.pixels[u] = kind == 0   ? dark.pixels[u] - 5                                        // below dark
-                       : kind == 1 ? flat.pixels[u] * 2                                          // transmission above 1.5
-                       : kind == 2 ? std::numeric_limits<float>::quiet_NaN()                    // a dead pixel
+    counts.pixels[u] = kind == 0   ? dark.pixels[u] - 5                       // below dark
+                       : kind == 1 ? flat.pixels[u] * 2                       // transmission above 1.5
+                       : kind == 2 ? std::numeric_limits<float>::quiet_NaN()  // a dead pixel
                                    : dark.pixels[u] + static_cast<float>(next() % 9000);
   }
   std::vector<float> p(n), w(n);

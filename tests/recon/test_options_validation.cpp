@@ -16,9 +16,12 @@ namespace {
 
 TEST(OptionsValidation, SirtOptions) {
   EXPECT_NO_THROW(SirtOptions{}.validate());
-  testing::expect_option_refused(SirtOptions{}, [](auto& o) { o.relaxation = 2.0; }, "SirtOptions.relaxation");
-  testing::expect_option_refused(SirtOptions{}, [](auto& o) { o.relaxation = 0.0; }, "SirtOptions.relaxation");
-  testing::expect_option_refused(SirtOptions{}, [](auto& o) { o.iterations = -1; }, "SirtOptions.iterations");
+  testing::expect_option_refused(
+      SirtOptions{}, [](auto& o) { o.relaxation = 2.0; }, "SirtOptions.relaxation");
+  testing::expect_option_refused(
+      SirtOptions{}, [](auto& o) { o.relaxation = 0.0; }, "SirtOptions.relaxation");
+  testing::expect_option_refused(
+      SirtOptions{}, [](auto& o) { o.iterations = -1; }, "SirtOptions.iterations");
   // The solver checks before any work.
   Volume x(VolumeLayout::centred({4, 4, 4}, Eigen::Vector3d::Ones()));
   EXPECT_THROW(solve_sirt(JosephProjector(), {}, ProjectionStack(), x, {10, 2.5, true}), std::invalid_argument);
@@ -26,26 +29,37 @@ TEST(OptionsValidation, SirtOptions) {
 
 TEST(OptionsValidation, WlsOptions) {
   EXPECT_NO_THROW(WlsOptions{}.validate());
-  testing::expect_option_refused(WlsOptions{}, [](auto& o) { o.iterations = -3; }, "WlsOptions.iterations");
-  testing::expect_option_refused(WlsOptions{}, [](auto& o) { o.tolerance = -1e-4; }, "WlsOptions.tolerance");
-  testing::expect_option_refused(WlsOptions{}, [](auto& o) { o.tolerance = 1.0; }, "WlsOptions.tolerance");
-  testing::expect_option_refused(WlsOptions{}, [](auto& o) { o.lambda = -0.5; }, "WlsOptions.lambda");
-  testing::expect_option_refused(WlsOptions{}, [](auto& o) { o.lambda = std::numeric_limits<double>::infinity(); }, "WlsOptions.lambda");
+  testing::expect_option_refused(
+      WlsOptions{}, [](auto& o) { o.iterations = -3; }, "WlsOptions.iterations");
+  testing::expect_option_refused(
+      WlsOptions{}, [](auto& o) { o.tolerance = -1e-4; }, "WlsOptions.tolerance");
+  testing::expect_option_refused(
+      WlsOptions{}, [](auto& o) { o.tolerance = 1.0; }, "WlsOptions.tolerance");
+  testing::expect_option_refused(
+      WlsOptions{}, [](auto& o) { o.lambda = -0.5; }, "WlsOptions.lambda");
+  testing::expect_option_refused(
+      WlsOptions{}, [](auto& o) { o.lambda = std::numeric_limits<double>::infinity(); }, "WlsOptions.lambda");
 }
 
 TEST(OptionsValidation, ProjectorOptions) {
   EXPECT_NO_THROW(ProjectorOptions{}.validate());
-  testing::expect_option_refused(ProjectorOptions{}, [](auto& o) { o.threads = -2; }, "ProjectorOptions.threads");
-  testing::expect_option_refused(ProjectorOptions{}, [](auto& o) { o.rows_per_block = -1; }, "ProjectorOptions.rows_per_block");
+  testing::expect_option_refused(
+      ProjectorOptions{}, [](auto& o) { o.threads = -2; }, "ProjectorOptions.threads");
+  testing::expect_option_refused(
+      ProjectorOptions{}, [](auto& o) { o.rows_per_block = -1; }, "ProjectorOptions.rows_per_block");
   EXPECT_THROW(JosephProjector(ProjectorOptions{0, -8}), std::invalid_argument);
 }
 
 TEST(OptionsValidation, RefinementOptions) {
   EXPECT_NO_THROW(RefinementOptions{}.validate());
-  testing::expect_option_refused(RefinementOptions{}, [](auto& o) { o.z_accept = 0; }, "RefinementOptions.z_accept");
-  testing::expect_option_refused(RefinementOptions{}, [](auto& o) { o.max_rounds = 0; }, "RefinementOptions.max_rounds");
-  testing::expect_option_refused(RefinementOptions{}, [](auto& o) { o.sharpness_tolerance = 1.5; }, "RefinementOptions.sharpness_tolerance");
-  testing::expect_option_refused(RefinementOptions{}, [](auto& o) { o.nominal_blur_arc_deg = -1; }, "RefinementOptions.nominal_blur_arc_deg");
+  testing::expect_option_refused(
+      RefinementOptions{}, [](auto& o) { o.z_accept = 0; }, "RefinementOptions.z_accept");
+  testing::expect_option_refused(
+      RefinementOptions{}, [](auto& o) { o.max_rounds = 0; }, "RefinementOptions.max_rounds");
+  testing::expect_option_refused(
+      RefinementOptions{}, [](auto& o) { o.sharpness_tolerance = 1.5; }, "RefinementOptions.sharpness_tolerance");
+  testing::expect_option_refused(
+      RefinementOptions{}, [](auto& o) { o.nominal_blur_arc_deg = -1; }, "RefinementOptions.nominal_blur_arc_deg");
 }
 
 }  // namespace

@@ -23,7 +23,8 @@ struct SmallProblem {
   SmallProblem() {
     const Intrinsics K = Intrinsics::from_setup(600, detector, detector.centre_px());
     for (const auto& R : circular_rotations(Eigen::Vector3d::UnitZ(), 20, 0.0, 2 * M_PI))
-      views.push_back(ProjectionMatrix::compose(K, make_rigid(rotation_looking_along(R * Eigen::Vector3d::UnitX()), Eigen::Vector3d(0, 0, 400))));
+      views.push_back(ProjectionMatrix::compose(
+          K, make_rigid(rotation_looking_along(R * Eigen::Vector3d::UnitX()), Eigen::Vector3d(0, 0, 400))));
     Volume truth(layout);
     for (int k = 6; k < 18; ++k)
       for (int j = 4; j < 16; ++j)
@@ -75,9 +76,8 @@ TEST(SolverState, WlsCgContinuedFromItsSavedStateEqualsTheUninterruptedRun) {
   o.tolerance = 0;
   o.lambda = 0.5;
   o.regulariser = Regulariser::gradient;
-  const double difference = continued_difference(p, 5, [&](Volume& x, const Checkpointing* c) {
-    return solve_wls_cg(A, p.views, p.b, &p.weights, x, o, {}, c);
-  });
+  const double difference = continued_difference(
+      p, 5, [&](Volume& x, const Checkpointing* c) { return solve_wls_cg(A, p.views, p.b, &p.weights, x, o, {}, c); });
   EXPECT_LE(difference, 1e-6);
 }
 

@@ -35,7 +35,8 @@ struct SheppLoganScan {
     exact = ProjectionStack(static_cast<int>(views.size()), kDetector.rows, kDetector.cols);
 #pragma omp parallel for schedule(dynamic)
     for (int v = 0; v < exact.views; ++v) {
-      const Image im = render_line_integrals(phantom, views[static_cast<std::size_t>(v)], kDetector, {2, std::nullopt, std::nullopt});
+      const Image im =
+          render_line_integrals(phantom, views[static_cast<std::size_t>(v)], kDetector, {2, std::nullopt, std::nullopt});
       std::copy(im.pixels.begin(), im.pixels.end(), exact.view(v));
     }
     truth = Volume(layout);
@@ -100,7 +101,8 @@ TEST(WlsCg, NoiseFreeSheppLoganBeatsAOneVoxelBlurOfTheTruthAndImprovesEveryItera
   o.lambda = 5.0;
   o.regulariser = Regulariser::gradient;
   std::vector<double> rmse;  // after each iteration: x is updated before the callback
-  const SolverReport report = solve_wls_cg(A, s.views, s.exact, nullptr, x, o, [&](const IterationLog&) { rmse.push_back(s.rmse(x)); });
+  const SolverReport report =
+      solve_wls_cg(A, s.views, s.exact, nullptr, x, o, [&](const IterationLog&) { rmse.push_back(s.rmse(x)); });
   ASSERT_EQ(report.iterations.size(), 31u);
   for (std::size_t i = 1; i < report.iterations.size(); ++i)
     EXPECT_LT(report.iterations[i].cost, report.iterations[i - 1].cost) << "iteration " << i;
@@ -149,8 +151,8 @@ TEST(WlsCg, StatisticalWeightsBeatUnitWeightsAndTikhonovLowersNoise) {
         }
     return std::sqrt(sum2 / n - (sum / n) * (sum / n));
   };
-  std::cout << "RMSE LS " << s.rmse(ls) << ", WLS " << s.rmse(wls) << ", WLS + Tikhonov " << s.rmse(tikhonov)
-            << "; noise " << noise(ls) << ", " << noise(wls) << ", " << noise(tikhonov) << "; clamped " << clamped << "\n";
+  std::cout << "RMSE LS " << s.rmse(ls) << ", WLS " << s.rmse(wls) << ", WLS + Tikhonov " << s.rmse(tikhonov) << "; noise "
+            << noise(ls) << ", " << noise(wls) << ", " << noise(tikhonov) << "; clamped " << clamped << "\n";
   EXPECT_LT(s.rmse(wls), s.rmse(ls));
   EXPECT_LT(noise(tikhonov), 0.9 * noise(wls));
 }
@@ -264,8 +266,8 @@ TEST(Sirt, ConvergesOnNoiseFreeData) {
 
 TEST(MemoryPlan, ThesisSizeFitsIn24GB) {
   // 720^3 volume, 900 views of 720 x 720, weighted CG.
-  const MemoryPlan plan = plan_memory(ReconstructionMethod::wls_cg,
-                                      VolumeLayout::centred({720, 720, 720}, Eigen::Vector3d::Constant(0.1)), 900, 720, 720, true);
+  const MemoryPlan plan = plan_memory(
+      ReconstructionMethod::wls_cg, VolumeLayout::centred({720, 720, 720}, Eigen::Vector3d::Constant(0.1)), 900, 720, 720, true);
   std::cout << "thesis size, WLS-CG: " << plan.describe() << "\n";
   EXPECT_LT(plan.total_bytes(), 24'000'000'000ull);
   EXPECT_EQ(plan.volume_bytes, 720ull * 720 * 720 * 4);

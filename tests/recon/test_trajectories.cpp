@@ -30,7 +30,8 @@ Result reconstruct_sample2(const std::vector<Eigen::Vector3d>& directions) {
   ProjectionStack b(static_cast<int>(views.size()), kDetector.rows, kDetector.cols);
 #pragma omp parallel for schedule(dynamic)
   for (int v = 0; v < b.views; ++v) {
-    const Image im = render_line_integrals(phantom, views[static_cast<std::size_t>(v)], kDetector, {2, std::nullopt, std::nullopt});
+    const Image im =
+        render_line_integrals(phantom, views[static_cast<std::size_t>(v)], kDetector, {2, std::nullopt, std::nullopt});
     std::copy(im.pixels.begin(), im.pixels.end(), b.view(v));
   }
   Volume x(kLayout);
@@ -63,12 +64,13 @@ Result reconstruct_sample2(const std::vector<Eigen::Vector3d>& directions) {
 TEST(Trajectories, SphericalScanOfSample2HasFewerConeArtefactsThanCircular) {
   const int views = 120;
   std::vector<Eigen::Vector3d> circular;
-  for (const auto& R : circular_rotations(Eigen::Vector3d::UnitZ(), views, 0.0, 2 * M_PI)) circular.push_back(R * Eigen::Vector3d::UnitX());
+  for (const auto& R : circular_rotations(Eigen::Vector3d::UnitZ(), views, 0.0, 2 * M_PI))
+    circular.push_back(R * Eigen::Vector3d::UnitX());
   const Result c = reconstruct_sample2(circular);
   const Result s = reconstruct_sample2(random_directions(views, 17));
   std::cout << "sample 2, " << views << " views: RMSE circular " << c.rmse << " /mm, spherical " << s.rmse
-            << " /mm; line-profile gradient magnitude circular " << c.profile_gradient << ", spherical "
-            << s.profile_gradient << "\n";
+            << " /mm; line-profile gradient magnitude circular " << c.profile_gradient << ", spherical " << s.profile_gradient
+            << "\n";
   EXPECT_LT(s.rmse, c.rmse);
   EXPECT_GT(s.profile_gradient, c.profile_gradient);
 }

@@ -24,7 +24,6 @@ struct ViewDirection {
 };
 /// The source's direction for a pose T_camera_holder (the camera frame has the source at 0).
 Eigen::Vector3d source_direction_in_holder(const Rigid& T_camera_holder);
-void write_view_directions_png(const std::vector<ViewDirection>& views, double threshold_px,
-                               const std::filesystem::path& png);
+void write_view_directions_png(const std::vector<ViewDirection>& views, double threshold_px, const std::filesystem::path& png);
 
 }  // namespace ctk

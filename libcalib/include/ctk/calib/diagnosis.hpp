@@ -29,7 +29,7 @@ namespace ctk {
 
 struct DiagnosisOptions {
   double z_accept = 3.0;
-  double robot_sigma_mm = 0.1;   // repeatability the robot prior assumes (3-D RMS)
+  double robot_sigma_mm = 0.1;  // repeatability the robot prior assumes (3-D RMS)
   double robot_sigma_deg = 0.02;
   int max_effects = 4;
   double min_image_effect_px = 0.01;  // image-only effects must explain at least this much held-out RMS
@@ -47,10 +47,10 @@ struct ModelError {
 struct EffectFinding {
   Effect effect;
   bool accepted = false;
-  double z = 0;                    // held-out improvement in standard errors
-  EffectParameters parameters;     // fitted on all views with the effects accepted before it
-  EffectParameters model_before;   // the model it was tested against
-  Eigen::MatrixXd covariance;      // of this effect's parameters (may be empty)
+  double z = 0;                   // held-out improvement in standard errors
+  EffectParameters parameters;    // fitted on all views with the effects accepted before it
+  EffectParameters model_before;  // the model it was tested against
+  Eigen::MatrixXd covariance;     // of this effect's parameters (may be empty)
   std::vector<Effect> confounded_with;
   ModelError before, after;
 };
@@ -58,17 +58,16 @@ struct EffectFinding {
 struct Diagnosis {
   int views_ok = 0;
   ModelError baseline, final_error;
-  std::vector<EffectFinding> effects;   // every candidate, accepted ones first in order of acceptance
-  EffectParameters model;               // all accepted effects
+  std::vector<EffectFinding> effects;  // every candidate, accepted ones first in order of acceptance
+  EffectParameters model;              // all accepted effects
   std::vector<Effect> accepted;
   std::vector<StructureFinding> unexplained;
-  ScanModelFit before_fit, after_fit;   // all views, for pictures
+  ScanModelFit before_fit, after_fit;  // all views, for pictures
 };
 
 /// The observations behind a calibration (observe_calibration) with the repeatability the options
 /// assume, and the detections of spheres the calibration dropped in most views (misplaced ones).
-ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration& calibration,
-                              const DiagnosisOptions& options);
+ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration& calibration, const DiagnosisOptions& options);
 
 Diagnosis diagnose(const ScanObservations& observations, const DiagnosisOptions& options,
                    const std::function<void(const std::string&)>& log = {});

@@ -12,6 +12,7 @@ namespace ctk {
 
 /// Writes `<stem>.field-before.png`, `<stem>.field-after.png`, `<stem>.spheres.png` and, for
 /// robot scans, `<stem>.fk.png`; returns the file names written.
-std::vector<std::string> write_diagnosis_pictures(const Diagnosis& d, const ScanObservations& o, const std::filesystem::path& stem);
+std::vector<std::string> write_diagnosis_pictures(const Diagnosis& d, const ScanObservations& o,
+                                                  const std::filesystem::path& stem);
 
 }  // namespace ctk

@@ -16,7 +16,7 @@ namespace ctk {
 struct WallMeasurement {
   HolderWall wall;
   double inner_sigma_mm = 0, outer_sigma_mm = 0;  // standard errors of the medians over the views
-  int views = 0;                                   // views whose fit converged
+  int views = 0;                                  // views whose fit converged
 };
 
 /// Measures the wall in up to `max_views` calibrated views that see the holder from the side

@@ -11,10 +11,10 @@ namespace ctk {
 
 struct PoseFit {
   Rigid T_camera_holder = Rigid::Identity();
-  std::vector<double> residual_px;      // per point, after the fit
+  std::vector<double> residual_px;  // per point, after the fit
   double rms_px = 0;
   double translation_sigma_mm[3] = {0, 0, 0};  // camera x, y, z (z: along the beam, weakly seen)
-  double rotation_sigma_deg = 0;        // largest axis
+  double rotation_sigma_deg = 0;               // largest axis
   bool converged = false;
 };
 

@@ -18,18 +18,18 @@
 namespace ctk {
 
 struct RobotPriorOptions {
-  int min_views = 12;            // fewer calibrated robot views: no prior (the model has 12 offsets)
-  double start_sigma_mm = 0.1;   // repeatability the first fit assumes (3-D RMS) ...
-  double start_sigma_deg = 0.02; // ... before it is measured
-  void validate() const;  // std::invalid_argument naming the field
+  int min_views = 12;             // fewer calibrated robot views: no prior (the model has 12 offsets)
+  double start_sigma_mm = 0.1;    // repeatability the first fit assumes (3-D RMS) ...
+  double start_sigma_deg = 0.02;  // ... before it is measured
+  void validate() const;          // std::invalid_argument naming the field
 };
 
 struct RobotPriorFit {
   bool applied = false;
-  std::string reason;           // why not, when not applied
-  int views = 0;                // views combined with the prior
+  std::string reason;                  // why not, when not applied
+  int views = 0;                       // views combined with the prior
   double sigma_mm = 0, sigma_deg = 0;  // the repeatability measured on the scan (3-D RMS)
-  EffectParameters model;       // the fitted base and mount offsets
+  EffectParameters model;              // the fitted base and mount offsets
   /// Views whose image pose and the robot's disagree beyond both noises (p < 0.001): left out of
   /// the model's fit; their poses are still combined (the image's noise grows with its residual).
   std::vector<int> inconsistent_views;

@@ -12,16 +12,16 @@
 namespace ctk {
 
 struct ScanCalibration {
-  Geometry geometry;                    // ctk-geometry/1, one entry per projection
-  std::vector<ViewCalibration> views;   // details, same order
+  Geometry geometry;                   // ctk-geometry/1, one entry per projection
+  std::vector<ViewCalibration> views;  // details, same order
   double seconds = 0;
-  int taken_over = 0;                   // views an earlier run had finished (BatchControl::done)
-  int left_undone = 0;                  // views not started when a stop was asked for
+  int taken_over = 0;   // views an earlier run had finished (BatchControl::done)
+  int left_undone = 0;  // views not started when a stop was asked for
 };
 
 /// What a batch takes from an earlier, interrupted run, and hands on as it goes.
 struct BatchControl {
-  const std::map<int, ViewCalibration>* done = nullptr;  // views an earlier run finished: taken as they are
+  const std::map<int, ViewCalibration>* done = nullptr;      // views an earlier run finished: taken as they are
   std::function<void(int, const ViewCalibration&)> on_view;  // each view this run finishes (calls serialised)
   std::function<bool()> stop_requested;                      // true: the views not yet started are left undone
 };
@@ -29,15 +29,15 @@ struct BatchControl {
 /// How one view is seen: a declared source drift moves the focal spot, i.e. the principal point
 /// moves with it and the pose is shifted by the spot's offset (P = K' [R | t - s]).
 struct ViewCamera {
-  Eigen::Matrix3d K;                            // K' of the moved spot
-  Rigid from_nominal = Rigid::Identity();       // camera frame of the nominal spot -> of the moved one
+  Eigen::Matrix3d K;                       // K' of the moved spot
+  Rigid from_nominal = Rigid::Identity();  // camera frame of the nominal spot -> of the moved one
   ProjectionMatrix P(const Rigid& T_camera_holder) const { return ProjectionMatrix::compose(K, from_nominal * T_camera_holder); }
 };
 ViewCamera view_camera(const ScanDescription& scan, int view);
 
 /// Poses from the images alone; robot_prior.hpp's combine_with_robot then adds the robot's prior
-/// (`ctk calibrate` does, unless --image-only). Throws InputError for problems of the scan as a whole (no holder, fewer than 6 spheres,
-/// unreadable flat or dark); per-view problems end up in the views.
+/// (`ctk calibrate` does, unless --image-only). Throws InputError for problems of the scan as a whole (no holder, fewer than 6
+/// spheres, unreadable flat or dark); per-view problems end up in the views.
 ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
                                const std::function<void(int, int)>& progress = {}, const BatchControl* control = nullptr);
 

@@ -30,9 +30,8 @@ enum class Effect {
 /// In the order used to choose among effects that explain the same residual equally well: the
 /// robot's frames first (they are never where the setup says), the detector last (a lab measures
 /// it separately and it rarely changes).
-inline constexpr std::array<Effect, 7> kEffects{Effect::robot_base_frame,    Effect::holder_mount,
-                                                Effect::joint_offsets,       Effect::source_drift,
-                                                Effect::sphere_positions,    Effect::detector_distortion,
+inline constexpr std::array<Effect, 7> kEffects{Effect::robot_base_frame,   Effect::holder_mount,     Effect::joint_offsets,
+                                                Effect::source_drift,       Effect::sphere_positions, Effect::detector_distortion,
                                                 Effect::detector_intrinsics};
 const char* effect_name(Effect e);
 /// Effects that act through the robot's kinematics need a robot pose source.
@@ -40,12 +39,12 @@ bool needs_robot(Effect e);
 
 /// Every effect's parameters; all zero is the declared setup.
 struct EffectParameters {
-  double base[6] = {0, 0, 0, 0, 0, 0};   // rotation vector (rad), translation (mm); base coordinates
-  double mount[6] = {0, 0, 0, 0, 0, 0};  // same, flange coordinates
+  double base[6] = {0, 0, 0, 0, 0, 0};       // rotation vector (rad), translation (mm); base coordinates
+  double mount[6] = {0, 0, 0, 0, 0, 0};      // same, flange coordinates
   double joints[7] = {0, 0, 0, 0, 0, 0, 0};  // true angle = logged + offset (rad)
-  double drift[2] = {0, 0};              // focal spot offset per 100 views, camera x and y (mm)
-  double intrinsics[3] = {0, 0, 0};      // principal point shift u, v (px); focal length change (px, on fu and fv alike)
-  double distortion[3] = {0, 0, 0};      // radial shift at 360 px from the centre (px); centre offset from the principal point (px)
+  double drift[2] = {0, 0};                  // focal spot offset per 100 views, camera x and y (mm)
+  double intrinsics[3] = {0, 0, 0};          // principal point shift u, v (px); focal length change (px, on fu and fv alike)
+  double distortion[3] = {0, 0, 0};  // radial shift at 360 px from the centre (px); centre offset from the principal point (px)
   std::vector<Eigen::Vector3d> spheres;  // offset of each sphere (mm, holder frame)
   /// Which sphere offsets are free when sphere_positions is fitted: empty means all (the list's
   /// centroid, orientation and scale then fixed by a gauge); a subset is held in place by the rest.
@@ -63,19 +62,19 @@ struct DeclaredSetup {
 };
 
 struct ViewObservations {
-  int view = 0;                      // projection index (time order)
+  int view = 0;  // projection index (time order)
   std::optional<panda::Joints> joints;
-  Rigid T_calibrated;                // the per-view calibrated pose (start of every fit)
+  Rigid T_calibrated;  // the per-view calibrated pose (start of every fit)
   std::vector<int> spheres;
   std::vector<Eigen::Vector2d> measured_px;
-  double centre_sigma_px = 0;        // this view's own detection noise; 0: the scan's
+  double centre_sigma_px = 0;  // this view's own detection noise; 0: the scan's
 };
 
 struct ScanObservations {
   DeclaredSetup setup;
   std::vector<ViewObservations> views;
-  double centre_sigma_px = 0.05;     // detection noise per axis, from the calibration residuals
-  double robot_sigma_mm = 0.1;       // robot repeatability (per view, total over the 3 axes)
+  double centre_sigma_px = 0.05;  // detection noise per axis, from the calibration residuals
+  double robot_sigma_mm = 0.1;    // robot repeatability (per view, total over the 3 axes)
   double robot_sigma_deg = 0.02;
 };
 

@@ -15,21 +15,20 @@ namespace ctk {
 
 struct ScanModelFit {
   EffectParameters parameters;
-  std::vector<Rigid> poses;                  // per fitted view, in the order of `views`
-  std::vector<double> cost;                  // chi-square per view (image + prior)
-  std::vector<double> image_sq_px;           // sum of squared image residuals per view (px^2)
-  std::vector<int> residual_count;           // image residuals per view (2 per sphere)
+  std::vector<Rigid> poses;                               // per fitted view, in the order of `views`
+  std::vector<double> cost;                               // chi-square per view (image + prior)
+  std::vector<double> image_sq_px;                        // sum of squared image residuals per view (px^2)
+  std::vector<int> residual_count;                        // image residuals per view (2 per sphere)
   std::vector<std::vector<Eigen::Vector2d>> residual_px;  // measured - model, per view and sphere
-  Eigen::MatrixXd covariance;                // of the active effects' parameters, in fit order (may be empty)
-  std::vector<int> covariance_offsets;       // where each active effect starts in it
+  Eigen::MatrixXd covariance;                             // of the active effects' parameters, in fit order (may be empty)
+  std::vector<int> covariance_offsets;                    // where each active effect starts in it
   bool converged = false;
 };
 
 /// Fits the poses of `views` (indices into observations.views) and the parameters of `active`,
 /// starting from `start`; the other effects stay at their values in `start`.
 ScanModelFit fit_scan_model(const ScanObservations& observations, const std::vector<Effect>& active,
-                            const std::vector<std::size_t>& views, const EffectParameters& start,
-                            bool with_covariance = false);
+                            const std::vector<std::size_t>& views, const EffectParameters& start, bool with_covariance = false);
 
 /// Every view of `views` alone with the model fixed: its pose from its spheres and the robot
 /// prior (the held-out test).

@@ -18,12 +18,12 @@ struct SphereDetection {
 };
 
 struct DetectionOptions {
-  double radius_px = 2.6;         // projected sphere radius
-  double noise_sigmas = 5.0;      // response threshold, in robust noise deviations
-  double min_roundness = 0.3;     // smaller / larger curvature: below, a ridge (a wall's edge)
+  double radius_px = 2.6;      // projected sphere radius
+  double noise_sigmas = 5.0;   // response threshold, in robust noise deviations
+  double min_roundness = 0.3;  // smaller / larger curvature: below, a ridge (a wall's edge)
   int max_candidates = 400;
-  Eigen::AlignedBox2d region;     // the pixels searched, e.g. where a first guess puts the spheres
-                                  // with room for its error (empty: the whole image)
+  Eigen::AlignedBox2d region;  // the pixels searched, e.g. where a first guess puts the spheres
+                               // with room for its error (empty: the whole image)
 };
 
 /// `line_integrals` is one view's image; returns the detections, strongest first.
@@ -32,7 +32,6 @@ std::vector<SphereDetection> detect_spheres(const Image& line_integrals, const D
 /// The sub-pixel centre of a blob near `guess`: background plane from the ring between
 /// radius + 2 and radius + 4, centroid of the positive remainder within radius + 1.5.
 /// Returns false when the window leaves the image or holds no signal.
-bool refine_centroid(const Image& line_integrals, const Eigen::Vector2d& guess, double radius_px,
-                     SphereDetection& out);
+bool refine_centroid(const Image& line_integrals, const Eigen::Vector2d& guess, double radius_px, SphereDetection& out);
 
 }  // namespace ctk

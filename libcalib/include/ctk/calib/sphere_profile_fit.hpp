@@ -15,9 +15,9 @@
 namespace ctk {
 
 struct ProfileFitOptions {
-  double margin_px = 3.0;   // the window reaches this far beyond the sphere's rim
-  int subsamples = 3;       // per pixel and axis: the model is averaged over the pixel's area
-  double max_move_px = 1.0; // a fit moving further from its start is not trusted
+  double margin_px = 3.0;    // the window reaches this far beyond the sphere's rim
+  int subsamples = 3;        // per pixel and axis: the model is averaged over the pixel's area
+  double max_move_px = 1.0;  // a fit moving further from its start is not trusted
 };
 
 /// A known shape of the background at an image position (pixel units), e.g. the path length
@@ -34,8 +34,7 @@ bool refine_by_profile_fit(const Image& line_integrals, double radius_px, Sphere
 
 /// Spheres whose windows overlap, fitted together: one background, a centre, radius and amplitude
 /// per ball. Returns which were refined; the others keep their start.
-std::vector<bool> refine_cluster_by_profile_fit(const Image& line_integrals, double radius_px,
-                                                std::span<SphereDetection> spheres, const ProfileFitOptions& options = {},
-                                                const BackgroundShape& shape = nullptr);
+std::vector<bool> refine_cluster_by_profile_fit(const Image& line_integrals, double radius_px, std::span<SphereDetection> spheres,
+                                                const ProfileFitOptions& options = {}, const BackgroundShape& shape = nullptr);
 
 }  // namespace ctk

@@ -13,12 +13,12 @@
 namespace ctk {
 
 struct CalibrationOptions {
-  int min_spheres = 6;        // fewer matched spheres: rejected
-  double max_rms_px = 0.5;    // larger reprojection RMS: rejected
-  double search_px = 40;      // how far the first guess may put the pattern (5 mm / 3 deg here)
-  double robust_px = 1.0;     // Cauchy scale of the pose fit
+  int min_spheres = 6;                     // fewer matched spheres: rejected
+  double max_rms_px = 0.5;                 // larger reprojection RMS: rejected
+  double search_px = 40;                   // how far the first guess may put the pattern (5 mm / 3 deg here)
+  double robust_px = 1.0;                  // Cauchy scale of the pose fit
   double max_first_guess_error_deg = 6.0;  // a fitted pose turned further from the guess is refused
-  void validate() const;  // std::invalid_argument naming the field
+  void validate() const;                   // std::invalid_argument naming the field
 };
 
 struct ViewCalibration {
@@ -33,7 +33,7 @@ struct ViewCalibration {
   double translation_sigma_mm[3] = {0, 0, 0};  // camera x, y, z (z along the beam)
   double rotation_sigma_deg = 0;
   std::vector<Eigen::Vector2d> detected_px, fitted_px;  // the used pairs, for pictures
-  std::vector<int> spheres;                              // their sphere indices
+  std::vector<int> spheres;                             // their sphere indices
   /// Matched spheres left out of the fit as outliers (a sample's edge pulling one view's centre,
   /// or a sphere that is not where the holder's list says: the diagnosis tells them apart).
   std::vector<int> outlier_spheres;
@@ -43,8 +43,8 @@ struct ViewCalibration {
 /// `K`: the scan's detector matrix; `initial`: first-guess T_camera_holder (robot FK);
 /// `distortion`: the detector's declared radial distortion (centres are undistorted before the
 /// fit, so P stays the pinhole matrix of the contract; detected_px are then ideal positions).
-ViewCalibration calibrate_view(const Image& line_integrals, const Eigen::Matrix3d& K, const Rigid& initial,
-                               const Holder& holder, const Detector& detector, const CalibrationOptions& options,
+ViewCalibration calibrate_view(const Image& line_integrals, const Eigen::Matrix3d& K, const Rigid& initial, const Holder& holder,
+                               const Detector& detector, const CalibrationOptions& options,
                                const std::optional<RadialDistortion>& distortion = std::nullopt);
 
 }  // namespace ctk

@@ -10,13 +10,11 @@ namespace ctk {
 
 /// Calls `write` with a stream to a temporary file, then renames it to `path`.
 /// Throws std::runtime_error (naming the path) when the file cannot be written.
-void write_file_atomically(const std::filesystem::path& path,
-                           const std::function<void(std::ostream&)>& write);
+void write_file_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& write);
 
 /// Same for a file written by a library that takes a path (OpenImageIO, ...): `write` receives the
 /// temporary path, which must carry the same extension so the library picks the right format.
-void write_path_atomically(const std::filesystem::path& path,
-                           const std::function<void(const std::filesystem::path&)>& write);
+void write_path_atomically(const std::filesystem::path& path, const std::function<void(const std::filesystem::path&)>& write);
 
 void write_text_atomically(const std::filesystem::path& path, std::string_view text);
 

@@ -39,8 +39,7 @@ Eigen::Matrix3d tilted_detector_matrix(const Intrinsics& nominal, double sdd_mm,
 /// The detector matrix seen from a focal spot displaced by `source_offset_mm` (camera frame) while
 /// the detector stays put: P = M' [I | -offset] [R | t]. `M` is a detector matrix whose third
 /// row is the plane's unit normal n (K or a tilted one) and the plane passes through (0, 0, sdd).
-Eigen::Matrix3d detector_matrix_for_source_at(const Eigen::Matrix3d& M, double sdd_mm,
-                                              const Eigen::Vector3d& source_offset_mm);
+Eigen::Matrix3d detector_matrix_for_source_at(const Eigen::Matrix3d& M, double sdd_mm, const Eigen::Vector3d& source_offset_mm);
 
 /// Radial distortion of the detector about a centre, as the diagnosis contract names it: a point
 /// whose ideal (pinhole) projection is x is measured at x + k1 |x - c|^2 (x - c).

@@ -17,7 +17,7 @@ struct GeometryView {
   int index = 0;
   std::string projection;  // file name as in the scan
   ViewStatus status = ViewStatus::ok;
-  std::string reason;      // why, when not ok
+  std::string reason;                 // why, when not ok
   std::optional<ProjectionMatrix> P;  // present for every ok view
   std::optional<double> rms_px;
   std::optional<int> spheres_used;

@@ -39,8 +39,7 @@ struct Holder {
   std::optional<HolderWall> wall;
 
   /// n spheres equally spaced in tau over [tau_begin, tau_end] — how a helix holder is designed.
-  static Holder on_helix(const Helix& helix, double sphere_diameter_mm, int count, double tau_begin,
-                         double tau_end);
+  static Holder on_helix(const Helix& helix, double sphere_diameter_mm, int count, double tau_begin, double tau_end);
   double tau_min() const;  // extent of the spheres along the axis
   double tau_max() const;
 };
@@ -52,13 +51,13 @@ Holder reference_helix_holder();
 
 struct HelixPoint {
   double tau = 0;
-  Eigen::Vector2d uv;        // projection of h(tau)
-  double distance_px = 0;    // from the query pixel
+  Eigen::Vector2d uv;      // projection of h(tau)
+  double distance_px = 0;  // from the query pixel
 };
 
 /// The point of the projected helix curve nearest to pixel `uv`, searched continuously over
 /// tau in [tau_begin, tau_end] (a coarse scan for the basin, then Newton refinement).
-HelixPoint closest_point_on_projected_helix(const ProjectionMatrix& P, const Helix& helix,
-                                            const Eigen::Vector2d& uv, double tau_begin, double tau_end);
+HelixPoint closest_point_on_projected_helix(const ProjectionMatrix& P, const Helix& helix, const Eigen::Vector2d& uv,
+                                            double tau_begin, double tau_end);
 
 }  // namespace ctk

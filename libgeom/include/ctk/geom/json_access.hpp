@@ -25,14 +25,13 @@ void require_same_run(const nlohmann::json& saved, const nlohmann::json& now, co
 class JsonNode {
  public:
   /// `warnings` (optional) collects notes about unknown keys.
-  JsonNode(const nlohmann::json& value, std::string file, std::string path,
-           std::vector<std::string>* warnings = nullptr);
+  JsonNode(const nlohmann::json& value, std::string file, std::string path, std::vector<std::string>* warnings = nullptr);
 
   bool has(std::string_view key) const;
-  JsonNode at(std::string_view key) const;                 // required key
+  JsonNode at(std::string_view key) const;                   // required key
   std::optional<JsonNode> find(std::string_view key) const;  // optional key
-  JsonNode at(std::size_t index) const;                    // array element
-  std::size_t size() const;                                // array length (must be an array)
+  JsonNode at(std::size_t index) const;                      // array element
+  std::size_t size() const;                                  // array length (must be an array)
 
   double number() const;  // finite number
   double positive_number() const;

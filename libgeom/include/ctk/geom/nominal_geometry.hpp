@@ -13,7 +13,7 @@ namespace ctk {
 struct NominalView {
   std::optional<Rigid> T_camera_holder;  // robot scans only
   std::optional<ProjectionMatrix> P;
-  std::string reason;                    // why there is no pose (absent joints row, limits)
+  std::string reason;  // why there is no pose (absent joints row, limits)
 };
 
 std::vector<NominalView> nominal_views(const ScanDescription& scan);

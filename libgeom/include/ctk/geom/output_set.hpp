@@ -26,7 +26,7 @@ std::filesystem::path temporary_beside(const std::filesystem::path& path);
 
 class OutputSet {
  public:
-  OutputSet();  // becomes the process' active set; one at a time
+  OutputSet();   // becomes the process' active set; one at a time
   ~OutputSet();  // removes whatever was written and not published
   OutputSet(const OutputSet&) = delete;
   OutputSet& operator=(const OutputSet&) = delete;

@@ -42,10 +42,8 @@ Eigen::Matrix<T, 4, 4> forward_kinematics_matrix(const T* q) {
     const double ca = std::cos(table[i].alpha_rad), sa = std::sin(table[i].alpha_rad);
     const T ct = cos(theta), st = sin(theta);
     Eigen::Matrix<T, 4, 4> A;
-    A << ct, -st, T(0), T(table[i].a_mm),
-        st * ca, ct * ca, T(-sa), T(-sa * table[i].d_mm),
-        st * sa, ct * sa, T(ca), T(ca * table[i].d_mm),
-        T(0), T(0), T(0), T(1);
+    A << ct, -st, T(0), T(table[i].a_mm), st * ca, ct * ca, T(-sa), T(-sa * table[i].d_mm), st * sa, ct * sa, T(ca),
+        T(ca * table[i].d_mm), T(0), T(0), T(0), T(1);
     M = M * A;
   }
   return M;

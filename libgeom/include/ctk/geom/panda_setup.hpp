@@ -23,8 +23,8 @@ struct PandaSetup {
 
 /// Ready pose (0, -pi/4, 0, -3pi/4, 0, pi/2, pi/4): flange pointing down; holder centre
 /// `holder_offset_mm` beyond the flange on its axis; beam horizontal along the base's +y.
-PandaSetup reference_panda_setup(const Detector& detector, double source_to_detector_mm,
-                                 double source_to_isocentre_mm, double holder_offset_mm = 150.0);
+PandaSetup reference_panda_setup(const Detector& detector, double source_to_detector_mm, double source_to_isocentre_mm,
+                                 double holder_offset_mm = 150.0);
 
 /// `count` joint vectors from the ready pose with joint 7 stepped evenly over its whole range
 /// (332 degrees: one joint cannot turn a full circle).

@@ -32,9 +32,9 @@ class RunFiles {
  private:
   struct Entry {
     std::string what;
-    std::filesystem::path path;    // as given
-    std::filesystem::path place;   // absolute, `..` and symbolic links resolved
-    std::string suffix;            // families only
+    std::filesystem::path path;   // as given
+    std::filesystem::path place;  // absolute, `..` and symbolic links resolved
+    std::string suffix;           // families only
   };
   std::vector<Entry> inputs_, input_folders_, outputs_, output_folders_, families_;
 };

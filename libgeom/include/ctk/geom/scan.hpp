@@ -19,8 +19,8 @@ namespace ctk {
 enum class ProjectionKind { counts, line_integrals };
 
 struct ProjectionSet {
-  std::string files_pattern;                  // as written: printf pattern or empty when a list
-  std::vector<std::string> file_names;        // as written when a list was given
+  std::string files_pattern;            // as written: printf pattern or empty when a list
+  std::vector<std::string> file_names;  // as written when a list was given
   int count = 0;
   ProjectionKind kind = ProjectionKind::line_integrals;
   /// As written (required for counts). A list of several frames (e.g. flats taken before and
@@ -40,8 +40,8 @@ struct PandaPoseSource {
 };
 
 struct MatricesPoseSource {
-  std::string file;  // a ctk-geometry/1 file, as written
-  Geometry geometry; // loaded by read_scan
+  std::string file;   // a ctk-geometry/1 file, as written
+  Geometry geometry;  // loaded by read_scan
 };
 
 struct ScanDescription {
@@ -50,9 +50,9 @@ struct ScanDescription {
   Eigen::Vector2d principal_point_px{0, 0};
   double source_to_detector_mm = 0;
   ProjectionSet projections;
-  std::optional<PandaPoseSource> panda;       // exactly one of panda / matrices is set
+  std::optional<PandaPoseSource> panda;  // exactly one of panda / matrices is set
   std::optional<MatricesPoseSource> matrices;
-  std::optional<Holder> holder;               // required for calibration, optional otherwise
+  std::optional<Holder> holder;  // required for calibration, optional otherwise
   /// Optional key `detector.radial_distortion` {k1_per_px2, center_px} (an extension of
   /// ctk-scan/1, as the diagnosis reports it): the detector measures x at x + k1 |x - c|^2 (x - c).
   std::optional<RadialDistortion> distortion;
@@ -62,7 +62,7 @@ struct ScanDescription {
   /// Optional key `written_by` {"run": id} (an extension of ctk-scan/1): the ctk run that wrote the
   /// scan and its images at once (ctk simulate). Images that name another run are refused.
   std::string written_by_run;
-  std::vector<std::string> warnings;          // unknown keys and other non-fatal findings
+  std::vector<std::string> warnings;  // unknown keys and other non-fatal findings
 
   Intrinsics intrinsics() const { return Intrinsics::from_setup(source_to_detector_mm, detector, principal_point_px); }
   /// Where the focal spot is at `view` (camera frame, mm), from the declared drift.

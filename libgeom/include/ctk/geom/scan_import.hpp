@@ -54,8 +54,8 @@ struct ImportedScan {
 /// `matrices` address stored pixels of `detector`, one per projection. The scan's summary
 /// intrinsics (SDD, principal point: informative only for a matrices scan) come from the first
 /// view. File names are made relative to `scan_file`'s folder.
-ImportedScan import_matrices(const Detector& detector, const std::vector<ProjectionMatrix>& matrices,
-                             ProjectionSet projections, const std::filesystem::path& scan_file);
+ImportedScan import_matrices(const Detector& detector, const std::vector<ProjectionMatrix>& matrices, ProjectionSet projections,
+                             const std::filesystem::path& scan_file);
 
 /// Writes the geometry beside the scan (`<stem>.matrices.json`), then the scan, both atomically.
 void write_imported_scan(const ImportedScan& imported, const std::filesystem::path& scan_file);

@@ -9,8 +9,7 @@ namespace ctk {
 
 /// `count` rotations about `axis` (any unit vector, holder frame), equally spaced from `start_rad`
 /// over `span_rad` (2 pi: a full orbit without repeating the first view).
-std::vector<Eigen::Matrix3d> circular_rotations(const Eigen::Vector3d& axis, int count, double start_rad,
-                                                double span_rad);
+std::vector<Eigen::Matrix3d> circular_rotations(const Eigen::Vector3d& axis, int count, double start_rad, double span_rad);
 
 /// The holder rotation that looks along `direction` (holder frame): R * direction = +z. The roll
 /// about the beam puts the holder axis +w as close to image "up" (-v, camera -y) as it can go.
@@ -22,7 +21,7 @@ class HealpixSphere {
   explicit HealpixSphere(int nside);
   int nside() const { return nside_; }
   int size() const;
-  Eigen::Vector3d direction(int cell) const;     // unit vector of the cell centre
+  Eigen::Vector3d direction(int cell) const;  // unit vector of the cell centre
   int cell_of(const Eigen::Vector3d& direction) const;
   std::vector<int> cells_within(const Eigen::Vector3d& direction, double radius_rad) const;
   double cell_area_sr() const;

@@ -21,16 +21,16 @@ struct SampleRegion {
 struct SegmentationOptions {
   SampleRegion region;
   double wall_inner_mm = 25.5, wall_outer_mm = 27.5;  // inside the reference holder's 3 mm POM wall
-  double times_wall = 2.0;        // absorbers attenuate more than this many times the wall
-  std::size_t min_voxels = 20;    // fewer above the threshold: noise, nothing segmented
+  double times_wall = 2.0;                            // absorbers attenuate more than this many times the wall
+  std::size_t min_voxels = 20;                        // fewer above the threshold: noise, nothing segmented
 };
 
 struct AbsorberSegmentation {
-  Volume absorbers;          // 1 inside absorbers, 0 elsewhere (same layout as the input)
-  double wall_level = 0;     // median of the holder wall's voxels, 1/mm
-  double threshold = 0;      // 1/mm
+  Volume absorbers;       // 1 inside absorbers, 0 elsewhere (same layout as the input)
+  double wall_level = 0;  // median of the holder wall's voxels, 1/mm
+  double threshold = 0;   // 1/mm
   std::size_t voxels = 0;
-  std::string note;          // why nothing was segmented
+  std::string note;  // why nothing was segmented
 };
 
 AbsorberSegmentation segment_absorbers(const Volume& reconstruction, const SegmentationOptions& options = {});

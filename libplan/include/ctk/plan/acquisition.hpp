@@ -29,10 +29,10 @@ struct AcquisitionRequest {
 
 struct AcquisitionAnswer {
   bool acquired = false;
-  std::string reason;             // why not, when not
+  std::string reason;  // why not, when not
   panda::Joints joints{};
-  Image counts;                   // raw detector counts
-  std::string projection_file;    // where the image is (relative to the exchange folder), if a file
+  Image counts;                 // raw detector counts
+  std::string projection_file;  // where the image is (relative to the exchange folder), if a file
 };
 
 class Acquisition {

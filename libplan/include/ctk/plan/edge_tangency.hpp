@@ -29,7 +29,6 @@ struct EdgeTangencyOptions {
 /// the region has no gradient at all). `directions` should cover the sphere evenly (HEALPix
 /// cells), or the mean is not the sphere's.
 std::vector<double> tangent_edge_demand(const Volume& volume, const SampleRegion& region,
-                                        const std::vector<Eigen::Vector3d>& directions,
-                                        const EdgeTangencyOptions& options = {});
+                                        const std::vector<Eigen::Vector3d>& directions, const EdgeTangencyOptions& options = {});
 
 }  // namespace ctk

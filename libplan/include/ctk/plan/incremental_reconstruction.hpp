@@ -15,10 +15,10 @@
 namespace ctk {
 
 struct IncrementalOptions {
-  int binning = 3;              // detector pixels per coarse pixel, per axis
+  int binning = 3;  // detector pixels per coarse pixel, per axis
   int first_update_iterations = 8;
   int iterations_per_update = 1;
-  double lambda = 0.02;         // gradient penalty (voxel units) against streaks from few views
+  double lambda = 0.02;  // gradient penalty (voxel units) against streaks from few views
 };
 
 class IncrementalReconstruction {

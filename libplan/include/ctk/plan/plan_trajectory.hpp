@@ -28,9 +28,9 @@ struct PlanningSetup {
 };
 
 struct PlanningOptions {
-  int scout_nside = 2;  // 24 scout directions (one of each opposite pair of 48 cells)
-  int views = 100;      // acquired views wanted in all (scout included)
-  int max_attempts = 0; // requests in all; 0: three times `views`
+  int scout_nside = 2;   // 24 scout directions (one of each opposite pair of 48 cells)
+  int views = 100;       // acquired views wanted in all (scout included)
+  int max_attempts = 0;  // requests in all; 0: three times `views`
   /// Non-empty: no scout and no planning, these directions are requested in order until `views`
   /// are acquired (the trajectories a planned one is compared with).
   std::vector<Eigen::Vector3d> fixed_directions;
@@ -43,18 +43,18 @@ struct PlanningOptions {
 };
 
 struct PlannedViewRecord {
-  int index = 0;                 // request number (the exchange's view number)
+  int index = 0;  // request number (the exchange's view number)
   bool scout = false;
   Eigen::Vector3d requested{0, 0, 1};
-  bool acquired = false;         // the lab took the projection
-  bool calibrated = false;       // and its spheres fixed the pose: only such views are used
-  std::string reason;            // unreachable, or why calibration failed
+  bool acquired = false;    // the lab took the projection
+  bool calibrated = false;  // and its spheres fixed the pose: only such views are used
+  std::string reason;       // unreachable, or why calibration failed
   panda::Joints joints{};
   std::optional<ProjectionMatrix> P;  // calibrated; absent when calibration failed
   double calibration_rms_px = 0;
-  double damage_mm = 0;          // of the requested direction when it was chosen
+  double damage_mm = 0;  // of the requested direction when it was chosen
   std::string projection_file;
-  double planning_seconds = 0;   // this view's share of the planner's own work (not acquisition)
+  double planning_seconds = 0;  // this view's share of the planner's own work (not acquisition)
 };
 
 struct PlanningResult {
@@ -67,8 +67,8 @@ struct PlanningResult {
   std::vector<double> step_seconds;      // planner time of each planned (not scout) step
   PlannerOptions planner;                // the settings the draws were made with
   EdgeTangencyOptions edge_tangency;     // and how the edges' demand was found
-  int acquired() const;    // projections taken
-  int calibrated() const;  // of those, calibrated: the views of the trajectory
+  int acquired() const;                  // projections taken
+  int calibrated() const;                // of those, calibrated: the views of the trajectory
 };
 
 PlanningResult plan_trajectory(Acquisition& acquisition, const PlanningSetup& setup, const PlanningOptions& options,

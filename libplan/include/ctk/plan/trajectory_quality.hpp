@@ -18,17 +18,17 @@
 namespace ctk {
 
 struct LineProfile {
-  int axis = 0;                 // along x, y or z
+  int axis = 0;                  // along x, y or z
   std::array<int, 3> through{};  // voxel the line passes through
   std::vector<float> reconstruction, truth;
 };
 
 struct TrajectoryQuality {
-  double rmse_per_mm = 0;                  // over the sample region
+  double rmse_per_mm = 0;                    // over the sample region
   double rmse_outside_absorbers_per_mm = 0;  // over the region less the absorbers and their face neighbours
-  double profile_gradient_per_mm2 = 0;     // mean |d mu / ds| across the truth's edges on the profiles
+  double profile_gradient_per_mm2 = 0;       // mean |d mu / ds| across the truth's edges on the profiles
   double truth_profile_gradient_per_mm2 = 0;
-  double edge_gradient_per_mm2 = 0;        // the same over every axis-parallel line of the region
+  double edge_gradient_per_mm2 = 0;  // the same over every axis-parallel line of the region
   double truth_edge_gradient_per_mm2 = 0;
   std::vector<LineProfile> profiles;
 };

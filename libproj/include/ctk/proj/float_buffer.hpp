@@ -14,7 +14,7 @@ namespace ctk {
 
 namespace detail {
 inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
-void* allocate_large(std::size_t bytes);           // 2 MB aligned, advised, never null
+void* allocate_large(std::size_t bytes);  // 2 MB aligned, advised, never null
 void deallocate_large(void* p);
 }  // namespace detail
 
@@ -39,7 +39,9 @@ struct HugePageAllocator {
       detail::deallocate_large(p);
   }
   template <class U>
-  bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
+  bool operator==(const HugePageAllocator<U>&) const noexcept {
+    return true;
+  }
 };
 
 /// Float storage of volumes and projection stacks (64-byte aligned; huge pages when large).

@@ -36,7 +36,6 @@ void write_volume_tiff(const Volume& volume, const std::filesystem::path& file);
 /// must not darken the picture), at least 1e-6.
 float preview_ceiling(const Volume& volume);
 /// Slice `index` across `axis` (0: x, 1: y, 2: z), grey levels linear from `low` to `high`.
-void write_slice_png(const Volume& volume, int axis, int index, float low, float high,
-                     const std::filesystem::path& file);
+void write_slice_png(const Volume& volume, int axis, int index, float low, float high, const std::filesystem::path& file);
 
 }  // namespace ctk

@@ -23,7 +23,7 @@ struct ProjectorOptions {
                            // the detector): the tables take slabs of the volume that many lines
                            // of the densest view thick, so views with sparser lines take fewer;
                            // 0: JosephProjector::default_rows_per_block of the views
-  void validate() const;  // std::invalid_argument naming the field
+  void validate() const;   // std::invalid_argument naming the field
 };
 
 class JosephProjector {

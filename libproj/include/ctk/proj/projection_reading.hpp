@@ -18,11 +18,11 @@ struct FlatDark {
 std::optional<FlatDark> read_flat_dark(const ScanDescription& scan);
 
 /// Line integrals from raw counts; `clamped` counts pixels whose normalised transmission was not
-/// in (0, 1.5] and was clamped there (a NaN count stays NaN, for mask_non_finite). Weights (optional) are the detected counts relative to the
-/// open beam, (I - dark) / (flat - dark): Poisson statistics give var(p) ~ 1 / counts, and this
-/// scaling keeps open-beam weights at 1.
-void counts_to_line_integrals(const Image& counts, const Image& flat, const Image& dark, float* line_integrals,
-                              float* weights, std::size_t& clamped);
+/// in (0, 1.5] and was clamped there (a NaN count stays NaN, for mask_non_finite). Weights (optional) are the detected counts
+/// relative to the open beam, (I - dark) / (flat - dark): Poisson statistics give var(p) ~ 1 / counts, and this scaling keeps
+/// open-beam weights at 1.
+void counts_to_line_integrals(const Image& counts, const Image& flat, const Image& dark, float* line_integrals, float* weights,
+                              std::size_t& clamped);
 
 /// Pixels whose line integral is not a finite number (NaN or infinite in a float image, a NaN
 /// count) carry no measurement: each becomes the mean of its finite neighbours (0 when none is) so

@@ -12,12 +12,19 @@ struct ProjectionStack {
 
   ProjectionStack() = default;
   ProjectionStack(int v, int r, int c)
-      : views(v), rows(r), cols(c), data(static_cast<std::size_t>(v) * static_cast<std::size_t>(r) * static_cast<std::size_t>(c), 0.0f) {}
+      : views(v),
+        rows(r),
+        cols(c),
+        data(static_cast<std::size_t>(v) * static_cast<std::size_t>(r) * static_cast<std::size_t>(c), 0.0f) {}
   std::size_t pixels_per_view() const { return static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols); }
   float* view(int v) { return data.data() + static_cast<std::size_t>(v) * pixels_per_view(); }
   const float* view(int v) const { return data.data() + static_cast<std::size_t>(v) * pixels_per_view(); }
-  float& at(int v, int row, int col) { return view(v)[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(col)]; }
-  float at(int v, int row, int col) const { return view(v)[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(col)]; }
+  float& at(int v, int row, int col) {
+    return view(v)[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(col)];
+  }
+  float at(int v, int row, int col) const {
+    return view(v)[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(col)];
+  }
 };
 
 }  // namespace ctk

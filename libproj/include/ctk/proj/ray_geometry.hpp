@@ -26,7 +26,7 @@ ViewRays view_rays(const ProjectionMatrix& P, const VolumeLayout& layout);
 struct MarchedRay {
   int axis = 0;
   double pb_mid = 0, beta_b = 0, pc_mid = 0, beta_c = 0;
-  double weight_mm = 0;   // path length per slice
+  double weight_mm = 0;          // path length per slice
   int k_first = 0, k_last = -1;  // empty when k_last < k_first
 };
 

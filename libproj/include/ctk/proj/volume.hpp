@@ -32,8 +32,9 @@ struct Volume {
   float& at(int i, int j, int k) { return data[index(i, j, k)]; }
   float at(int i, int j, int k) const { return data[index(i, j, k)]; }
   std::size_t index(int i, int j, int k) const {
-    return static_cast<std::size_t>(i) + static_cast<std::size_t>(layout.size[0]) *
-                                             (static_cast<std::size_t>(j) + static_cast<std::size_t>(layout.size[1]) * static_cast<std::size_t>(k));
+    return static_cast<std::size_t>(i) +
+           static_cast<std::size_t>(layout.size[0]) *
+               (static_cast<std::size_t>(j) + static_cast<std::size_t>(layout.size[1]) * static_cast<std::size_t>(k));
   }
 };
 

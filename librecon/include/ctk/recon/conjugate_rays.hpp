@@ -30,7 +30,7 @@ struct ConjugateRayEstimate {
   int sense = 0;                 // s above: the one whose pairs agree (the other disagrees by far)
   double rms_mismatch = 0;       // between the two measurements of a line at u0, line-integral units
   double rms_mismatch_other_sense = 0;
-  std::int64_t pairs = 0;        // pairs of measurements compared at u0
+  std::int64_t pairs = 0;  // pairs of measurements compared at u0
 };
 
 /// The row nearest `v0_px` of a circular scan's stack as a sinogram, the views' angles taken from

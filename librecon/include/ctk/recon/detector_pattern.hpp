@@ -13,10 +13,10 @@ namespace ctk {
 
 struct DetectorPattern {
   int rows = 0, cols = 0;
-  bool by_column = false;             // one value per column, the same down every row
-  std::vector<double> mean;           // per pixel (row-major)
-  std::vector<double> standard_error; // of each mean, from the scatter between views
-  std::vector<bool> used;             // pixels in the rows the costs use
+  bool by_column = false;              // one value per column, the same down every row
+  std::vector<double> mean;            // per pixel (row-major)
+  std::vector<double> standard_error;  // of each mean, from the scatter between views
+  std::vector<bool> used;              // pixels in the rows the costs use
 };
 
 /// The mean over `views` of `sign` times each image, per pixel (or per column: the mean down the

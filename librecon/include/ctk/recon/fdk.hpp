@@ -14,12 +14,12 @@
 namespace ctk {
 
 struct CircularTrajectory {
-  Eigen::Vector3d centre{0, 0, 0};  // of the source circle (holder frame)
-  Eigen::Vector3d axis{0, 0, 1};    // unit normal of its plane; angles turn right-handed about it
-  double radius_mm = 0;             // source to rotation axis
-  std::vector<double> angles_rad;   // per view, measured from the first view, in [0, 2 pi)
-  std::vector<double> step_rad;     // angular weight of each view (half the gaps to its neighbours)
-  double arc_rad = 0;               // covered arc (2 pi for a full turn)
+  Eigen::Vector3d centre{0, 0, 0};             // of the source circle (holder frame)
+  Eigen::Vector3d axis{0, 0, 1};               // unit normal of its plane; angles turn right-handed about it
+  double radius_mm = 0;                        // source to rotation axis
+  std::vector<double> angles_rad;              // per view, measured from the first view, in [0, 2 pi)
+  std::vector<double> step_rad;                // angular weight of each view (half the gaps to its neighbours)
+  double arc_rad = 0;                          // covered arc (2 pi for a full turn)
   double off_plane_mm = 0, off_circle_mm = 0;  // largest deviations of a source from the fit
 };
 

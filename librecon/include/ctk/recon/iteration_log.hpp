@@ -8,12 +8,12 @@
 namespace ctk {
 
 struct IterationLog {
-  int iteration = 0;            // 1-based; 0 is the starting point
-  double cost = 0;              // the objective the solver minimises
-  double data_term = 0;         // 1/2 ||W^(1/2) (A x - b)||^2 (SIRT: unweighted)
-  double regulariser_term = 0;  // 1/2 lambda ||G x||^2
-  double relative_gradient = 0; // ||gradient|| / ||gradient at the start|| (CG)
-  double seconds = 0;           // this iteration's wall time
+  int iteration = 0;             // 1-based; 0 is the starting point
+  double cost = 0;               // the objective the solver minimises
+  double data_term = 0;          // 1/2 ||W^(1/2) (A x - b)||^2 (SIRT: unweighted)
+  double regulariser_term = 0;   // 1/2 lambda ||G x||^2
+  double relative_gradient = 0;  // ||gradient|| / ||gradient at the start|| (CG)
+  double seconds = 0;            // this iteration's wall time
 };
 
 struct SolverReport {

@@ -25,10 +25,10 @@ namespace ctk {
 struct RefinementOptions {
   double z_accept = 3.0;
   int max_rounds = 4;
-  std::vector<std::string> candidates = {"detector_offset", "detector_roll",  "axis_tilt", "magnification",
+  std::vector<std::string> candidates = {"detector_offset", "detector_roll",  "axis_tilt",  "magnification",
                                          "angular_blur",    "beam_hardening", "pixel_gain", "column_gain"};
   double sharpness_tolerance = 0.01;  // an accepted effect may not lower the edge sharpness by more
-  double nominal_blur_arc_deg = 0;  // the arc each view is known to integrate (scan log): the blur scan's upper range
+  double nominal_blur_arc_deg = 0;    // the arc each view is known to integrate (scan log): the blur scan's upper range
   /// Where to begin scanning a parameter (by its reported key, in reported units, e.g. "u0_px")
   /// while the model still holds its nominal value: an estimate from elsewhere (conjugate rays)
   /// saves the scan its walk; the fitted value is still the held-out cost's own minimum.
@@ -59,7 +59,7 @@ struct RefinementResult {
   std::vector<std::pair<std::string, std::string>> not_observable;
   bool structured = false;
   std::string unexplained_note;
-  DetectorPattern residual_pattern;  // measured - predicted over the judge views under the final model
+  DetectorPattern residual_pattern;    // measured - predicted over the judge views under the final model
   Volume volume_before, volume_after;  // FDK from every view on the fine grid, nominal and refined model
 };
 

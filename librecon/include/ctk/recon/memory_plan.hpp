@@ -12,10 +12,10 @@ enum class ReconstructionMethod { wls_cg, sirt, fdk };
 const char* to_string(ReconstructionMethod m);
 
 struct MemoryPlan {
-  std::size_t volume_bytes = 0;      // one volume
-  std::size_t stack_bytes = 0;       // one projection stack (the views used)
-  int volumes = 0, stacks = 0;       // how many of each the method holds at once
-  std::size_t other_bytes = 0;       // per-thread tables, one image per reader, margin
+  std::size_t volume_bytes = 0;  // one volume
+  std::size_t stack_bytes = 0;   // one projection stack (the views used)
+  int volumes = 0, stacks = 0;   // how many of each the method holds at once
+  std::size_t other_bytes = 0;   // per-thread tables, one image per reader, margin
 
   std::size_t total_bytes() const;
   /// "4 volumes x 1.49 GB + 4 stacks x 1.87 GB + 0.10 GB = 13.53 GB"
@@ -24,8 +24,7 @@ struct MemoryPlan {
 
 /// CG: x, gradient, direction, H direction; b, residual, scratch, and weights when weighted.
 /// SIRT: x, column sums, update; b, row sums, residual. FDK: the volume and the filtered stack.
-MemoryPlan plan_memory(ReconstructionMethod method, const VolumeLayout& layout, int views, int rows, int cols,
-                       bool weighted);
+MemoryPlan plan_memory(ReconstructionMethod method, const VolumeLayout& layout, int views, int rows, int cols, bool weighted);
 
 /// Memory available to a new run (MemAvailable in /proc/meminfo; physical memory otherwise).
 std::size_t available_memory_bytes();

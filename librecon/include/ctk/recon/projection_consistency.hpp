@@ -34,7 +34,6 @@ struct ForwardModel {
 double linearise_line_integral(double p, double c2);
 double measured_from_linear(double y, double c2);
 
-
 class ConsistencyProbe {
  public:
   /// `b`: measured line integrals of every view (kept by reference: it must outlive the probe),
@@ -47,8 +46,10 @@ class ConsistencyProbe {
   /// the detector rows except a tenth at the top and at the bottom (a long object's incomplete
   /// region): the views not named are not predicted. `fit_residuals` / `judge_residuals`
   /// (optional) receive predicted - measured for those views (0 in the rows left out).
-  std::vector<double> fit_costs(const GlobalGeometry& geometry, const ForwardModel& model, ProjectionStack* fit_residuals = nullptr) const;
-  std::vector<double> judge_costs(const GlobalGeometry& geometry, const ForwardModel& model, ProjectionStack* judge_residuals = nullptr) const;
+  std::vector<double> fit_costs(const GlobalGeometry& geometry, const ForwardModel& model,
+                                ProjectionStack* fit_residuals = nullptr) const;
+  std::vector<double> judge_costs(const GlobalGeometry& geometry, const ForwardModel& model,
+                                  ProjectionStack* judge_residuals = nullptr) const;
   /// FDK from every view with the model's geometry and linearisation, on `layout`.
   Volume reconstruct_all(const GlobalGeometry& geometry, const ForwardModel& model, const VolumeLayout& layout) const;
   const CircularTrajectory& orbit() const { return orbit_; }

@@ -16,8 +16,8 @@ struct SirtOptions {
   void validate() const;  // std::invalid_argument naming the field
 };
 
-SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
-                        Volume& x, const SirtOptions& options, const IterationCallback& on_iteration = {},
+SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b, Volume& x,
+                        const SirtOptions& options, const IterationCallback& on_iteration = {},
                         const Checkpointing* checkpointing = nullptr);
 
 }  // namespace ctk

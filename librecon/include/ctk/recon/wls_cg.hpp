@@ -28,17 +28,15 @@ struct WlsOptions {
 
 /// `x` is the starting point (zeros for a cold start) and receives the result. `weights` may be
 /// null (unit weights); otherwise the same shape as `b`.
-SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views,
-                          const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
-                          const WlsOptions& options, const IterationCallback& on_iteration = {},
-                          const Checkpointing* checkpointing = nullptr);
+SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
+                          const ProjectionStack* weights, Volume& x, const WlsOptions& options,
+                          const IterationCallback& on_iteration = {}, const Checkpointing* checkpointing = nullptr);
 
 /// The same for a caller that keeps the residual A x - b between calls (an incremental
 /// reconstruction that adds views): `residual` holds it on entry and on return, so the start
 /// costs no forward projection.
-SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views,
-                          const ProjectionStack& b, const ProjectionStack* weights, Volume& x, ProjectionStack& residual,
-                          const WlsOptions& options, const IterationCallback& on_iteration = {},
-                          const Checkpointing* checkpointing = nullptr);
+SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
+                          const ProjectionStack* weights, Volume& x, ProjectionStack& residual, const WlsOptions& options,
+                          const IterationCallback& on_iteration = {}, const Checkpointing* checkpointing = nullptr);
 
 }  // namespace ctk

@@ -12,9 +12,9 @@ namespace ctk {
 
 /// Linear attenuation (1/mm) near 60 keV: mass attenuation coefficient (NIST XCOM) times density.
 namespace material {
-inline constexpr double pom = 0.027;        // polyoxymethylene, 1.41 g/cm3
-inline constexpr double aluminium = 0.075;  // 2.70 g/cm3
-inline constexpr double pvc = 0.046;        // 1.38 g/cm3 (chlorine raises it)
+inline constexpr double pom = 0.027;          // polyoxymethylene, 1.41 g/cm3
+inline constexpr double aluminium = 0.075;    // 2.70 g/cm3
+inline constexpr double pvc = 0.046;          // 1.38 g/cm3 (chlorine raises it)
 inline constexpr double abs_plastic = 0.020;  // toy bricks, 1.05 g/cm3
 }  // namespace material
 

@@ -18,22 +18,22 @@ struct Primitive {
   /// Semi-axes in the primitive's own frame (mm): radii for sphere/ellipsoid; radii x, y and half
   /// the height (along local z) for a cylinder; half the edge lengths for a box.
   Eigen::Vector3d half_size_mm{1, 1, 1};
-  Rigid pose = Rigid::Identity();   // T_holder_primitive: centre and orientation
-  double attenuation_per_mm = 0;    // linear attenuation coefficient, 1/mm (negative: a hole)
-  std::string label;                // what it is ("sphere 12", "POM wall"), for files and reports
+  Rigid pose = Rigid::Identity();  // T_holder_primitive: centre and orientation
+  double attenuation_per_mm = 0;   // linear attenuation coefficient, 1/mm (negative: a hole)
+  std::string label;               // what it is ("sphere 12", "POM wall"), for files and reports
   /// What it is made of (material_attenuation.hpp), for polychromatic simulation: the attenuation
   /// above holds at the reference energy and scales like the material's. Empty: the same at every
   /// energy.
   std::string material;
 
   static Primitive sphere(const Eigen::Vector3d& centre_mm, double radius_mm, double mu, std::string label = {});
-  static Primitive ellipsoid(const Eigen::Vector3d& centre_mm, const Eigen::Vector3d& radii_mm,
-                             const Eigen::Matrix3d& rotation, double mu, std::string label = {});
+  static Primitive ellipsoid(const Eigen::Vector3d& centre_mm, const Eigen::Vector3d& radii_mm, const Eigen::Matrix3d& rotation,
+                             double mu, std::string label = {});
   /// Axis along the rotated local z.
-  static Primitive cylinder(const Eigen::Vector3d& centre_mm, double radius_mm, double height_mm,
-                            const Eigen::Matrix3d& rotation, double mu, std::string label = {});
-  static Primitive box(const Eigen::Vector3d& centre_mm, const Eigen::Vector3d& size_mm,
-                       const Eigen::Matrix3d& rotation, double mu, std::string label = {});
+  static Primitive cylinder(const Eigen::Vector3d& centre_mm, double radius_mm, double height_mm, const Eigen::Matrix3d& rotation,
+                            double mu, std::string label = {});
+  static Primitive box(const Eigen::Vector3d& centre_mm, const Eigen::Vector3d& size_mm, const Eigen::Matrix3d& rotation,
+                       double mu, std::string label = {});
 
   /// Length (mm) of the part of the ray origin + t * direction, t >= 0, inside the primitive.
   /// `direction` must be a unit vector.

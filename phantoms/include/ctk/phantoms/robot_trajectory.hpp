@@ -12,16 +12,15 @@
 namespace ctk {
 
 struct PlannedView {
-  Eigen::Vector3d direction{0, 0, 1};    // beam direction seen in the holder frame
-  std::optional<panda::Joints> joints;   // absent: unreachable
-  std::string note;                      // why unreachable
+  Eigen::Vector3d direction{0, 0, 1};   // beam direction seen in the holder frame
+  std::optional<panda::Joints> joints;  // absent: unreachable
+  std::string note;                     // why unreachable
 };
 
 std::vector<PlannedView> circular_robot_trajectory(const PandaSetup& setup, int count);
 
 /// For each direction, the first of several rolls about the beam (0, 90, 180, 270, then the
 /// diagonals, degrees) that the IK reaches, from the previous view's joints or the ready pose.
-std::vector<PlannedView> spherical_robot_trajectory(const PandaSetup& setup,
-                                                    const std::vector<Eigen::Vector3d>& directions);
+std::vector<PlannedView> spherical_robot_trajectory(const PandaSetup& setup, const std::vector<Eigen::Vector3d>& directions);
 
 }  // namespace ctk

@@ -13,7 +13,7 @@
 namespace ctk {
 
 struct SimulationReport {
-  int views = 0;             // in the scan (acquired or not)
+  int views = 0;  // in the scan (acquired or not)
   int views_acquired = 0;
   std::size_t saturated_pixels = 0;
 };
@@ -30,8 +30,8 @@ Phantom simulated_phantom(const ScanSimulation& simulation, const Holder& holder
 RenderOptions simulated_render_options(const ScanSimulation& simulation);
 /// One acquired view's image as the detector delivers it: counts (noise drawn from the seed and
 /// the view index) or noise-free line integrals, per `simulation.output`.
-Image simulated_image(const ScanSimulation& simulation, const Phantom& phantom, const TrueView& view,
-                      const RenderOptions& render, std::size_t* saturated = nullptr);
+Image simulated_image(const ScanSimulation& simulation, const Phantom& phantom, const TrueView& view, const RenderOptions& render,
+                      std::size_t* saturated = nullptr);
 
 /// `progress(done, total)` is called as views are written (from one thread at a time).
 SimulationReport simulate_scan(const ScanSimulation& simulation, const std::filesystem::path& folder,

@@ -12,9 +12,9 @@ namespace ctk {
 
 struct LabShot {
   bool reached = false;
-  std::string note;                  // why not
-  panda::Joints joints{};            // as logged
-  Image image;                       // counts (or line integrals, per the simulation's output)
+  std::string note;        // why not
+  panda::Joints joints{};  // as logged
+  Image image;             // counts (or line integrals, per the simulation's output)
   std::optional<ProjectionMatrix> true_P;
 };
 

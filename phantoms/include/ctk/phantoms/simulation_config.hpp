@@ -23,14 +23,14 @@ struct RigidOffset {
 };
 
 struct DetectorIntrinsicsError {
-  double sdd_error_mm = 0;                          // true SDD = declared + error
-  Eigen::Vector2d principal_point_error_px{0, 0};   // true (u0, v0) = declared + error
-  Eigen::Vector2d tilt_deg{0, 0};                   // out-of-plane: about u, then about v
+  double sdd_error_mm = 0;                         // true SDD = declared + error
+  Eigen::Vector2d principal_point_error_px{0, 0};  // true (u0, v0) = declared + error
+  Eigen::Vector2d tilt_deg{0, 0};                  // out-of-plane: about u, then about v
 };
 
 struct SphereDisplacement {
-  int count = 5;             // how many spheres (chosen at random) are off
-  double magnitude_mm = 0.2; // each by this much, in a random direction
+  int count = 5;              // how many spheres (chosen at random) are off
+  double magnitude_mm = 0.2;  // each by this much, in a random direction
 };
 
 struct BlurredViews {
