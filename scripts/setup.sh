@@ -19,6 +19,7 @@ packages=(
   libgtest-dev libgmock-dev   # tests
   libbenchmark-dev       # benchmarks
   libhwy-dev             # SIMD with runtime dispatch (Highway)
+  clang-format           # tests/format: the sources as .clang-format says
   python3                # benchmarks/yardstick.py: the benchmark checked from outside (standard library only)
 )
 
