@@ -150,7 +150,10 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   // beyond the search is never matched. Most of a detector sees no sphere, and the filters over the
   // whole image were a fifth of a view's time (perf on ctk calibrate, 120 views of 720 x 720).
   for (const auto& X : holder.spheres_mm)
-    if (const Eigen::Vector3d c = K * (initial * X); c.z() > 0) detection.region.extend(Eigen::Vector2d(c.head<2>() / c.z()));
+    if (const Eigen::Vector3d c = K * (initial * X); c.z() > 0) {
+      const Eigen::Vector2d ideal = c.head<2>() / c.z();  // the image holds the spheres where the distortion puts them
+      detection.region.extend(distortion ? distortion->measured_from_ideal(ideal) : ideal);
+    }
   if (!detection.region.isEmpty()) {
     const double margin = o.search_px + 2 * radius_px + 8;
     detection.region.min().array() -= margin;
