@@ -34,31 +34,29 @@ constexpr std::size_t kMostPixels = std::size_t{1} << 30;
 // header claiming 20000 x 20000 costs nothing. Only regular files: a FIFO or a device would hang.
 Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>>& expected, std::string* written_by) {
   require_regular_file(file);
-  if (auto tiff = read_plain_tiff(file, expected, kMostPixels)) {
+  auto check_header = [&](int width, int height, int depth, const std::string& description) {
+    if (expected && (width != expected->first || height != expected->second || depth > 1))
+      throw InputError(file.string(), "",
+                       "image is " + std::to_string(width) + " x " + std::to_string(height) + " pixels, the scan declares " +
+                           std::to_string(expected->first) + " x " + std::to_string(expected->second));
+    if (width <= 0 || height <= 0 || depth > 1 ||
+        static_cast<std::size_t>(width) * static_cast<std::size_t>(height) > kMostPixels)
+      throw InputError(file.string(), "",
+                       "the header claims " + std::to_string(width) + " x " + std::to_string(height) +
+                           (depth > 1 ? " x " + std::to_string(depth) : "") + " pixels: not a projection (damaged header?)");
     if (written_by)
-      *written_by = tiff->description.rfind(kWrittenBy, 0) == 0 ? tiff->description.substr(std::string_view(kWrittenBy).size())
-                                                                : std::string();
-    return std::move(tiff->image);
+      *written_by =
+          description.rfind(kWrittenBy, 0) == 0 ? description.substr(std::string_view(kWrittenBy).size()) : std::string();
+  };
+  if (auto tiff = PlainTiff::open(file)) {
+    check_header(tiff->cols(), tiff->rows(), 1, tiff->description());
+    return tiff->read();
   }
   auto in = ImageInput::open(file.string());
   if (!in) throw InputError(file.string(), "", "cannot read the image: " + OIIO::geterror());
   const ImageSpec& spec = in->spec();
-  if (expected && (spec.width != expected->first || spec.height != expected->second || spec.depth > 1))
-    throw InputError(file.string(), "",
-                     "image is " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
-                         " pixels, the scan declares " + std::to_string(expected->first) + " x " +
-                         std::to_string(expected->second));
-  if (spec.width <= 0 || spec.height <= 0 || spec.depth > 1 ||
-      static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height) > kMostPixels)
-    throw InputError(file.string(), "",
-                     "the header claims " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
-                         (spec.depth > 1 ? " x " + std::to_string(spec.depth) : "") +
-                         " pixels: not a projection (damaged header?)");
+  check_header(spec.width, spec.height, spec.depth, spec.get_string_attribute("ImageDescription"));
   Image image;
-  if (written_by) {
-    const std::string said = spec.get_string_attribute("ImageDescription");
-    *written_by = said.rfind(kWrittenBy, 0) == 0 ? said.substr(std::string_view(kWrittenBy).size()) : std::string();
-  }
   image.cols = spec.width;
   image.rows = spec.height;
   image.pixels.resize(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height));

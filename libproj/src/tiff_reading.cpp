@@ -1,7 +1,5 @@
 #include "tiff_reading.hpp"
 
-#include <tiffio.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cstdarg>
@@ -47,64 +45,64 @@ void widen(const unsigned char* bytes, std::size_t count, float* out) {
 
 }  // namespace
 
-std::optional<TiffImage> read_plain_tiff(const fs::path& file, const std::optional<std::pair<int, int>>& expected,
-                                         std::size_t most_pixels) {
+std::optional<PlainTiff> PlainTiff::open(const fs::path& file) {
   if (!has_tiff_extension(file)) return std::nullopt;
-  std::string error;
+  PlainTiff t;
+  t.file_ = file;
+  t.error_ = std::make_shared<std::string>();
   std::unique_ptr<TIFFOpenOptions, void (*)(TIFFOpenOptions*)> options(TIFFOpenOptionsAlloc(), TIFFOpenOptionsFree);
-  TIFFOpenOptionsSetErrorHandlerExtR(options.get(), keep_message, &error);
+  TIFFOpenOptionsSetErrorHandlerExtR(options.get(), keep_message, t.error_.get());
   TIFFOpenOptionsSetWarningHandlerExtR(options.get(), ignore_message, nullptr);
-  std::unique_ptr<TIFF, void (*)(TIFF*)> tif(TIFFOpenExt(file.c_str(), "r", options.get()), TIFFClose);
-  if (!tif) return std::nullopt;
-
-  std::uint32_t cols = 0, rows = 0;
-  std::uint16_t samples = 1, bits = 1, format = SAMPLEFORMAT_UINT, planar = PLANARCONFIG_CONTIG,
-                photometric = PHOTOMETRIC_MINISBLACK;
-  TIFFGetField(tif.get(), TIFFTAG_IMAGEWIDTH, &cols);
-  TIFFGetField(tif.get(), TIFFTAG_IMAGELENGTH, &rows);
-  TIFFGetFieldDefaulted(tif.get(), TIFFTAG_SAMPLESPERPIXEL, &samples);
-  TIFFGetFieldDefaulted(tif.get(), TIFFTAG_BITSPERSAMPLE, &bits);
-  TIFFGetFieldDefaulted(tif.get(), TIFFTAG_SAMPLEFORMAT, &format);
-  TIFFGetFieldDefaulted(tif.get(), TIFFTAG_PLANARCONFIG, &planar);
-  TIFFGetField(tif.get(), TIFFTAG_PHOTOMETRIC, &photometric);
-  const bool plain_samples =
-      (format == SAMPLEFORMAT_UINT && (bits == 8 || bits == 16 || bits == 32)) || (format == SAMPLEFORMAT_IEEEFP && bits == 32);
-  if (TIFFIsTiled(tif.get()) || samples != 1 || planar != PLANARCONFIG_CONTIG || photometric != PHOTOMETRIC_MINISBLACK ||
-      !plain_samples || cols == 0 || rows == 0)
+  t.tif_ = std::shared_ptr<TIFF>(TIFFOpenExt(file.c_str(), "r", options.get()), [](TIFF* tif) {
+    if (tif) TIFFClose(tif);
+  });
+  if (!t.tif_) return std::nullopt;
+  TIFF* tif = t.tif_.get();
+  std::uint16_t samples = 1, planar = PLANARCONFIG_CONTIG, photometric = PHOTOMETRIC_MINISBLACK;
+  t.bits_ = 1;
+  t.format_ = SAMPLEFORMAT_UINT;
+  TIFFGetField(tif, TIFFTAG_IMAGEWIDTH, &t.cols_);
+  TIFFGetField(tif, TIFFTAG_IMAGELENGTH, &t.rows_);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLESPERPIXEL, &samples);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_BITSPERSAMPLE, &t.bits_);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLEFORMAT, &t.format_);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_PLANARCONFIG, &planar);
+  TIFFGetField(tif, TIFFTAG_PHOTOMETRIC, &photometric);
+  const bool plain_samples = (t.format_ == SAMPLEFORMAT_UINT && (t.bits_ == 8 || t.bits_ == 16 || t.bits_ == 32)) ||
+                             (t.format_ == SAMPLEFORMAT_IEEEFP && t.bits_ == 32);
+  if (TIFFIsTiled(tif) || samples != 1 || planar != PLANARCONFIG_CONTIG || photometric != PHOTOMETRIC_MINISBLACK ||
+      !plain_samples || t.cols_ == 0 || t.rows_ == 0 || t.cols_ > (1u << 30) || t.rows_ > (1u << 30))
     return std::nullopt;
+  if (char* description = nullptr; TIFFGetField(tif, TIFFTAG_IMAGEDESCRIPTION, &description) && description)
+    t.description_ = description;
+  return t;
+}
 
-  if (expected && (cols != static_cast<std::uint32_t>(expected->first) || rows != static_cast<std::uint32_t>(expected->second)))
-    throw InputError(file.string(), "",
-                     "image is " + std::to_string(cols) + " x " + std::to_string(rows) + " pixels, the scan declares " +
-                         std::to_string(expected->first) + " x " + std::to_string(expected->second));
-  if (static_cast<std::size_t>(cols) * rows > most_pixels) return std::nullopt;  // the general reader words the refusal
-
-  TiffImage out;
-  if (char* description = nullptr; TIFFGetField(tif.get(), TIFFTAG_IMAGEDESCRIPTION, &description) && description)
-    out.description = description;
-  out.image.cols = static_cast<int>(cols);
-  out.image.rows = static_cast<int>(rows);
-  out.image.pixels.resize(static_cast<std::size_t>(cols) * rows);
-  const std::size_t bytes_per_sample = bits / 8, row_bytes = bytes_per_sample * cols;
-  std::uint32_t rows_per_strip = rows;
-  TIFFGetFieldDefaulted(tif.get(), TIFFTAG_ROWSPERSTRIP, &rows_per_strip);
-  rows_per_strip = std::clamp<std::uint32_t>(rows_per_strip, 1, rows);
+Image PlainTiff::read() {
+  TIFF* tif = tif_.get();
+  Image out;
+  out.cols = cols();
+  out.rows = rows();
+  out.pixels.resize(static_cast<std::size_t>(cols_) * rows_);
+  const std::size_t row_bytes = static_cast<std::size_t>(bits_ / 8) * cols_;
+  std::uint32_t rows_per_strip = rows_;
+  TIFFGetFieldDefaulted(tif, TIFFTAG_ROWSPERSTRIP, &rows_per_strip);
+  rows_per_strip = std::clamp<std::uint32_t>(rows_per_strip, 1, rows_);
   std::vector<unsigned char> strip(row_bytes * rows_per_strip);
-  const auto fail = [&](const std::string& what) {
-    return InputError(file.string(), "",
-                      "cannot read the pixels (truncated or damaged?): " + what + (error.empty() ? "" : " (" + error + ")"));
-  };
-  for (std::uint32_t row = 0, index = 0; row < rows; row += rows_per_strip, ++index) {
-    const std::uint32_t strip_rows = std::min(rows_per_strip, rows - row);
+  for (std::uint32_t row = 0, index = 0; row < rows_; row += rows_per_strip, ++index) {
+    const std::uint32_t strip_rows = std::min(rows_per_strip, rows_ - row);
     const auto want = static_cast<tmsize_t>(row_bytes * strip_rows);
-    if (TIFFReadEncodedStrip(tif.get(), index, strip.data(), want) != want) throw fail("strip " + std::to_string(index));
-    float* dst = out.image.pixels.data() + static_cast<std::size_t>(row) * cols;
-    const std::size_t count = static_cast<std::size_t>(strip_rows) * cols;
-    if (format == SAMPLEFORMAT_IEEEFP)
+    if (TIFFReadEncodedStrip(tif, index, strip.data(), want) != want)
+      throw InputError(file_.string(), "",
+                       "cannot read the pixels (truncated or damaged?): strip " + std::to_string(index) +
+                           (error_->empty() ? "" : " (" + *error_ + ")"));
+    float* dst = out.pixels.data() + static_cast<std::size_t>(row) * cols_;
+    const std::size_t count = static_cast<std::size_t>(strip_rows) * cols_;
+    if (format_ == SAMPLEFORMAT_IEEEFP)
       widen<float>(strip.data(), count, dst);
-    else if (bits == 8)
+    else if (bits_ == 8)
       widen<std::uint8_t>(strip.data(), count, dst);
-    else if (bits == 16)
+    else if (bits_ == 16)
       widen<std::uint16_t>(strip.data(), count, dst);
     else
       widen<std::uint32_t>(strip.data(), count, dst);
