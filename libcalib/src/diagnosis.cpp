@@ -9,6 +9,7 @@
 
 #include "ctk/geom/panda.hpp"
 #include "ctk/geom/statistics.hpp"
+#include "ctk/geom/error.hpp"
 
 namespace ctk {
 
@@ -141,9 +142,36 @@ ModelError image_error(const ScanModelFit& all, const HeldOut& h) {
   return e;
 }
 
+// A load found outside the vocabulary, in the report's words.
+StructureFinding outside_finding(const EffectFinding& f) {
+  std::ostringstream what;
+  auto sd = [&](int i) { return f.covariance.rows() > i ? std::sqrt(std::max(0.0, f.covariance(i, i))) : 0.0; };
+  switch (f.effect) {
+    case Effect::gravity_load:
+      what << "a load that follows gravity explains the residual better than any listed effect (held-out improvement " << f.z
+           << " standard errors): with its axis horizontal the holder turns " << f.parameters.gravity[0] / kDegree << " +- "
+           << sd(0) / kDegree << " deg (about the axis x gravity) and shifts " << f.parameters.gravity[1] << " +- " << sd(1)
+           << " mm (across its axis), less as it tilts towards the vertical, as a holder sagging under its weight does; "
+           << "the held-out RMS goes from " << f.before.heldout_rms_px << " to " << f.after.heldout_rms_px << " px";
+      break;
+    default:
+      what << effect_name(f.effect) << " (held-out improvement " << f.z << " standard errors)";
+  }
+  return {"by gravity", what.str()};
+}
+
 }  // namespace
 
+void DiagnosisOptions::validate() const {
+  require_option(z_accept > 0, "DiagnosisOptions.z_accept", "a number above 0 (standard errors)", z_accept);
+  require_option(robot_sigma_mm > 0, "DiagnosisOptions.robot_sigma_mm", "a number above 0", robot_sigma_mm);
+  require_option(robot_sigma_deg > 0, "DiagnosisOptions.robot_sigma_deg", "a number above 0", robot_sigma_deg);
+  require_option(max_effects >= 1, "DiagnosisOptions.max_effects", "at least 1", max_effects);
+  require_option(min_image_effect_px >= 0, "DiagnosisOptions.min_image_effect_px", "a number of 0 or more", min_image_effect_px);
+}
+
 ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration& c, const DiagnosisOptions& options) {
+  options.validate();
   ScanObservations o = observe_calibration(scan, c);
   o.robot_sigma_mm = options.robot_sigma_mm;
   o.robot_sigma_deg = options.robot_sigma_deg;
@@ -170,14 +198,18 @@ ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration
 
 Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
                    const std::function<void(const std::string&)>& log) {
+  options.validate();
   Diagnosis d;
   d.views_ok = static_cast<int>(o.views.size());
   auto say = [&](const std::string& s) {
     if (log) log(s);
   };
-  std::vector<Effect> candidates;
+  std::vector<Effect> candidates, outside;
   for (Effect e : kEffects)
     if (o.setup.robot || !needs_robot(e)) candidates.push_back(e);
+  for (Effect e : kOutsideEffects)
+    if (o.setup.robot || !needs_robot(e)) outside.push_back(e);
+  std::vector<Effect> modelled;  // the accepted effects and the loads found outside the vocabulary
 
   EffectParameters current;
   current.spheres.assign(o.setup.holder.spheres_mm.size(), Eigen::Vector3d::Zero());
@@ -187,6 +219,23 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
   d.baseline = image_error(current_fit, current_held);
   say("baseline: " + std::to_string(d.baseline.rms_px) + " px RMS, held out " + std::to_string(d.baseline.heldout_rms_px));
 
+  // Fits `chosen` into the model on every view, with its own covariance block.
+  auto add_to_model = [&](Effect chosen, const HeldOut& held, EffectFinding& f) {
+    modelled.push_back(chosen);
+    const ScanModelFit all = fit_scan_model(o, modelled, all_views(o), current, true);
+    current = all.parameters;
+    current_held = held;
+    current_fit = all;
+    f.parameters = current;
+    const auto slot = modelled.size() - 1;
+    if (all.covariance.size() > 0) {
+      const int start = all.covariance_offsets[slot], size = parameter_count(chosen, o);
+      f.covariance = all.covariance.block(start, start, size, size);
+    }
+    f.after = image_error(all, current_held);
+    d.final_error = f.after;
+  };
+
   std::vector<EffectFinding> rejected_last;
   while (static_cast<int>(d.accepted.size()) < options.max_effects && !candidates.empty()) {
     struct Trial {
@@ -194,10 +243,11 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
       HeldOut held;
       double z;
       std::vector<bool> free_spheres;  // sphere_positions: the spheres its fit frees
+      bool in_vocabulary = true;
     };
     std::vector<Trial> trials;
     for (Effect e : candidates) {
-      std::vector<Effect> active = d.accepted;
+      std::vector<Effect> active = modelled;
       active.push_back(e);
       EffectParameters start = current;
       if (e == Effect::sphere_positions) {
@@ -219,8 +269,16 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
       say(std::string("  ") + effect_name(e) + ": held-out improvement " + std::to_string(t.z) + " standard errors");
       trials.push_back(std::move(t));
     }
+    for (Effect e : outside) {
+      std::vector<Effect> active = modelled;
+      active.push_back(e);
+      Trial t{e, held_out(o, active, current), 0, {}, false};
+      t.z = paired_z(current_held.cost, t.held.cost);
+      say(std::string("  ") + effect_name(e) + " (outside the vocabulary): held-out improvement " + std::to_string(t.z) +
+          " standard errors");
+      trials.push_back(std::move(t));
+    }
     // The best held-out cost among those that pass; the equivalents of the best are confounded.
-    const Trial* best = nullptr;
     auto total = [](const Trial& t) { return std::accumulate(t.held.cost.begin(), t.held.cost.end(), 0.0); };
     // An effect must also lower the held-out chi-square by more than its parameter count (what
     // fitting noise alone buys on the training half): a direction the data leave nearly free (a
@@ -241,14 +299,35 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
       const double explained2 = current_held.rms_px * current_held.rms_px - t.held.rms_px * t.held.rms_px;
       return explained2 > options.min_image_effect_px * options.min_image_effect_px;
     };
-    for (const Trial& t : trials)
-      if (passes(t) && (!best || total(t) < total(*best))) best = &t;
+    const Trial *best = nullptr, *load = nullptr;
+    for (const Trial& t : trials) {
+      const Trial*& slot = t.in_vocabulary ? best : load;
+      if (passes(t) && (!slot || total(t) < total(*slot))) slot = &t;
+    }
+    // A load outside the vocabulary enters the model only where it explains the residual better
+    // than every named effect (by the same held-out test): a holder sagging on a cap of directions
+    // is then found as a load, not as a base offset that takes its mean; where the two explain the
+    // data equally well, the named effect is reported.
+    if (load && (!best || paired_z(best->held.cost, load->held.cost) > options.z_accept)) {
+      EffectFinding f;
+      f.effect = load->effect;
+      f.z = load->z;
+      f.before = d.accepted.empty() && d.outside.empty() ? d.baseline : d.final_error;
+      f.model_before = current;
+      add_to_model(load->effect, load->held, f);
+      say(std::string("found outside the vocabulary: ") + effect_name(load->effect) + ": " + std::to_string(f.before.rms_px) +
+          " -> " + std::to_string(f.after.rms_px) + " px");
+      outside.erase(std::remove(outside.begin(), outside.end(), f.effect), outside.end());
+      d.outside.push_back(std::move(f));
+      continue;
+    }
     if (!best) {
       for (const Trial& t : trials) {
+        if (!t.in_vocabulary) continue;
         EffectFinding f;
         f.effect = t.effect;
         f.z = t.z;
-        f.before = d.effects.empty() ? d.baseline : d.final_error;
+        f.before = d.effects.empty() && d.outside.empty() ? d.baseline : d.final_error;
         f.before.heldout_rms_px = current_held.rms_px;
         f.after = f.before;
         f.after.heldout_rms_px = t.held.rms_px;
@@ -259,7 +338,8 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
     }
     std::vector<Effect> equivalent;
     for (const Trial& t : trials)
-      if (passes(t) && paired_z(t.held.cost, best->held.cost) < options.z_accept) equivalent.push_back(t.effect);
+      if (t.in_vocabulary && passes(t) && paired_z(t.held.cost, best->held.cost) < options.z_accept)
+        equivalent.push_back(t.effect);
     const Effect chosen = *std::min_element(equivalent.begin(), equivalent.end(), [](Effect a, Effect b) {
       return std::find(kEffects.begin(), kEffects.end(), a) < std::find(kEffects.begin(), kEffects.end(), b);
     });
@@ -271,22 +351,11 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
     f.z = t.z;
     for (Effect e : equivalent)
       if (e != chosen) f.confounded_with.push_back(e);
-    f.before = d.accepted.empty() ? d.baseline : d.final_error;
+    f.before = d.accepted.empty() && d.outside.empty() ? d.baseline : d.final_error;
     f.model_before = current;
     d.accepted.push_back(chosen);
     if (chosen == Effect::sphere_positions) current.free_spheres = t.free_spheres;  // as judged
-    const ScanModelFit all = fit_scan_model(o, d.accepted, all_views(o), current, true);
-    current = all.parameters;
-    current_held = t.held;
-    current_fit = all;
-    f.parameters = current;
-    const auto slot = static_cast<std::size_t>(std::find(d.accepted.begin(), d.accepted.end(), chosen) - d.accepted.begin());
-    if (all.covariance.size() > 0) {
-      const int start = all.covariance_offsets[slot], size = parameter_count(chosen, o);
-      f.covariance = all.covariance.block(start, start, size, size);
-    }
-    f.after = image_error(all, current_held);
-    d.final_error = f.after;
+    add_to_model(chosen, t.held, f);
     say(std::string("accepted ") + effect_name(chosen) + ": " + std::to_string(f.before.rms_px) + " -> " +
         std::to_string(f.after.rms_px) + " px");
     d.effects.push_back(f);
@@ -296,10 +365,10 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
     // chosen one leaves, and it is then accepted beside it on the same held-out terms.
     candidates.erase(std::remove(candidates.begin(), candidates.end(), chosen), candidates.end());
   }
-  if (d.accepted.empty()) d.final_error = d.baseline;
+  if (modelled.empty()) d.final_error = d.baseline;
   for (auto& f : rejected_last) d.effects.push_back(f);
   d.model = current;
-  d.after_fit = d.accepted.empty() ? d.before_fit : current_fit;
+  d.after_fit = modelled.empty() ? d.before_fit : current_fit;
   // The robot channel's figures, all against the same reference poses.
   const std::vector<Rigid>& reference = d.after_fit.poses;
   fk_error(o, reference, EffectParameters{}, d.baseline);
@@ -308,7 +377,24 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
     fk_error(o, reference, f.model_before, f.before);
     fk_error(o, reference, f.accepted ? f.parameters : f.model_before, f.after);
   }
-  d.unexplained = find_structure(o, d.after_fit);
+  for (EffectFinding& f : d.outside) {
+    fk_error(o, reference, f.model_before, f.before);
+    fk_error(o, reference, f.parameters, f.after);
+  }
+  // What is reported of each effect is its value in the final model, fitted with all the others
+  // (a later one, a load above all, can take up part of what an earlier one first absorbed).
+  for (EffectFinding& f : d.effects) {
+    if (!f.accepted) continue;
+    const auto slot = static_cast<std::size_t>(std::find(modelled.begin(), modelled.end(), f.effect) - modelled.begin());
+    f.parameters = current;
+    if (current_fit.covariance.size() > 0) {
+      const int start = current_fit.covariance_offsets[slot], size = parameter_count(f.effect, o);
+      f.covariance = current_fit.covariance.block(start, start, size, size);
+    }
+  }
+  // A load found outside the vocabulary is structure the contract's effects do not explain.
+  for (const EffectFinding& f : d.outside) d.unexplained.push_back(outside_finding(f));
+  for (StructureFinding& s : find_structure(o, d.after_fit)) d.unexplained.push_back(std::move(s));
   return d;
 }
 
@@ -382,6 +468,8 @@ void effect_parameters_json(const EffectFinding& f, const ScanObservations& o, n
       uncertainty = {{"spheres", sigmas}};
       break;
     }
+    case Effect::gravity_load:
+      break;  // reported in `unexplained`, not among the effects
   }
 }
 
@@ -478,6 +566,8 @@ ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d) 
       case Effect::source_drift:
         out.source_drift_mm_per_100_views += Eigen::Vector2d(p.drift[0], p.drift[1]);
         break;
+      case Effect::gravity_load:
+        break;  // never accepted: the scan format has no place for it
     }
   }
   return out;

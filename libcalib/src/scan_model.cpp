@@ -20,11 +20,15 @@ const char* effect_name(Effect e) {
       return "detector_distortion";
     case Effect::detector_intrinsics:
       return "detector_intrinsics";
+    case Effect::gravity_load:
+      return "gravity_load";
   }
   return "?";
 }
 
-bool needs_robot(Effect e) { return e == Effect::robot_base_frame || e == Effect::holder_mount || e == Effect::joint_offsets; }
+bool needs_robot(Effect e) {
+  return e == Effect::robot_base_frame || e == Effect::holder_mount || e == Effect::joint_offsets || e == Effect::gravity_load;
+}
 
 namespace {
 Rigid offset_rigid(const double* p) {
@@ -35,7 +39,11 @@ Rigid offset_rigid(const double* p) {
 FlangeChain flange_chain(const DeclaredSetup& s, const EffectParameters& p, const panda::Joints& q) {
   panda::Joints q_true = q;
   for (int j = 0; j < panda::kJointCount; ++j) q_true[static_cast<std::size_t>(j)] += p.joints[j];
-  return {s.T_camera_base * offset_rigid(p.base) * panda::forward_kinematics(q_true), offset_rigid(p.mount) * s.T_flange_holder};
+  const Rigid T_base_flange = panda::forward_kinematics(q_true);
+  const Eigen::Matrix<double, 6, 1> load =
+      gravity_load_offset<double>(T_base_flange.linear(), s.T_flange_holder.linear().col(2), p.gravity);
+  return {s.T_camera_base * offset_rigid(p.base) * T_base_flange,
+          offset_rigid(p.mount) * offset_rigid(load.data()) * s.T_flange_holder};
 }
 
 Rigid robot_predicted_pose(const DeclaredSetup& s, const EffectParameters& p, const panda::Joints& q) {
@@ -106,10 +114,6 @@ ScanObservations observe_calibration(const ScanDescription& scan, const ScanCali
   }
   if (dof > 0) o.centre_sigma_px = std::sqrt(sq / dof);
   return o;
-}
-
-Eigen::Vector3d source_offset_at(const EffectParameters& p, int view) {
-  return Eigen::Vector3d(p.drift[0], p.drift[1], 0) * (view / 100.0);
 }
 
 }  // namespace ctk

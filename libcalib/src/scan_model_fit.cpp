@@ -65,8 +65,9 @@ struct ImageResidual {
     Vec3<T> t;
     pose_of(pose, R0, R, t);
     const Vec3<T> Xs = X.cast<T>() + Vec3<T>(sphere[0], sphere[1], sphere[2]);
-    const T s0 = (drift[0] + T(declared_drift.x())) * T(view / 100.0), s1 = (drift[1] + T(declared_drift.y())) * T(view / 100.0);
-    const Vec3<T> Y = R * Xs + t - Vec3<T>(s0, s1, T(0.0));
+    const Vec3<T> s = drifted_focal_spot_mm(drift[0] + T(declared_drift.x()), drift[1] + T(declared_drift.y()), view);
+    const T s0 = s.x(), s1 = s.y();
+    const Vec3<T> Y = R * Xs + t - s;
     // Seen from the moved focal spot the principal point moves with it (detector fixed).
     const T fu = T(K.fu_px) + intrinsics[2], fv = T(K.fv_px) + intrinsics[2] * T(K.fv_px / K.fu_px);
     const T u0 = T(K.u0_px) + intrinsics[0] + s0 / T(pitch_u), v0 = T(K.v0_px) + intrinsics[1] + s1 / T(pitch_v);
@@ -91,7 +92,7 @@ struct RobotPrior {
   double sigma_mm, sigma_rad;
 
   template <typename T>
-  bool operator()(const T* pose, const T* base, const T* mount, const T* joints, T* r) const {
+  bool operator()(const T* pose, const T* base, const T* mount, const T* joints, const T* gravity, T* r) const {
     Mat3<T> R;
     Vec3<T> t;
     pose_of(pose, R0, R, t);
@@ -100,9 +101,11 @@ struct RobotPrior {
     Tv.template topRightCorner<3, 1>() = t;
     T qt[panda::kJointCount];
     for (int j = 0; j < panda::kJointCount; ++j) qt[j] = T(q[static_cast<std::size_t>(j)]) + joints[j];
-    const Eigen::Matrix<T, 4, 4> before_flange =
-        T_camera_base.cast<T>() * offset_matrix(base) * panda::forward_kinematics_matrix(qt);
-    const Eigen::Matrix<T, 4, 4> after_flange = offset_matrix(mount) * T_flange_holder.cast<T>();
+    const Eigen::Matrix<T, 4, 4> base_flange = panda::forward_kinematics_matrix(qt);
+    const Eigen::Matrix<T, 4, 4> before_flange = T_camera_base.cast<T>() * offset_matrix(base) * base_flange;
+    const Eigen::Matrix<T, 6, 1> load =
+        gravity_load_offset<T>(base_flange.template topLeftCorner<3, 3>(), T_flange_holder.topLeftCorner<3, 3>().col(2), gravity);
+    const Eigen::Matrix<T, 4, 4> after_flange = offset_matrix(mount) * offset_matrix(load.data()) * T_flange_holder.cast<T>();
     const Eigen::Matrix<T, 4, 4> N = rigid_inverse(before_flange) * Tv * rigid_inverse(after_flange);
     const Mat3<T> NR = N.template topLeftCorner<3, 3>();
     T aa[3];
@@ -161,6 +164,8 @@ struct GlobalBlocks {
         return p.distortion;
       case Effect::sphere_positions:
         return p.spheres[sphere].data();
+      case Effect::gravity_load:
+        return p.gravity;
     }
     return nullptr;
   }
@@ -174,6 +179,7 @@ int block_size(Effect e) {
     case Effect::joint_offsets:
       return 7;
     case Effect::source_drift:
+    case Effect::gravity_load:
       return 2;
     case Effect::detector_intrinsics:
     case Effect::detector_distortion:
@@ -208,6 +214,9 @@ Eigen::VectorXd plausible_scale(Effect e) {
     case Effect::detector_distortion:
       s << 50, 200, 200;
       break;  // px
+    case Effect::gravity_load:
+      s << 1 * deg, 5;
+      break;  // rad, mm at a horizontal holder
     case Effect::sphere_positions:
       s.resize(0);
       break;  // fixed by the sphere gauge instead
@@ -252,13 +261,14 @@ void add_view(ceres::Problem& problem, const ScanObservations& o, const ViewObse
                              s.T_flange_holder.matrix(),
                              o.robot_sigma_mm / std::sqrt(3.0),
                              o.robot_sigma_deg * kDegree / std::sqrt(3.0)};
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RobotPrior, 6, 6, 6, 6, 7>(f), nullptr, pose,
-                             g.block(Effect::robot_base_frame), g.block(Effect::holder_mount), g.block(Effect::joint_offsets));
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RobotPrior, 6, 6, 6, 6, 7, 2>(f), nullptr, pose,
+                             g.block(Effect::robot_base_frame), g.block(Effect::holder_mount), g.block(Effect::joint_offsets),
+                             g.block(Effect::gravity_load));
   }
 }
 
 void set_global_blocks_constant(ceres::Problem& problem, GlobalBlocks& g, const std::vector<Effect>& active) {
-  for (Effect e : kEffects) {
+  for (Effect e : kModelledEffects) {
     if (std::find(active.begin(), active.end(), e) != active.end()) continue;
     if (e == Effect::sphere_positions) {
       for (std::size_t k = 0; k < g.p.spheres.size(); ++k)
@@ -303,7 +313,7 @@ void collect_view(const ScanObservations& o, const ViewObservations& v, const do
                        o.robot_sigma_mm / std::sqrt(3.0),
                        o.robot_sigma_deg * kDegree / std::sqrt(3.0)};
     double r[6];
-    f(pose, p.base, p.mount, p.joints, r);
+    f(pose, p.base, p.mount, p.joints, p.gravity, r);
     for (double x : r) prior += x * x;
   }
   out.cost[slot] = image + prior;
@@ -354,7 +364,7 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
     cost->SetNumResiduals(7);
     problem.AddResidualBlock(cost, nullptr, blocks);
   }
-  for (Effect e : kEffects) {
+  for (Effect e : kModelledEffects) {
     if (e == Effect::sphere_positions) {
       for (std::size_t k = 0; k < g.p.spheres.size(); ++k)
         if (problem.HasParameterBlock(g.block(e, k))) ordering->AddElementToGroup(g.block(e, k), 1);

@@ -111,7 +111,8 @@ void draw_robot_views(const ScanSimulation& sim, TrueScan& truth, double true_sd
     }
     view.T_camera_holder = truth.T_camera_base * T_base_flange * noise * sag * truth.T_flange_holder;
     if (e.source_drift_mm_per_100_views)
-      view.source_offset_mm.head<2>() = *e.source_drift_mm_per_100_views * (static_cast<double>(v) / 100.0);
+      view.source_offset_mm = drifted_focal_spot_mm(e.source_drift_mm_per_100_views->x(), e.source_drift_mm_per_100_views->y(),
+                                                    static_cast<double>(v));
     if (e.source_wobble_mm)
       view.source_offset_mm.head<2>() +=
           *e.source_wobble_mm * std::cos(4 * M_PI * static_cast<double>(v) / static_cast<double>(sim.trajectory.size()));

@@ -15,6 +15,9 @@
 // detector parameters: the robot's base is never where the setup says, the detector is measured
 // separately). The others stay candidates: one that still explains what the chosen one leaves
 // (the two differ at second order and the data are precise enough) is accepted beside it.
+// Loads outside the vocabulary (kOutsideEffects: a holder sagging under gravity) compete on the
+// same terms; one that explains the residual significantly better than every named effect enters
+// the model, is never accepted, and is reported as unexplained structure.
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -33,6 +36,7 @@ struct DiagnosisOptions {
   double robot_sigma_deg = 0.02;
   int max_effects = 4;
   double min_image_effect_px = 0.01;  // image-only effects must explain at least this much held-out RMS
+  void validate() const;              // std::invalid_argument naming the field
 };
 
 /// How well a model explains the scan: image RMS (px, per sphere), held-out RMS, and how far the
@@ -48,9 +52,9 @@ struct EffectFinding {
   Effect effect;
   bool accepted = false;
   double z = 0;                   // held-out improvement in standard errors
-  EffectParameters parameters;    // fitted on all views with the effects accepted before it
+  EffectParameters parameters;    // the final model (all views, every accepted effect and load)
   EffectParameters model_before;  // the model it was tested against
-  Eigen::MatrixXd covariance;     // of this effect's parameters (may be empty)
+  Eigen::MatrixXd covariance;     // of this effect's parameters in the final model (may be empty)
   std::vector<Effect> confounded_with;
   ModelError before, after;
 };
@@ -59,8 +63,9 @@ struct Diagnosis {
   int views_ok = 0;
   ModelError baseline, final_error;
   std::vector<EffectFinding> effects;  // every candidate, accepted ones first in order of acceptance
-  EffectParameters model;              // all accepted effects
+  EffectParameters model;              // all accepted effects and the loads outside the vocabulary
   std::vector<Effect> accepted;
+  std::vector<EffectFinding> outside;  // loads outside the vocabulary (kOutsideEffects) the model includes
   std::vector<StructureFinding> unexplained;
   ScanModelFit before_fit, after_fit;  // all views, for pictures
 };

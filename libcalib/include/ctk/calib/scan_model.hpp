@@ -4,6 +4,7 @@
 // that is zero when the effect is absent, and the observations the model must explain (every
 // calibrated view's matched sphere centres and, for robot scans, its logged joints).
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <optional>
 #include <string>
@@ -25,7 +26,8 @@ enum class Effect {
   source_drift,
   sphere_positions,
   detector_distortion,
-  detector_intrinsics
+  detector_intrinsics,
+  gravity_load  // outside the contract's vocabulary: a competitor, never an accepted effect
 };
 /// In the order used to choose among effects that explain the same residual equally well: the
 /// robot's frames first (they are never where the setup says), the detector last (a lab measures
@@ -33,6 +35,14 @@ enum class Effect {
 inline constexpr std::array<Effect, 7> kEffects{Effect::robot_base_frame,   Effect::holder_mount,     Effect::joint_offsets,
                                                 Effect::source_drift,       Effect::sphere_positions, Effect::detector_distortion,
                                                 Effect::detector_intrinsics};
+/// Loads the contract has no name for, which the diagnosis still fits beside the vocabulary so
+/// that a holder bending under gravity is found as what it is and not reported as a frame offset
+/// that explains part of it.
+inline constexpr std::array<Effect, 1> kOutsideEffects{Effect::gravity_load};
+/// Everything the scan model can fit: the vocabulary, then the loads outside it.
+inline constexpr std::array<Effect, kEffects.size() + kOutsideEffects.size()> kModelledEffects{
+    Effect::robot_base_frame, Effect::holder_mount,        Effect::joint_offsets,       Effect::source_drift,
+    Effect::sphere_positions, Effect::detector_distortion, Effect::detector_intrinsics, Effect::gravity_load};
 const char* effect_name(Effect e);
 /// Effects that act through the robot's kinematics need a robot pose source.
 bool needs_robot(Effect e);
@@ -45,11 +55,28 @@ struct EffectParameters {
   double drift[2] = {0, 0};                  // focal spot offset per 100 views, camera x and y (mm)
   double intrinsics[3] = {0, 0, 0};          // principal point shift u, v (px); focal length change (px, on fu and fv alike)
   double distortion[3] = {0, 0, 0};  // radial shift at 360 px from the centre (px); centre offset from the principal point (px)
+  double gravity[2] = {0, 0};        // holder's turn (rad) and shift (mm) under gravity across its axis (gravity_load_offset)
   std::vector<Eigen::Vector3d> spheres;  // offset of each sphere (mm, holder frame)
   /// Which sphere offsets are free when sphere_positions is fitted: empty means all (the list's
   /// centroid, orientation and scale then fixed by a gauge); a subset is held in place by the rest.
   std::vector<bool> free_spheres;
 };
+
+/// The holder's pose change under its own weight, flange coordinates, as a rotation vector and a
+/// translation: it turns about a x g by gravity[0] and shifts along g - (g.a) a by gravity[1],
+/// where a is the holder's axis and g the unit downward direction (base -z), both in the flange
+/// frame. Both scale with the sine of the axis's angle to the vertical, as a cantilever's
+/// deflection does; the pair covers a turn about any point of the axis.
+template <typename T>
+Eigen::Matrix<T, 6, 1> gravity_load_offset(const Eigen::Matrix<T, 3, 3>& R_base_flange, const Eigen::Vector3d& holder_axis,
+                                           const T* gravity) {
+  const Eigen::Matrix<T, 3, 1> g = -R_base_flange.row(2).transpose();
+  const Eigen::Matrix<T, 3, 1> a = holder_axis.cast<T>();
+  Eigen::Matrix<T, 6, 1> x;
+  x.template head<3>() = gravity[0] * a.cross(g);
+  x.template tail<3>() = gravity[1] * (g - g.dot(a) * a);
+  return x;
+}
 
 /// The kinematic chain and detector the scan declares.
 struct DeclaredSetup {
@@ -110,7 +137,5 @@ ScanObservations observe_calibration(const ScanDescription& scan, const ScanCali
 /// Radial distortion and intrinsics in the contract's terms.
 RadialDistortion distortion_of(const DeclaredSetup& setup, const EffectParameters& p);
 Intrinsics intrinsics_of(const DeclaredSetup& setup, const EffectParameters& p);
-/// The focal spot's offset at `view` (camera frame, mm).
-Eigen::Vector3d source_offset_at(const EffectParameters& p, int view);
 
 }  // namespace ctk

@@ -36,6 +36,15 @@ struct Intrinsics {
 Eigen::Matrix3d tilted_detector_matrix(const Intrinsics& nominal, double sdd_mm, const Detector& detector,
                                        double tilt_about_u_rad, double tilt_about_v_rad);
 
+/// The focal spot's offset at `view` (camera frame, mm) under a linear drift from view 0 of
+/// (drift_x, drift_y) mm per 100 views in camera x and y, the detector staying put: the one drift
+/// model of scan files, calibration, diagnosis and simulation. Templated for automatic derivatives.
+template <typename T>
+Eigen::Matrix<T, 3, 1> drifted_focal_spot_mm(const T& drift_x, const T& drift_y, double view) {
+  const T per_view(view / 100.0);
+  return Eigen::Matrix<T, 3, 1>(drift_x * per_view, drift_y * per_view, T(0.0));
+}
+
 /// The detector matrix seen from a focal spot displaced by `source_offset_mm` (camera frame) while
 /// the detector stays put: P = M' [I | -offset] [R | t]. `M` is a detector matrix whose third
 /// row is the plane's unit normal n (K or a tilted one) and the plane passes through (0, 0, sdd).

@@ -67,7 +67,7 @@ struct ScanDescription {
   Intrinsics intrinsics() const { return Intrinsics::from_setup(source_to_detector_mm, detector, principal_point_px); }
   /// Where the focal spot is at `view` (camera frame, mm), from the declared drift.
   Eigen::Vector3d source_offset_mm(int view) const {
-    return {source_drift_mm_per_100_views.x() * view / 100.0, source_drift_mm_per_100_views.y() * view / 100.0, 0.0};
+    return drifted_focal_spot_mm(source_drift_mm_per_100_views.x(), source_drift_mm_per_100_views.y(), view);
   }
   std::filesystem::path resolve(const std::string& name) const;
   std::filesystem::path projection_path(int view) const { return resolve(projections.file_name(view)); }
