@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ctk/geom/statistics.hpp"
+#include "ctk/geom/error.hpp"
 
 namespace ctk {
 
@@ -50,7 +51,15 @@ bool refine_centroid(const Image& im, const Eigen::Vector2d& guess, double radiu
   return true;
 }
 
+void DetectionOptions::validate() const {
+  require_option(radius_px > 0, "DetectionOptions.radius_px", "a number above 0", radius_px);
+  require_option(noise_sigmas > 0, "DetectionOptions.noise_sigmas", "a number above 0", noise_sigmas);
+  require_option(min_roundness >= 0 && min_roundness <= 1, "DetectionOptions.min_roundness", "a number in [0, 1]", min_roundness);
+  require_option(max_candidates >= 1, "DetectionOptions.max_candidates", "at least 1", max_candidates);
+}
+
 std::vector<SphereDetection> detect_spheres(const Image& im, const DetectionOptions& o) {
+  o.validate();
   // The searched rectangle; the filters read the image around it (OpenCV filters a submatrix with
   // its parent's pixels beyond the edge), so its responses equal those of the whole image.
   cv::Rect roi(0, 0, im.cols, im.rows);

@@ -1,4 +1,5 @@
 #include "ctk/calib/sphere_profile_fit.hpp"
+#include "ctk/geom/error.hpp"
 
 #include <ceres/ceres.h>
 
@@ -139,8 +140,15 @@ class PixelAverages {
 
 }  // namespace
 
+void ProfileFitOptions::validate() const {
+  require_option(margin_px > 0, "ProfileFitOptions.margin_px", "a number above 0", margin_px);
+  require_option(subsamples >= 1, "ProfileFitOptions.subsamples", "at least 1", subsamples);
+  require_option(max_move_px > 0, "ProfileFitOptions.max_move_px", "a number above 0", max_move_px);
+}
+
 std::vector<bool> refine_cluster_by_profile_fit(const Image& im, double radius_px, std::span<SphereDetection> spheres,
                                                 const ProfileFitOptions& o, const BackgroundShape& shape) {
+  o.validate();
   const int n = static_cast<int>(spheres.size());
   std::vector<bool> refined(spheres.size(), false);
   if (n == 0) return refined;

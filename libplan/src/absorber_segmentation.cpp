@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "ctk/geom/statistics.hpp"
+#include "ctk/geom/error.hpp"
 
 namespace ctk {
 
@@ -12,7 +13,19 @@ bool SampleRegion::contains(const Eigen::Vector3d& p) const {
   return p.head<2>().norm() <= radius_mm && std::abs(p.z()) <= half_height_mm;
 }
 
+void SegmentationOptions::validate() const {
+  require_option(region.radius_mm > 0, "SegmentationOptions.region.radius_mm", "a number above 0", region.radius_mm);
+  require_option(region.half_height_mm > 0, "SegmentationOptions.region.half_height_mm", "a number above 0",
+                 region.half_height_mm);
+  require_option(wall_inner_mm > 0, "SegmentationOptions.wall_inner_mm", "a number above 0", wall_inner_mm);
+  require_option(wall_outer_mm > wall_inner_mm, "SegmentationOptions.wall_outer_mm", "a radius beyond wall_inner_mm",
+                 wall_outer_mm);
+  require_option(times_wall > 0, "SegmentationOptions.times_wall", "a number above 0", times_wall);
+  require_option(min_voxels >= 1, "SegmentationOptions.min_voxels", "at least 1", static_cast<double>(min_voxels));
+}
+
 AbsorberSegmentation segment_absorbers(const Volume& x, const SegmentationOptions& options) {
+  options.validate();
   AbsorberSegmentation s{Volume(x.layout), 0, 0, 0, {}};
   const auto& n = x.layout.size;
   std::vector<std::size_t> inside;

@@ -4,13 +4,19 @@
 #include <stdexcept>
 
 #include "ctk/geom/trajectory.hpp"
+#include "ctk/geom/error.hpp"
 
 namespace ctk {
 
+void EdgeTangencyOptions::validate() const {
+  require_option(tangent_width_deg > 0 && tangent_width_deg < 90, "EdgeTangencyOptions.tangent_width_deg",
+                 "an angle in (0, 90) deg", tangent_width_deg);
+  require_option(normal_nside >= 1, "EdgeTangencyOptions.normal_nside", "a HEALPix nside of at least 1", normal_nside);
+}
+
 std::vector<double> tangent_edge_demand(const Volume& x, const SampleRegion& region,
                                         const std::vector<Eigen::Vector3d>& directions, const EdgeTangencyOptions& options) {
-  if (!(options.tangent_width_deg > 0 && options.tangent_width_deg < 90))
-    throw std::invalid_argument("tangent_edge_demand: the tangent width must lie between 0 and 90 deg");
+  options.validate();
   const HealpixSphere sphere(options.normal_nside);
   // Squared gradient per normal direction; a normal and its opposite are the same edge.
   std::vector<double> binned(static_cast<std::size_t>(sphere.size()), 0.0);

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "ctk/proj/detector_binning.hpp"
+#include "ctk/geom/error.hpp"
 
 namespace ctk {
 
@@ -19,9 +20,20 @@ void append_view(ProjectionStack& stack, const Image& image) {
 
 }  // namespace
 
+void IncrementalOptions::validate() const {
+  require_option(binning >= 1, "IncrementalOptions.binning", "at least 1 (detector pixels per coarse pixel)", binning);
+  require_option(first_update_iterations >= 1, "IncrementalOptions.first_update_iterations", "at least 1",
+                 first_update_iterations);
+  require_option(iterations_per_update >= 1, "IncrementalOptions.iterations_per_update", "at least 1", iterations_per_update);
+  require_option(lambda >= 0, "IncrementalOptions.lambda", "a number of 0 or more", lambda);
+}
+
 IncrementalReconstruction::IncrementalReconstruction(const VolumeLayout& layout, const Detector& detector,
                                                      const IncrementalOptions& options)
-    : options_(options), detector_(detector), coarse_(binned_detector(detector, options.binning)), x_(layout) {}
+    : options_((options.validate(), options)),
+      detector_(detector),
+      coarse_(binned_detector(detector, options.binning)),
+      x_(layout) {}
 
 void IncrementalReconstruction::add_view(const ProjectionMatrix& P, const Image& line_integrals, const Image& weights) {
   if (line_integrals.cols != detector_.cols || line_integrals.rows != detector_.rows)

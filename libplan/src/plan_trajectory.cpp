@@ -6,6 +6,7 @@
 
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/proj/projection_reading.hpp"
+#include "ctk/geom/error.hpp"
 
 namespace ctk {
 
@@ -196,8 +197,26 @@ std::vector<Eigen::Vector3d> whole_sphere_order(int nside) {
   return order;
 }
 
+void PlanningOptions::validate() const {
+  require_option(scout_nside >= 1, "PlanningOptions.scout_nside", "a HEALPix nside of at least 1", scout_nside);
+  require_option(views >= 1, "PlanningOptions.views", "at least 1", views);
+  require_option(max_attempts >= 0, "PlanningOptions.max_attempts", "0 (three times views) or more", max_attempts);
+  for (int a = 0; a < 3; ++a) {
+    require_option(coarse_volume.size[static_cast<std::size_t>(a)] >= 1, "PlanningOptions.coarse_volume.size",
+                   "at least 1 voxel per axis", coarse_volume.size[static_cast<std::size_t>(a)]);
+    require_option(coarse_volume.voxel_mm[a] > 0, "PlanningOptions.coarse_volume.voxel_mm", "a number above 0",
+                   coarse_volume.voxel_mm[a]);
+  }
+  planner.validate();
+  reconstruction.validate();
+  segmentation.validate();
+  edge_tangency.validate();
+  calibration.validate();
+}
+
 PlanningResult plan_trajectory(Acquisition& acquisition, const PlanningSetup& setup, const PlanningOptions& options,
                                const std::function<void(const PlannedViewRecord&)>& on_view) {
+  options.validate();
   return Loop(acquisition, setup, options).run(on_view);
 }
 

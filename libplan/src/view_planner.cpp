@@ -1,4 +1,5 @@
 #include "ctk/plan/view_planner.hpp"
+#include "ctk/geom/error.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,8 +11,24 @@ namespace {
 constexpr double kDegree = M_PI / 180.0;
 }
 
+void PlannerOptions::validate() const {
+  require_option(candidate_nside >= 1, "PlannerOptions.candidate_nside", "a HEALPix nside of at least 1", candidate_nside);
+  require_option(planned_views >= 1, "PlannerOptions.planned_views", "at least 1", planned_views);
+  require_option(damage_exponent >= 0, "PlannerOptions.damage_exponent", "a number of 0 or more", damage_exponent);
+  require_option(spread_exponent > 0, "PlannerOptions.spread_exponent", "a number above 0", spread_exponent);
+  require_option(widest_gap_fraction >= 0 && widest_gap_fraction <= 1, "PlannerOptions.widest_gap_fraction", "a share in [0, 1]",
+                 widest_gap_fraction);
+  require_option(edge_tangency_weight >= 0 && edge_tangency_weight <= 1, "PlannerOptions.edge_tangency_weight",
+                 "a share in [0, 1]", edge_tangency_weight);
+  require_option(damage_floor_mm > 0, "PlannerOptions.damage_floor_mm", "a number above 0 (it divides)", damage_floor_mm);
+  require_option(unreachable_radius_deg >= 0 && unreachable_radius_deg < 180, "PlannerOptions.unreachable_radius_deg",
+                 "an angle in [0, 180) deg", unreachable_radius_deg);
+}
+
 ViewPlanner::ViewPlanner(const PlannerOptions& options)
-    : options_(options), candidates_(HealpixSphere(options.candidate_nside).directions()), rng_(options.seed) {}
+    : options_((options.validate(), options)),
+      candidates_(HealpixSphere(options.candidate_nside).directions()),
+      rng_(options.seed) {}
 
 void ViewPlanner::record_acquired(const Eigen::Vector3d& d) { acquired_.push_back(d.normalized()); }
 void ViewPlanner::record_unreachable(const Eigen::Vector3d& d) { unreachable_.push_back(d.normalized()); }

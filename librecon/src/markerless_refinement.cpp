@@ -445,7 +445,7 @@ nlohmann::json refinement_to_json(const RefinementResult& r) {
               {"confounded_with", e.confounded_with},
               {"heldout_projection_rms_before", e.heldout_rms_before},
               {"heldout_projection_rms_after", e.heldout_rms_after},
-              {"heldout_z", e.z}};
+              {"heldout_improvement_z", e.z}};
     if (e.accepted) {
       j["round"] = e.round;
       j["sharpness_per_mm_before"] = e.sharpness_before;

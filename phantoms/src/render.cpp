@@ -6,8 +6,19 @@
 #include <string>
 
 #include "ctk/phantoms/material_attenuation.hpp"
+#include "ctk/geom/error.hpp"
 
 namespace ctk {
+
+void RenderOptions::validate() const {
+  require_option(supersampling >= 1, "RenderOptions.supersampling", "at least 1 (rays per pixel and axis)", supersampling);
+  if (distortion)
+    require_option(std::isfinite(distortion->k1_per_px2), "RenderOptions.distortion.k1_per_px2", "a finite number",
+                   distortion->k1_per_px2);
+  if (spectrum)
+    require_option(!spectrum->bins.empty(), "RenderOptions.spectrum.bins", "at least one energy bin",
+                   static_cast<double>(spectrum->bins.size()));
+}
 
 namespace {
 
@@ -79,8 +90,8 @@ MaterialGroups material_groups(const Phantom& phantom, const std::optional<XrayS
 
 Image render_line_integrals(const Phantom& phantom, const ProjectionMatrix& P, const Detector& detector,
                             const RenderOptions& options) {
+  options.validate();
   const int s = options.supersampling;
-  if (s < 1) throw std::invalid_argument("render_line_integrals: supersampling must be at least 1");
   const MaterialGroups groups = material_groups(phantom, options.spectrum);
   const std::size_t group_count = groups.ratio.size();
   const std::size_t samples = static_cast<std::size_t>(s) * static_cast<std::size_t>(s);

@@ -5,7 +5,10 @@
 #include <string>
 
 #include "../test_support.hpp"
+#include "ctk/calib/diagnosis.hpp"
 #include "ctk/calib/robot_prior.hpp"
+#include "ctk/calib/sphere_detection.hpp"
+#include "ctk/calib/sphere_profile_fit.hpp"
 #include "ctk/calib/view_calibration.hpp"
 
 namespace ctk {
@@ -33,6 +36,50 @@ TEST(OptionsValidation, RobotPriorOptions) {
       RobotPriorOptions{}, [](auto& o) { o.start_sigma_mm = 0; }, "RobotPriorOptions.start_sigma_mm");
   testing::expect_option_refused(
       RobotPriorOptions{}, [](auto& o) { o.start_sigma_deg = -0.02; }, "RobotPriorOptions.start_sigma_deg");
+}
+
+TEST(OptionsValidation, DetectionOptions) {
+  EXPECT_NO_THROW(DetectionOptions{}.validate());
+  testing::expect_option_refused(
+      DetectionOptions{}, [](auto& o) { o.radius_px = 0; }, "DetectionOptions.radius_px");
+  testing::expect_option_refused(
+      DetectionOptions{}, [](auto& o) { o.noise_sigmas = -1; }, "DetectionOptions.noise_sigmas");
+  testing::expect_option_refused(
+      DetectionOptions{}, [](auto& o) { o.min_roundness = 1.5; }, "DetectionOptions.min_roundness");
+  testing::expect_option_refused(
+      DetectionOptions{}, [](auto& o) { o.max_candidates = 0; }, "DetectionOptions.max_candidates");
+  // The detector checks before any work.
+  DetectionOptions bad;
+  bad.radius_px = -2;
+  EXPECT_THROW(detect_spheres(Image{8, 8, std::vector<float>(64, 0.0f)}, bad), std::invalid_argument);
+}
+
+TEST(OptionsValidation, ProfileFitOptions) {
+  EXPECT_NO_THROW(ProfileFitOptions{}.validate());
+  testing::expect_option_refused(
+      ProfileFitOptions{}, [](auto& o) { o.margin_px = 0; }, "ProfileFitOptions.margin_px");
+  testing::expect_option_refused(
+      ProfileFitOptions{}, [](auto& o) { o.subsamples = 0; }, "ProfileFitOptions.subsamples");
+  testing::expect_option_refused(
+      ProfileFitOptions{}, [](auto& o) { o.max_move_px = -1; }, "ProfileFitOptions.max_move_px");
+}
+
+TEST(OptionsValidation, DiagnosisOptions) {
+  EXPECT_NO_THROW(DiagnosisOptions{}.validate());
+  testing::expect_option_refused(
+      DiagnosisOptions{}, [](auto& o) { o.z_accept = 0; }, "DiagnosisOptions.z_accept");
+  testing::expect_option_refused(
+      DiagnosisOptions{}, [](auto& o) { o.robot_sigma_mm = 0; }, "DiagnosisOptions.robot_sigma_mm");
+  testing::expect_option_refused(
+      DiagnosisOptions{}, [](auto& o) { o.robot_sigma_deg = -0.01; }, "DiagnosisOptions.robot_sigma_deg");
+  testing::expect_option_refused(
+      DiagnosisOptions{}, [](auto& o) { o.max_effects = 0; }, "DiagnosisOptions.max_effects");
+  testing::expect_option_refused(
+      DiagnosisOptions{}, [](auto& o) { o.min_image_effect_px = -0.01; }, "DiagnosisOptions.min_image_effect_px");
+  // The diagnosis checks before any work.
+  DiagnosisOptions bad;
+  bad.max_effects = 0;
+  EXPECT_THROW(diagnose(ScanObservations{}, bad), std::invalid_argument);
 }
 
 }  // namespace

@@ -24,6 +24,7 @@ struct DetectionOptions {
   int max_candidates = 400;
   Eigen::AlignedBox2d region;  // the pixels searched, e.g. where a first guess puts the spheres
                                // with room for its error (empty: the whole image)
+  void validate() const;       // std::invalid_argument naming the field
 };
 
 /// `line_integrals` is one view's image; returns the detections, strongest first.

@@ -18,6 +18,7 @@ struct ProfileFitOptions {
   double margin_px = 3.0;    // the window reaches this far beyond the sphere's rim
   int subsamples = 3;        // per pixel and axis: the model is averaged over the pixel's area
   double max_move_px = 1.0;  // a fit moving further from its start is not trusted
+  void validate() const;     // std::invalid_argument naming the field
 };
 
 /// A known shape of the background at an image position (pixel units), e.g. the path length

@@ -23,6 +23,7 @@ struct SegmentationOptions {
   double wall_inner_mm = 25.5, wall_outer_mm = 27.5;  // inside the reference holder's 3 mm POM wall
   double times_wall = 2.0;                            // absorbers attenuate more than this many times the wall
   std::size_t min_voxels = 20;                        // fewer above the threshold: noise, nothing segmented
+  void validate() const;                              // std::invalid_argument naming the field
 };
 
 struct AbsorberSegmentation {

@@ -23,6 +23,7 @@ namespace ctk {
 struct EdgeTangencyOptions {
   double tangent_width_deg = 10;  // w
   int normal_nside = 8;           // HEALPix sphere the edge normals are binned on
+  void validate() const;          // std::invalid_argument naming the field
 };
 
 /// Per direction, its demand relative to the mean demand over `directions` (1 everywhere when

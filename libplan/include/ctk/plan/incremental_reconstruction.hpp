@@ -18,7 +18,8 @@ struct IncrementalOptions {
   int binning = 3;  // detector pixels per coarse pixel, per axis
   int first_update_iterations = 8;
   int iterations_per_update = 1;
-  double lambda = 0.02;  // gradient penalty (voxel units) against streaks from few views
+  double lambda = 0.02;   // gradient penalty (voxel units) against streaks from few views
+  void validate() const;  // std::invalid_argument naming the field
 };
 
 class IncrementalReconstruction {

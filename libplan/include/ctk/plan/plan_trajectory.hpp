@@ -40,6 +40,7 @@ struct PlanningOptions {
   SegmentationOptions segmentation;  // its region is also where edges are looked for
   EdgeTangencyOptions edge_tangency;
   CalibrationOptions calibration;
+  void validate() const;  // std::invalid_argument naming the field, its own and its parts'
 };
 
 struct PlannedViewRecord {

@@ -54,6 +54,7 @@ struct PlannerOptions {
   double damage_floor_mm = 1.0;       // added to every damage (about a coarse voxel)
   double unreachable_radius_deg = 4.0;
   std::uint64_t seed = 1;
+  void validate() const;  // std::invalid_argument naming the field
 };
 
 struct CandidateWeight {

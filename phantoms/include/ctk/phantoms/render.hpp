@@ -22,6 +22,7 @@ struct RenderOptions {
   int supersampling = 2;                       // s: s x s rays per pixel
   std::optional<RadialDistortion> distortion;  // the detector's, applied to where rays land
   std::optional<XraySpectrum> spectrum;        // absent: monochromatic at the reference energy
+  void validate() const;                       // std::invalid_argument naming the field
 };
 
 /// Line-integral image (cols x rows) of `phantom` for the view P (holder frame -> pixels).
