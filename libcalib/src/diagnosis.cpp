@@ -383,15 +383,17 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
   }
   // What is reported of each effect is its value in the final model, fitted with all the others
   // (a later one, a load above all, can take up part of what an earlier one first absorbed).
-  for (EffectFinding& f : d.effects) {
-    if (!f.accepted) continue;
+  auto in_final_model = [&](EffectFinding& f) {
     const auto slot = static_cast<std::size_t>(std::find(modelled.begin(), modelled.end(), f.effect) - modelled.begin());
     f.parameters = current;
     if (current_fit.covariance.size() > 0) {
       const int start = current_fit.covariance_offsets[slot], size = parameter_count(f.effect, o);
       f.covariance = current_fit.covariance.block(start, start, size, size);
     }
-  }
+  };
+  for (EffectFinding& f : d.effects)
+    if (f.accepted) in_final_model(f);
+  for (EffectFinding& f : d.outside) in_final_model(f);
   // A load found outside the vocabulary is structure the contract's effects do not explain.
   for (const EffectFinding& f : d.outside) d.unexplained.push_back(outside_finding(f));
   for (StructureFinding& s : find_structure(o, d.after_fit)) d.unexplained.push_back(std::move(s));
