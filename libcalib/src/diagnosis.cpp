@@ -7,9 +7,9 @@
 #include <numeric>
 #include <sstream>
 
+#include "ctk/geom/error.hpp"
 #include "ctk/geom/panda.hpp"
 #include "ctk/geom/statistics.hpp"
-#include "ctk/geom/error.hpp"
 
 namespace ctk {
 
@@ -142,21 +142,15 @@ ModelError image_error(const ScanModelFit& all, const HeldOut& h) {
   return e;
 }
 
-// A load found outside the vocabulary, in the report's words.
-StructureFinding outside_finding(const EffectFinding& f) {
-  std::ostringstream what;
+// The gravity load (kOutsideEffects' one member), in the report's words.
+StructureFinding gravity_load_finding(const EffectFinding& f) {
   auto sd = [&](int i) { return f.covariance.rows() > i ? std::sqrt(std::max(0.0, f.covariance(i, i))) : 0.0; };
-  switch (f.effect) {
-    case Effect::gravity_load:
-      what << "a load that follows gravity explains the residual better than any listed effect (held-out improvement " << f.z
-           << " standard errors): with its axis horizontal the holder turns " << f.parameters.gravity[0] / kDegree << " +- "
-           << sd(0) / kDegree << " deg (about the axis x gravity) and shifts " << f.parameters.gravity[1] << " +- " << sd(1)
-           << " mm (across its axis), less as it tilts towards the vertical, as a holder sagging under its weight does; "
-           << "the held-out RMS goes from " << f.before.heldout_rms_px << " to " << f.after.heldout_rms_px << " px";
-      break;
-    default:
-      what << effect_name(f.effect) << " (held-out improvement " << f.z << " standard errors)";
-  }
+  std::ostringstream what;
+  what << "a load that follows gravity explains the residual better than any listed effect (held-out improvement " << f.z
+       << " standard errors): with its axis horizontal the holder turns " << f.parameters.gravity[0] / kDegree << " +- "
+       << sd(0) / kDegree << " deg (about the axis x gravity) and shifts " << f.parameters.gravity[1] << " +- " << sd(1)
+       << " mm (across its axis), less as it tilts towards the vertical, as a holder sagging under its weight does; "
+       << "the held-out RMS goes from " << f.before.heldout_rms_px << " to " << f.after.heldout_rms_px << " px";
   return {"by gravity", what.str()};
 }
 
@@ -219,20 +213,15 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
   d.baseline = image_error(current_fit, current_held);
   say("baseline: " + std::to_string(d.baseline.rms_px) + " px RMS, held out " + std::to_string(d.baseline.heldout_rms_px));
 
-  // Fits `chosen` into the model on every view, with its own covariance block.
+  // Fits `chosen` into the model on every view (its value and covariance are read from the final
+  // model once the loop ends).
   auto add_to_model = [&](Effect chosen, const HeldOut& held, EffectFinding& f) {
     modelled.push_back(chosen);
-    const ScanModelFit all = fit_scan_model(o, modelled, all_views(o), current, true);
-    current = all.parameters;
+    current_fit = fit_scan_model(o, modelled, all_views(o), current, true);
+    current = current_fit.parameters;
     current_held = held;
-    current_fit = all;
-    f.parameters = current;
-    const auto slot = modelled.size() - 1;
-    if (all.covariance.size() > 0) {
-      const int start = all.covariance_offsets[slot], size = parameter_count(chosen, o);
-      f.covariance = all.covariance.block(start, start, size, size);
-    }
-    f.after = image_error(all, current_held);
+    f.model_after = current;
+    f.after = image_error(current_fit, current_held);
     d.final_error = f.after;
   };
 
@@ -375,11 +364,11 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
   fk_error(o, reference, d.model, d.final_error);
   for (EffectFinding& f : d.effects) {
     fk_error(o, reference, f.model_before, f.before);
-    fk_error(o, reference, f.accepted ? f.parameters : f.model_before, f.after);
+    fk_error(o, reference, f.accepted ? f.model_after : f.model_before, f.after);
   }
   for (EffectFinding& f : d.outside) {
     fk_error(o, reference, f.model_before, f.before);
-    fk_error(o, reference, f.parameters, f.after);
+    fk_error(o, reference, f.model_after, f.after);
   }
   // What is reported of each effect is its value in the final model, fitted with all the others
   // (a later one, a load above all, can take up part of what an earlier one first absorbed).
@@ -395,7 +384,7 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
     if (f.accepted) in_final_model(f);
   for (EffectFinding& f : d.outside) in_final_model(f);
   // A load found outside the vocabulary is structure the contract's effects do not explain.
-  for (const EffectFinding& f : d.outside) d.unexplained.push_back(outside_finding(f));
+  for (const EffectFinding& f : d.outside) d.unexplained.push_back(gravity_load_finding(f));
   for (StructureFinding& s : find_structure(o, d.after_fit)) d.unexplained.push_back(std::move(s));
   return d;
 }

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <vector>
 
-#include "ctk/geom/statistics.hpp"
 #include "ctk/geom/error.hpp"
+#include "ctk/geom/statistics.hpp"
 
 namespace ctk {
 

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "ctk/geom/trajectory.hpp"
 #include "ctk/geom/error.hpp"
+#include "ctk/geom/trajectory.hpp"
 
 namespace ctk {
 

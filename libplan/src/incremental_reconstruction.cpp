@@ -4,8 +4,8 @@
 #include <stdexcept>
 #include <utility>
 
-#include "ctk/proj/detector_binning.hpp"
 #include "ctk/geom/error.hpp"
+#include "ctk/proj/detector_binning.hpp"
 
 namespace ctk {
 

@@ -4,9 +4,9 @@
 #include <chrono>
 #include <optional>
 
+#include "ctk/geom/error.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/proj/projection_reading.hpp"
-#include "ctk/geom/error.hpp"
 
 namespace ctk {
 

@@ -5,8 +5,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "ctk/phantoms/material_attenuation.hpp"
 #include "ctk/geom/error.hpp"
+#include "ctk/phantoms/material_attenuation.hpp"
 
 namespace ctk {
 

@@ -54,6 +54,7 @@ struct EffectFinding {
   double z = 0;                   // held-out improvement in standard errors
   EffectParameters parameters;    // the final model (all views, every accepted effect and load)
   EffectParameters model_before;  // the model it was tested against
+  EffectParameters model_after;   // the model right after it entered (its before/after figures)
   Eigen::MatrixXd covariance;     // of this effect's parameters in the final model (may be empty)
   std::vector<Effect> confounded_with;
   ModelError before, after;
