@@ -21,6 +21,7 @@
 #include "ctk/geom/json_access.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/image_io.hpp"
+#include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/default_volume.hpp"
 #include "ctk/recon/fdk.hpp"
 #include "ctk/recon/measurements.hpp"
@@ -188,7 +189,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   checkpointing.save = [&](const SolverSnapshot& state) { write_solver_state(state, run, state_file); };
   checkpointing.stop_requested = [] { return InterruptionWatch::requested(); };
 
-  const JosephProjector A;
+  const JosephOperator A(m.matrices, layout, m.line_integrals.rows, m.line_integrals.cols);
   Volume x(layout);
   const int iterations = o.iterations > 0 ? o.iterations : (method == ReconstructionMethod::sirt ? 100 : 30);
   Progress solving(to_string(method), "iterations");
@@ -205,14 +206,14 @@ void run_reconstruct(const ReconstructOptions& o) {
     report.stop_reason = "FDK (Hann-windowed ramp)";
     report.iterations.push_back({});
   } else if (method == ReconstructionMethod::sirt) {
-    report = solve_sirt(A, m.matrices, m.line_integrals, x, {iterations, 1.0, true}, on_iteration, &checkpointing);
+    report = solve_sirt(A, m.line_integrals, x, {iterations, 1.0, true}, on_iteration, &checkpointing);
   } else {
     WlsOptions w;
     w.iterations = iterations;
     w.tolerance = o.tolerance;
     w.lambda = o.lambda;
     w.regulariser = o.regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
-    report = solve_wls_cg(A, m.matrices, m.line_integrals, weighted ? &m.weights : nullptr, x, w, on_iteration, &checkpointing);
+    report = solve_wls_cg(A, m.line_integrals, weighted ? &m.weights : nullptr, x, w, on_iteration, &checkpointing);
   }
   if (report.stop_reason == kStoppedOnRequest)
     throw Interrupted("stopped after iteration " + std::to_string(report.iterations.back().iteration) +

@@ -6,6 +6,7 @@
 
 #include "ctk/geom/error.hpp"
 #include "ctk/proj/detector_binning.hpp"
+#include "ctk/proj/joseph_operator.hpp"
 
 namespace ctk {
 
@@ -63,7 +64,7 @@ SolverReport IncrementalReconstruction::update() {
   o.lambda = options_.lambda;
   o.regulariser = Regulariser::gradient;
   o.gradient_after_last = false;
-  return solve_wls_cg(projector_, matrices_, b_, &w_, x_, residual_, o);
+  return solve_wls_cg(JosephOperator(matrices_, x_.layout, coarse_.rows, coarse_.cols), b_, &w_, x_, residual_, o);
 }
 
 }  // namespace ctk

@@ -113,8 +113,8 @@ struct ViewPaths {
 };
 
 // The detector pixel of table entry (row, lane) of lines from line_begin, or null outside it.
-template <typename Stack, typename Value = std::conditional_t<std::is_const_v<Stack>, const float, float>>
-Value* pixel_of(Stack& y, int v, const detail::LanePath& path, int line, int lane) {
+template <typename Stack>
+auto pixel_of(const Stack& y, int v, const detail::LanePath& path, int line, int lane) -> decltype(y.view(v)) {
   if (!path.inside(line, lane)) return nullptr;
   int u, row;
   path.pixel(line, lane, u, row);
@@ -123,8 +123,8 @@ Value* pixel_of(Stack& y, int v, const detail::LanePath& path, int line, int lan
 
 }  // namespace
 
-void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatrix>& views, ProjectionStack& y) const {
-  check_stack_matches_views(y, views.size());
+void JosephProjector::forward(ConstVolumeSpan x, const std::vector<ProjectionMatrix>& views, StackSpan y) const {
+  check_stack_matches_views(y.views, y.rows, y.cols, views.size());
   const int rows_per_block = lines_per_table(views, x.layout);
   const ViewPaths paths(views, x.layout, y.cols, y.rows, rows_per_block);
   // Every view's lines of one slab, then the next slab's: neighbouring items read the same
@@ -148,7 +148,7 @@ void JosephProjector::forward(const Volume& x, const std::vector<ProjectionMatri
       const auto& path = paths.path[static_cast<std::size_t>(v)];
       table.rows = item.lines;
       table.fill(paths.rays[static_cast<std::size_t>(v)], x.layout, 0, path, item.line_begin, 0, table.rows * table.row_stride);
-      detail::forward_rays(table, x.data.data(), out.data());
+      detail::forward_rays(table, x.data, out.data());
       for (int row = 0; row < table.rows; ++row)
         for (int lane = 0; lane < path.majors; ++lane)
           if (float* pixel = pixel_of(y, v, path, item.line_begin + row, lane)) *pixel = out[table.entry(0, row, lane)];
@@ -199,9 +199,9 @@ TableAxes axes_fewest_first(const std::vector<AxisSamples>& samples, int buffer)
 
 }  // namespace
 
-void JosephProjector::back(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views, Volume& x) const {
-  check_stack_matches_views(y, views.size());
-  std::fill(x.data.begin(), x.data.end(), 0.0f);
+void JosephProjector::back(ConstStackSpan y, const std::vector<ProjectionMatrix>& views, VolumeSpan x) const {
+  check_stack_matches_views(y.views, y.rows, y.cols, views.size());
+  std::fill_n(x.data, x.layout.voxel_count(), 0.0f);
   if (y.views == 0) return;
   const int rows_per_block = lines_per_table(views, x.layout);
   const ViewPaths paths(views, x.layout, y.cols, y.rows, rows_per_block);
@@ -282,7 +282,7 @@ void JosephProjector::back(const ProjectionStack& y, const std::vector<Projectio
 #pragma omp for schedule(dynamic, 1)
         for (int task = 0; task < slabs + (last ? fills : 0); ++task) {
           if (task < slabs)
-            detail::back_rays(table, axis, slab_edge(task, slabs, n, axis), slab_edge(task + 1, slabs, n, axis), x.data.data());
+            detail::back_rays(table, axis, slab_edge(task, slabs, n, axis), slab_edge(task + 1, slabs, n, axis), x.data);
           else
             fill(batches[i + 1], 1 - buffer, task - slabs);
         }

@@ -63,11 +63,11 @@ MarchedRay march_ray(const ViewRays& rays, const VolumeLayout& layout, double u,
   return m;
 }
 
-void check_stack_matches_views(const ProjectionStack& y, std::size_t view_count) {
-  if (y.views != static_cast<int>(view_count))
-    throw std::invalid_argument("projector: the stack has " + std::to_string(y.views) + " views but " +
+void check_stack_matches_views(int stack_views, int rows, int cols, std::size_t view_count) {
+  if (stack_views != static_cast<int>(view_count))
+    throw std::invalid_argument("projector: the stack has " + std::to_string(stack_views) + " views but " +
                                 std::to_string(view_count) + " matrices were given");
-  if (y.rows <= 0 || y.cols <= 0) throw std::invalid_argument("projector: empty detector");
+  if (rows <= 0 || cols <= 0) throw std::invalid_argument("projector: empty detector");
 }
 
 }  // namespace ctk

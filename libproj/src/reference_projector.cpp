@@ -39,7 +39,7 @@ void visit_ray(const MarchedRay& m, const VolumeLayout& layout, Visit&& visit) {
 }  // namespace
 
 void forward_project_reference(const Volume& x, const std::vector<ProjectionMatrix>& views, ProjectionStack& y) {
-  check_stack_matches_views(y, views.size());
+  check_stack_matches_views(y.views, y.rows, y.cols, views.size());
   for (int v = 0; v < y.views; ++v) {
     const ViewRays rays = view_rays(views[static_cast<std::size_t>(v)], x.layout);
     for (int row = 0; row < y.rows; ++row) {
@@ -53,7 +53,7 @@ void forward_project_reference(const Volume& x, const std::vector<ProjectionMatr
 }
 
 void back_project_reference(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views, Volume& x) {
-  check_stack_matches_views(y, views.size());
+  check_stack_matches_views(y.views, y.rows, y.cols, views.size());
   std::vector<double> acc(x.data.size(), 0.0);
   for (int v = 0; v < y.views; ++v) {
     const ViewRays rays = view_rays(views[static_cast<std::size_t>(v)], x.layout);

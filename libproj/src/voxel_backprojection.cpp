@@ -139,7 +139,7 @@ HWY_EXPORT(BackprojectRow);
 namespace {
 
 void check_inputs(const ProjectionStack& q, const std::vector<ProjectionMatrix>& views, double scale_mm) {
-  check_stack_matches_views(q, views.size());
+  check_stack_matches_views(q.views, q.rows, q.cols, views.size());
   if (!(scale_mm > 0)) throw std::invalid_argument("voxel_backproject: the weight's scale must be positive");
 }
 

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
+
+#include "ctk/proj/arc_averaged_projection.hpp"
 
 namespace ctk {
 
@@ -87,28 +90,22 @@ std::vector<double> ConsistencyProbe::costs(const std::vector<int>& held_out, co
 
   // Predict the held-out views (the mean over sub-views when the view integrates an arc).
   const int samples = model.blur_arc_rad > 0 ? std::max(model.blur_samples, 1) : 1;
-  std::vector<ProjectionMatrix> sub_views;
+  std::vector<std::vector<ProjectionMatrix>> sub_views;
   for (int v : held_out) {
     const ProjectionMatrix& P = matrices[static_cast<std::size_t>(v)];
-    if (samples == 1) {
-      sub_views.push_back(P);
-    } else {
-      for (const auto& S : angular_sub_views(P, orbit_, model.blur_arc_rad, samples)) sub_views.push_back(S);
-    }
+    sub_views.push_back(samples == 1 ? std::vector<ProjectionMatrix>{P}
+                                     : angular_sub_views(P, orbit_, model.blur_arc_rad, samples));
   }
-  ProjectionStack y(static_cast<int>(sub_views.size()), b_.rows, b_.cols);
-  projector_.forward(x, sub_views, y);
+  ProjectionStack y;
+  ArcAveragedProjection(std::move(sub_views), layout_, b_.rows, b_.cols).apply(x, y);
 
   std::vector<double> c;
   if (residuals) *residuals = ProjectionStack(static_cast<int>(held_out.size()), b_.rows, b_.cols);
   for (std::size_t i = 0; i < held_out.size(); ++i) {
     const float* measured = b_.view(held_out[i]);
     float* residual = residuals ? residuals->view(static_cast<int>(i)) : nullptr;
-    std::vector<double> predicted(b_.pixels_per_view(), 0.0);
-    for (int s = 0; s < samples; ++s) {
-      const float* sub = y.view(static_cast<int>(i) * samples + s);
-      for (std::size_t p = 0; p < predicted.size(); ++p) predicted[p] += sub[p] / samples;
-    }
+    const float* view = y.view(static_cast<int>(i));
+    std::vector<double> predicted(view, view + b_.pixels_per_view());
     if (model.prediction_smoothing > 0) smooth_box3(predicted, b_.rows, b_.cols, model.prediction_smoothing);
     // Rows near the top and bottom see parts of a long object that the other views miss (the
     // cone's incomplete region): no geometry predicts them, so they are left out of the cost.

@@ -22,18 +22,19 @@ void SirtOptions::validate() const {
   require_option(relaxation > 0 && relaxation < 2, "SirtOptions.relaxation", "a number in (0, 2)", relaxation);
 }
 
-SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b, Volume& x,
-                        const SirtOptions& o, const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
+SolverReport solve_sirt(const ProjectionOperator& A, const ProjectionStack& b, Volume& x, const SirtOptions& o,
+                        const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
   o.validate();
+  detail::require_problem_shapes("solve_sirt", A, b, x);
   auto start = std::chrono::steady_clock::now();
   ProjectionStack row_weight(b.views, b.rows, b.cols), residual(b.views, b.rows, b.cols);
   Volume column_weight(x.layout), update(x.layout);
   {
     Volume ones(x.layout);
     std::fill(ones.data.begin(), ones.data.end(), 1.0f);
-    A.forward(ones, views, row_weight);
+    A.apply(ones, row_weight);
     std::fill(residual.data.begin(), residual.data.end(), 1.0f);
-    A.back(residual, views, column_weight);
+    A.apply_adjoint(residual, column_weight);
   }
   invert_nonzero(row_weight.data);
   invert_nonzero(column_weight.data);
@@ -49,7 +50,7 @@ SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMa
   const std::ptrdiff_t n_rays = static_cast<std::ptrdiff_t>(b.data.size());
   const std::ptrdiff_t n_voxels = static_cast<std::ptrdiff_t>(x.data.size());
   for (int it = first; it <= o.iterations; ++it) {
-    A.forward(x, views, residual);  // residual = b - A x
+    A.apply(x, residual);  // residual = b - A x
 #pragma omp parallel for schedule(static)
     for (std::ptrdiff_t i = 0; i < n_rays; ++i) {
       const std::size_t k = static_cast<std::size_t>(i);
@@ -67,7 +68,7 @@ SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMa
 #pragma omp parallel for schedule(static)
     for (std::ptrdiff_t i = 0; i < n_rays; ++i)
       residual.data[static_cast<std::size_t>(i)] *= row_weight.data[static_cast<std::size_t>(i)];
-    A.back(residual, views, update);
+    A.apply_adjoint(residual, update);
     const float relax = static_cast<float>(o.relaxation);
 #pragma omp parallel for schedule(static)
     for (std::ptrdiff_t i = 0; i < n_voxels; ++i) {

@@ -1,10 +1,24 @@
 #pragma once
 // Threaded reductions and updates on float arrays, accumulating in double (solver internals).
 #include <cstddef>
+#include <stdexcept>
+#include <string>
 
 #include "ctk/proj/float_buffer.hpp"
+#include "ctk/proj/projection_operator.hpp"
 
 namespace ctk::detail {
+
+/// Throws std::invalid_argument, naming the solver, when b is not of A's range or x not of its domain.
+inline void require_problem_shapes(const char* solver, const ProjectionOperator& A, const ProjectionStack& b, const Volume& x) {
+  const StackShape r = A.range();
+  if (!(StackShape::of(b) == r))
+    throw std::invalid_argument(std::string(solver) + ": the line integrals are " + std::to_string(b.views) + " x " +
+                                std::to_string(b.rows) + " x " + std::to_string(b.cols) + " but the operator projects to " +
+                                std::to_string(r.views) + " x " + std::to_string(r.rows) + " x " + std::to_string(r.cols));
+  if (!(x.layout == A.domain()))
+    throw std::invalid_argument(std::string(solver) + ": the volume's layout is not the operator's domain");
+}
 
 inline double dot(const FloatBuffer& a, const FloatBuffer& b) {
   double sum = 0;

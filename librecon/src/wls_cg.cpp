@@ -28,22 +28,23 @@ void WlsOptions::validate() const {
   require_option(lambda >= 0 && std::isfinite(lambda), "WlsOptions.lambda", "a finite number of at least 0", lambda);
 }
 
-SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
-                          const ProjectionStack* weights, Volume& x, const WlsOptions& o, const IterationCallback& on_iteration,
-                          const Checkpointing* checkpointing) {
+SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
+                          const WlsOptions& o, const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
+  detail::require_problem_shapes("solve_wls_cg", A, b, x);
   ProjectionStack residual(b.views, b.rows, b.cols);
   if (!(checkpointing && checkpointing->resume)) {  // a continued run takes its residual from the state
     const bool cold = std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; });
-    if (!cold) A.forward(x, views, residual);
+    if (!cold) A.apply(x, residual);
     axpy(-1.0, b.data, residual.data);
   }
-  return solve_wls_cg(A, views, b, weights, x, residual, o, on_iteration, checkpointing);
+  return solve_wls_cg(A, b, weights, x, residual, o, on_iteration, checkpointing);
 }
 
-SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
-                          const ProjectionStack* weights, Volume& x, ProjectionStack& residual, const WlsOptions& o,
-                          const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
+SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
+                          ProjectionStack& residual, const WlsOptions& o, const IterationCallback& on_iteration,
+                          const Checkpointing* checkpointing) {
   o.validate();
+  detail::require_problem_shapes("solve_wls_cg", A, b, x);
   if (weights && weights->data.size() != b.data.size())
     throw std::invalid_argument("solve_wls_cg: weights and line integrals differ in size");
   if (residual.data.size() != b.data.size())
@@ -57,7 +58,7 @@ SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<Projection
   SolverState* resume = checkpointing ? checkpointing->resume : nullptr;
   if (!resume) {
     detail::weighted_copy(residual.data, w, scratch.data);
-    A.back(scratch, views, gradient);
+    A.apply_adjoint(scratch, gradient);
     add_regulariser_normal(o.regulariser, o.lambda, x, gradient);
   }
 
@@ -100,7 +101,7 @@ SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<Projection
 
   for (int it = first; it <= o.iterations; ++it) {
     // Scratch holds A d for the residual update; H d = A' W A d + lambda G'G d.
-    A.forward(direction, views, scratch);
+    A.apply(direction, scratch);
     const double dHd_data = detail::weighted_square_sum(scratch.data, w);
     ProjectionStack& Ad = scratch;
     // d'G'Gd = ||G d||^2 = 2 * (1/2 ||G d||^2): no extra volume needed.
@@ -118,7 +119,7 @@ SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<Projection
       break;
     }
     detail::weighted_copy(Ad.data, w, scratch.data);
-    A.back(scratch, views, H_direction);
+    A.apply_adjoint(scratch, H_direction);
     add_regulariser_normal(o.regulariser, o.lambda, direction, H_direction);
     axpy(alpha, H_direction.data, gradient.data);
     const double gg_new = dot(gradient.data, gradient.data);

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "ctk/geom/scan_import.hpp"
+#include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/wls_cg.hpp"
 
 namespace ctk {
@@ -65,7 +66,7 @@ TEST(FanBeam, OneRowOneSliceIsAdjointAndReconstructsADisc) {
   WlsOptions o;
   o.iterations = 60;
   o.tolerance = 0;
-  solve_wls_cg(A, views, b, nullptr, rec, o);
+  solve_wls_cg(JosephOperator(views, layout, 1, kFan.cols), b, nullptr, rec, o);
   double inside = 0, outside = 0;
   int n_in = 0, n_out = 0;
   for (int j = 0; j < 96; ++j)

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "../test_support.hpp"
-#include "ctk/proj/joseph_projector.hpp"
+#include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/markerless_refinement.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/wls_cg.hpp"
@@ -24,7 +24,8 @@ TEST(OptionsValidation, SirtOptions) {
       SirtOptions{}, [](auto& o) { o.iterations = -1; }, "SirtOptions.iterations");
   // The solver checks before any work.
   Volume x(VolumeLayout::centred({4, 4, 4}, Eigen::Vector3d::Ones()));
-  EXPECT_THROW(solve_sirt(JosephProjector(), {}, ProjectionStack(), x, {10, 2.5, true}), std::invalid_argument);
+  EXPECT_THROW(solve_sirt(JosephOperator({}, x.layout, 4, 4), ProjectionStack(0, 4, 4), x, {10, 2.5, true}),
+               std::invalid_argument);
 }
 
 TEST(OptionsValidation, WlsOptions) {

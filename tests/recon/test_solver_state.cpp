@@ -7,6 +7,7 @@
 #include "../test_support.hpp"
 #include "ctk/geom/error.hpp"
 #include "ctk/geom/trajectory.hpp"
+#include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/solver_state.hpp"
 #include "ctk/recon/wls_cg.hpp"
@@ -34,6 +35,7 @@ struct SmallProblem {
     weights = b;
     for (float& w : weights.data) w = 1.0f / (1.0f + w);
   }
+  JosephOperator projection() const { return {views, layout, detector.rows, detector.cols}; }
 };
 
 // Runs `solve` once whole and once stopped after `stop_after` iterations, saved to a file, read
@@ -70,22 +72,22 @@ double continued_difference(const SmallProblem& p, int stop_after, const Solve& 
 
 TEST(SolverState, WlsCgContinuedFromItsSavedStateEqualsTheUninterruptedRun) {
   const SmallProblem p;
-  const JosephProjector A;
+  const JosephOperator A = p.projection();
   WlsOptions o;
   o.iterations = 12;
   o.tolerance = 0;
   o.lambda = 0.5;
   o.regulariser = Regulariser::gradient;
   const double difference = continued_difference(
-      p, 5, [&](Volume& x, const Checkpointing* c) { return solve_wls_cg(A, p.views, p.b, &p.weights, x, o, {}, c); });
+      p, 5, [&](Volume& x, const Checkpointing* c) { return solve_wls_cg(A, p.b, &p.weights, x, o, {}, c); });
   EXPECT_LE(difference, 1e-6);
 }
 
 TEST(SolverState, SirtContinuedFromItsSavedStateEqualsTheUninterruptedRun) {
   const SmallProblem p;
-  const JosephProjector A;
+  const JosephOperator A = p.projection();
   const double difference = continued_difference(p, 7, [&](Volume& x, const Checkpointing* c) {
-    return solve_sirt(A, p.views, p.b, x, {15, 1.0, true}, {}, c);
+    return solve_sirt(A, p.b, x, {15, 1.0, true}, {}, c);
   });
   EXPECT_LE(difference, 1e-6);
 }
@@ -98,7 +100,7 @@ TEST(SolverState, ADamagedOrForeignStateIsRefusedNamingTheFile) {
   Checkpointing c;
   c.stop_requested = [&] { return ++done == 2; };
   c.save = [&](const SolverSnapshot& s) { write_solver_state(s, {}, dir / "state"); };
-  solve_sirt(JosephProjector(), p.views, p.b, x, {5, 1.0, true}, {}, &c);
+  solve_sirt(p.projection(), p.b, x, {5, 1.0, true}, {}, &c);
   const auto size = std::filesystem::file_size(dir / "state");
   std::filesystem::copy_file(dir / "state", dir / "cut");
   std::filesystem::resize_file(dir / "cut", size - 4);
@@ -119,7 +121,7 @@ TEST(SolverState, ADamagedOrForeignStateIsRefusedNamingTheFile) {
   Volume y(p.layout);
   WlsOptions o;
   o.iterations = 3;
-  EXPECT_THROW(solve_wls_cg(JosephProjector(), p.views, p.b, nullptr, y, o, {}, &resume), std::invalid_argument);
+  EXPECT_THROW(solve_wls_cg(p.projection(), p.b, nullptr, y, o, {}, &resume), std::invalid_argument);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/detector_response.hpp"
 #include "ctk/phantoms/render.hpp"
+#include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/measurements.hpp"
 #include "ctk/recon/memory_plan.hpp"
 #include "ctk/recon/sirt.hpp"
@@ -90,7 +91,7 @@ double one_voxel_blur_rmse(const SheppLoganScan& s) {
 
 TEST(WlsCg, NoiseFreeSheppLoganBeatsAOneVoxelBlurOfTheTruthAndImprovesEveryIteration) {
   const SheppLoganScan& s = noise_free_scan();
-  const JosephProjector A;
+  const JosephOperator A(s.views, s.layout, s.exact.rows, s.exact.cols);
   Volume x(s.layout);
   WlsOptions o;
   o.iterations = 30;
@@ -101,8 +102,7 @@ TEST(WlsCg, NoiseFreeSheppLoganBeatsAOneVoxelBlurOfTheTruthAndImprovesEveryItera
   o.lambda = 5.0;
   o.regulariser = Regulariser::gradient;
   std::vector<double> rmse;  // after each iteration: x is updated before the callback
-  const SolverReport report =
-      solve_wls_cg(A, s.views, s.exact, nullptr, x, o, [&](const IterationLog&) { rmse.push_back(s.rmse(x)); });
+  const SolverReport report = solve_wls_cg(A, s.exact, nullptr, x, o, [&](const IterationLog&) { rmse.push_back(s.rmse(x)); });
   ASSERT_EQ(report.iterations.size(), 31u);
   for (std::size_t i = 1; i < report.iterations.size(); ++i)
     EXPECT_LT(report.iterations[i].cost, report.iterations[i - 1].cost) << "iteration " << i;
@@ -127,17 +127,17 @@ TEST(WlsCg, StatisticalWeightsBeatUnitWeightsAndTikhonovLowersNoise) {
     draw_counts(counts, model, rng);
     counts_to_line_integrals(counts, flat, dark, b.view(v), w.view(v), clamped);
   }
-  const JosephProjector A;
+  const JosephOperator A(s.views, s.layout, b.rows, b.cols);
   WlsOptions o;
   o.iterations = 15;
   o.tolerance = 0;
   Volume ls(s.layout), wls(s.layout), tikhonov(s.layout);
-  solve_wls_cg(A, s.views, b, nullptr, ls, o);
-  solve_wls_cg(A, s.views, b, &w, wls, o);
+  solve_wls_cg(A, b, nullptr, ls, o);
+  solve_wls_cg(A, b, &w, wls, o);
   WlsOptions regularised = o;
   regularised.lambda = 20.0;
   regularised.regulariser = Regulariser::identity;
-  solve_wls_cg(A, s.views, b, &w, tikhonov, regularised);
+  solve_wls_cg(A, b, &w, tikhonov, regularised);
   // Noise: spread inside the large uniform region around the centre (the phantom's brain matter).
   auto noise = [&](const Volume& x) {
     double sum = 0, sum2 = 0;
@@ -186,23 +186,23 @@ TEST(WlsCg, TikhonovSolutionSatisfiesTheNormalEquations) {
   const VolumeLayout& layout = p.layout;
   const std::vector<ProjectionMatrix>& views = p.views;
   const ProjectionStack &b = p.b, &w = p.w;
-  const JosephProjector A;
+  const JosephOperator A(views, layout, b.rows, b.cols);
   Volume x(layout);
   WlsOptions o;
   o.iterations = 300;
   o.tolerance = 1e-5;
   o.lambda = 0.5;
-  const SolverReport r = solve_wls_cg(A, views, b, &w, x, o);
+  const SolverReport r = solve_wls_cg(A, b, &w, x, o);
   EXPECT_LT(r.iterations.back().relative_gradient, 1e-4) << r.stop_reason;
   // Independent check of the gradient at the solution.
   ProjectionStack Ax(15, 20, 20);
-  A.forward(x, views, Ax);
+  A.apply(x, Ax);
   for (std::size_t i = 0; i < Ax.data.size(); ++i) Ax.data[i] = w.data[i] * (Ax.data[i] - b.data[i]);
   Volume g(layout), Awb(layout);
-  A.back(Ax, views, g);
+  A.apply_adjoint(Ax, g);
   ProjectionStack wb = b;
   for (std::size_t i = 0; i < wb.data.size(); ++i) wb.data[i] *= w.data[i];
-  A.back(wb, views, Awb);
+  A.apply_adjoint(wb, Awb);
   double gnorm = 0, scale = 0;
   for (std::size_t i = 0; i < g.data.size(); ++i) {
     const double gi = g.data[i] + o.lambda * x.data[i];
@@ -220,7 +220,7 @@ TEST(WlsCg, AKeptResidualAndASkippedLastGradientChangeNothingInX) {
   const VolumeLayout& layout = p.layout;
   const std::vector<ProjectionMatrix>& views = p.views;
   const ProjectionStack& b = p.b;
-  const JosephProjector A;
+  const JosephOperator A(views, layout, b.rows, b.cols);
   WlsOptions o;
   o.tolerance = 0;
   o.lambda = 0.5;
@@ -228,12 +228,12 @@ TEST(WlsCg, AKeptResidualAndASkippedLastGradientChangeNothingInX) {
   ProjectionStack residual = b;
   for (auto& v : residual.data) v = -v;  // A 0 - b
   o.iterations = 2;
-  solve_wls_cg(A, views, b, nullptr, restarted, o);
-  solve_wls_cg(A, views, b, nullptr, handed_over, residual, o);
+  solve_wls_cg(A, b, nullptr, restarted, o);
+  solve_wls_cg(A, b, nullptr, handed_over, residual, o);
   o.iterations = 1;
-  solve_wls_cg(A, views, b, nullptr, restarted, o);
+  solve_wls_cg(A, b, nullptr, restarted, o);
   o.gradient_after_last = false;
-  const SolverReport last = solve_wls_cg(A, views, b, nullptr, handed_over, residual, o);
+  const SolverReport last = solve_wls_cg(A, b, nullptr, handed_over, residual, o);
   EXPECT_EQ(last.iterations.size(), 2u);
   EXPECT_LT(last.iterations.back().cost, last.iterations.front().cost);
 
@@ -244,7 +244,7 @@ TEST(WlsCg, AKeptResidualAndASkippedLastGradientChangeNothingInX) {
   }
   EXPECT_LT(std::sqrt(diff / norm), 1e-5);
   ProjectionStack Ax(6, 20, 20);
-  A.forward(handed_over, views, Ax);
+  A.apply(handed_over, Ax);
   double r_err = 0, r_norm = 0;
   for (std::size_t i = 0; i < Ax.data.size(); ++i) {
     r_err += std::pow(double(Ax.data[i]) - b.data[i] - residual.data[i], 2);
@@ -255,11 +255,11 @@ TEST(WlsCg, AKeptResidualAndASkippedLastGradientChangeNothingInX) {
 
 TEST(Sirt, ConvergesOnNoiseFreeData) {
   const SheppLoganScan& s = noise_free_scan();
-  const JosephProjector A;
+  const JosephOperator A(s.views, s.layout, s.exact.rows, s.exact.cols);
   Volume x(s.layout);
   SirtOptions o;
   o.iterations = 40;
-  const SolverReport r = solve_sirt(A, s.views, s.exact, x, o);
+  const SolverReport r = solve_sirt(A, s.exact, x, o);
   EXPECT_LT(r.iterations.back().cost, 0.05 * r.iterations.front().cost);
   EXPECT_LT(s.rmse(x), 0.5 * s.rmse(Volume(s.layout)));
 }

@@ -8,6 +8,7 @@
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/render.hpp"
+#include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/wls_cg.hpp"
 
 namespace ctk {
@@ -40,7 +41,7 @@ Result reconstruct_sample2(const std::vector<Eigen::Vector3d>& directions) {
   o.tolerance = 0;
   o.lambda = 2.0;
   o.regulariser = Regulariser::gradient;
-  solve_wls_cg(JosephProjector(), views, b, nullptr, x, o);
+  solve_wls_cg(JosephOperator(views, kLayout, b.rows, b.cols), b, nullptr, x, o);
 
   Result r;
   double sum = 0;

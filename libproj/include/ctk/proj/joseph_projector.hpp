@@ -31,9 +31,16 @@ class JosephProjector {
   explicit JosephProjector(ProjectorOptions options = {});
 
   /// y = A x; y must be sized (views.size(), rows, cols) for the detector.
-  void forward(const Volume& x, const std::vector<ProjectionMatrix>& views, ProjectionStack& y) const;
+  void forward(ConstVolumeSpan x, const std::vector<ProjectionMatrix>& views, StackSpan y) const;
   /// x = A' y; x's layout is kept, its values overwritten.
-  void back(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views, Volume& x) const;
+  void back(ConstStackSpan y, const std::vector<ProjectionMatrix>& views, VolumeSpan x) const;
+  // The same on owned storage (the spans' memory may be anyone's: a numpy array, a memory map).
+  void forward(const Volume& x, const std::vector<ProjectionMatrix>& views, ProjectionStack& y) const {
+    forward(ConstVolumeSpan(x), views, StackSpan(y));
+  }
+  void back(const ProjectionStack& y, const std::vector<ProjectionMatrix>& views, Volume& x) const {
+    back(ConstStackSpan(y), views, VolumeSpan(x));
+  }
 
   /// Detector lines per ray table for these views when ProjectorOptions::rows_per_block is 0:
   /// 8, or 24 where the views' rays typically cross the rows of their slices (the median view's

@@ -6,6 +6,18 @@
 
 namespace ctk {
 
+/// A stack's pixels held elsewhere (a numpy array, a memory map), in the order of ProjectionStack.
+/// T is float or const float.
+template <class T>
+struct StackSpanOf {
+  int views = 0, rows = 0, cols = 0;
+  T* data = nullptr;
+  std::size_t pixels_per_view() const { return static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols); }
+  T* view(int v) const { return data + static_cast<std::size_t>(v) * pixels_per_view(); }
+};
+using StackSpan = StackSpanOf<float>;
+using ConstStackSpan = StackSpanOf<const float>;
+
 struct ProjectionStack {
   int views = 0, rows = 0, cols = 0;
   FloatBuffer data;
@@ -16,6 +28,8 @@ struct ProjectionStack {
         rows(r),
         cols(c),
         data(static_cast<std::size_t>(v) * static_cast<std::size_t>(r) * static_cast<std::size_t>(c), 0.0f) {}
+  operator StackSpan() { return {views, rows, cols, data.data()}; }
+  operator ConstStackSpan() const { return {views, rows, cols, data.data()}; }
   std::size_t pixels_per_view() const { return static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols); }
   float* view(int v) { return data.data() + static_cast<std::size_t>(v) * pixels_per_view(); }
   const float* view(int v) const { return data.data() + static_cast<std::size_t>(v) * pixels_per_view(); }

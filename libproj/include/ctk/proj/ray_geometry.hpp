@@ -33,7 +33,7 @@ struct MarchedRay {
 MarchedRay march_ray(const ViewRays& rays, const VolumeLayout& layout, double u, double v);
 
 /// Every projector's precondition: one view of `y` per matrix, a non-empty detector.
-void check_stack_matches_views(const ProjectionStack& y, std::size_t view_count);
+void check_stack_matches_views(int stack_views, int rows, int cols, std::size_t view_count);
 
 /// The two non-dominant axes (b < c) of `axis`.
 inline std::array<int, 2> other_axes(int axis) {

@@ -24,6 +24,16 @@ struct VolumeLayout {
   bool operator==(const VolumeLayout&) const = default;
 };
 
+/// A volume's voxels held elsewhere (a numpy array, a memory map): the layout and a pointer to
+/// voxel_count() floats in the order of Volume. T is float or const float.
+template <class T>
+struct VolumeSpanOf {
+  VolumeLayout layout;
+  T* data = nullptr;
+};
+using VolumeSpan = VolumeSpanOf<float>;
+using ConstVolumeSpan = VolumeSpanOf<const float>;
+
 struct Volume {
   VolumeLayout layout;
   FloatBuffer data;
@@ -31,6 +41,8 @@ struct Volume {
   explicit Volume(const VolumeLayout& l = {}) : layout(l), data(l.voxel_count(), 0.0f) {}
   float& at(int i, int j, int k) { return data[index(i, j, k)]; }
   float at(int i, int j, int k) const { return data[index(i, j, k)]; }
+  operator VolumeSpan() { return {layout, data.data()}; }
+  operator ConstVolumeSpan() const { return {layout, data.data()}; }
   std::size_t index(int i, int j, int k) const {
     return static_cast<std::size_t>(i) +
            static_cast<std::size_t>(layout.size[0]) *

@@ -6,7 +6,8 @@
 #include <vector>
 
 #include "ctk/geom/detector.hpp"
-#include "ctk/proj/joseph_projector.hpp"
+#include "ctk/proj/projection_stack.hpp"
+#include "ctk/proj/volume.hpp"
 #include "ctk/recon/global_geometry.hpp"
 
 namespace ctk {
@@ -74,7 +75,6 @@ class ConsistencyProbe {
   ConsistencySplit split_;
   CircularTrajectory orbit_;
   int row_margin_;  // detector rows left out of the cost at the top and at the bottom
-  JosephProjector projector_;
 };
 
 /// Edge sharpness of a volume, as line profiles show it: the mean of the largest 1 % of absolute

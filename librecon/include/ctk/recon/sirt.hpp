@@ -3,7 +3,7 @@
 // sums of A (rays and voxels no view sees are left alone); optionally kept non-negative.
 #include <vector>
 
-#include "ctk/proj/joseph_projector.hpp"
+#include "ctk/proj/projection_operator.hpp"
 #include "ctk/recon/iteration_log.hpp"
 #include "ctk/recon/solver_state.hpp"
 
@@ -16,8 +16,8 @@ struct SirtOptions {
   void validate() const;  // std::invalid_argument naming the field
 };
 
-SolverReport solve_sirt(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b, Volume& x,
-                        const SirtOptions& options, const IterationCallback& on_iteration = {},
-                        const Checkpointing* checkpointing = nullptr);
+/// `b` has A's range shape, `x` (the start, and the result) A's domain layout.
+SolverReport solve_sirt(const ProjectionOperator& A, const ProjectionStack& b, Volume& x, const SirtOptions& options,
+                        const IterationCallback& on_iteration = {}, const Checkpointing* checkpointing = nullptr);
 
 }  // namespace ctk

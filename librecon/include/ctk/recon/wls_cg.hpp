@@ -8,7 +8,7 @@
 // gradient, direction) as asked and continues a saved one exactly.
 #include <vector>
 
-#include "ctk/proj/joseph_projector.hpp"
+#include "ctk/proj/projection_operator.hpp"
 #include "ctk/recon/iteration_log.hpp"
 #include "ctk/recon/regulariser.hpp"
 #include "ctk/recon/solver_state.hpp"
@@ -26,17 +26,17 @@ struct WlsOptions {
   void validate() const;  // std::invalid_argument naming the field
 };
 
-/// `x` is the starting point (zeros for a cold start) and receives the result. `weights` may be
-/// null (unit weights); otherwise the same shape as `b`.
-SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
-                          const ProjectionStack* weights, Volume& x, const WlsOptions& options,
-                          const IterationCallback& on_iteration = {}, const Checkpointing* checkpointing = nullptr);
+/// `x` is the starting point (zeros for a cold start, A's domain layout) and receives the result.
+/// `b` has A's range shape; `weights` may be null (unit weights), otherwise the same shape as `b`.
+SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
+                          const WlsOptions& options, const IterationCallback& on_iteration = {},
+                          const Checkpointing* checkpointing = nullptr);
 
 /// The same for a caller that keeps the residual A x - b between calls (an incremental
 /// reconstruction that adds views): `residual` holds it on entry and on return, so the start
 /// costs no forward projection.
-SolverReport solve_wls_cg(const JosephProjector& A, const std::vector<ProjectionMatrix>& views, const ProjectionStack& b,
-                          const ProjectionStack* weights, Volume& x, ProjectionStack& residual, const WlsOptions& options,
-                          const IterationCallback& on_iteration = {}, const Checkpointing* checkpointing = nullptr);
+SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
+                          ProjectionStack& residual, const WlsOptions& options, const IterationCallback& on_iteration = {},
+                          const Checkpointing* checkpointing = nullptr);
 
 }  // namespace ctk
