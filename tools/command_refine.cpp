@@ -17,11 +17,7 @@
 #include "ctk/geom/error.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/image_io.hpp"
-#include "ctk/recon/conjugate_rays.hpp"
-#include "ctk/recon/default_volume.hpp"
-#include "ctk/recon/markerless_refinement.hpp"
-#include "ctk/recon/measurements.hpp"
-#include "measurement_report.hpp"
+#include "ctk/recon/refine_scan.hpp"
 #include "progress.hpp"
 
 namespace ctk::tools {
@@ -32,10 +28,7 @@ namespace fs = std::filesystem;
 
 struct RefineOptions {
   fs::path scan, geometry, out;
-  double coarsening = 2.0;
-  double blur_arc_deg = 0;
-  double z_accept = 3.0;
-  std::vector<std::string> effects;
+  RefineScanOptions options;
 };
 
 fs::path beside(const fs::path& out, const std::string& suffix) { return out.parent_path() / (out.stem().string() + suffix); }
@@ -61,34 +54,9 @@ void write_pattern_picture(const DetectorPattern& p, const fs::path& file) {
   write_slice_png(z, 2, 0, -10.0f, 10.0f, file);
 }
 
-// The axis' column from the data alone (conjugate rays of the row through the principal point):
-// an estimate that does not rest on the yardstick. Full circles at equal steps only; otherwise
-// `why_not` says why there is none.
-std::optional<ConjugateRayEstimate> conjugate_rays(const Measurements& m, const ConsistencyProbe& probe,
-                                                   const ScanDescription& scan, std::string& why_not) {
-  const Eigen::Vector2d pp = probe.nominal_principal_point();
-  try {
-    const FanSinogram s = row_sinogram(m.line_integrals, probe.orbit(), scan.detector, pp.y(), scan.source_to_detector_mm);
-    return conjugate_ray_u0(s, pp.x(), 30);
-  } catch (const std::invalid_argument& e) {
-    why_not = e.what();
-    return std::nullopt;
-  }
-}
-
-nlohmann::json cross_check_json(const std::optional<ConjugateRayEstimate>& e, const std::string& why_not, double loop_u0) {
-  if (!e) return {{"method", "conjugate rays"}, {"note", "not available: " + why_not}};
-  return {{"method", "conjugate rays: each line measured half a turn apart must agree"},
-          {"u0_px", e->u0_px},
-          {"uncertainty_px", e->standard_error_px},
-          {"rms_mismatch", e->rms_mismatch},
-          {"rms_mismatch_other_sense", e->rms_mismatch_other_sense},
-          {"loop_u0_px", loop_u0},
-          {"difference_px", e->u0_px - loop_u0}};
-}
-
 void run_refine(const RefineOptions& o) {
   const auto start = std::chrono::steady_clock::now();
+  o.options.validate();
   const ScanDescription scan = read_scan(o.scan);
   RunFiles files;
   require_projection_files(scan, o.scan.string(), "projections.count");
@@ -100,67 +68,33 @@ void run_refine(const RefineOptions& o) {
   files.check();
   OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
-  Geometry geometry = o.geometry.empty() ? nominal_geometry(scan) : read_geometry(o.geometry);
+  const Geometry geometry = o.geometry.empty() ? nominal_geometry(scan) : read_geometry(o.geometry);
   Progress reading("reading projections", "views");
-  const Measurements m = load_measurements(scan, geometry, {false}, std::ref(reading));
-  if (m.clamped_pixels > 0) std::cout << "clamped " << m.clamped_pixels << " pixels\n";
-  report_masked_and_left_out(m, o.geometry.empty() ? o.scan : o.geometry);
-
-  // Sharpness and pictures need only the central axial slice at full resolution. The coarse grid
-  // reaches 20 % beyond the detector's field along the axis, so the cone's edge rays stay inside
-  // it and a vertical detector shift is not mistaken for a better fit of a truncated object.
-  VolumeLayout fine = default_volume_layout(scan, m.matrices);
-  fine = VolumeLayout::centred({fine.size[0], fine.size[1], 1}, fine.voxel_mm);
-  VolumeLayout coarse = default_volume_layout(scan, m.matrices, 0, o.coarsening);
-  // A one-row (fan-beam) detector sees one slice, in the orbit's plane: the grid is that slice.
-  const int coarse_slices = scan.detector.rows == 1 ? 1 : static_cast<int>(std::ceil(1.2 * coarse.size[2]));
-  coarse = VolumeLayout::centred({coarse.size[0], coarse.size[1], coarse_slices}, coarse.voxel_mm);
-  std::cout << "held-out predictions on " << coarse.size[0] << " x " << coarse.size[1] << " x " << coarse.size[2] << " voxels of "
-            << coarse.voxel_mm.x() << " mm; sharpness on " << fine.size[0] << " x " << fine.size[1] << " x " << fine.size[2]
-            << "\n";
-  const ConsistencyProbe probe(m.line_integrals, m.matrices, scan.detector, coarse, interleaved_split(m.line_integrals.views));
-
-  RefinementOptions options;
-  options.z_accept = o.z_accept;
-  options.nominal_blur_arc_deg = o.blur_arc_deg;
-  if (!o.effects.empty()) options.candidates = o.effects;
   auto log = [&](const std::string& line) {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "[" << static_cast<int>(t) << " s] " << line << std::endl;
   };
-  std::string why_not;
-  const std::optional<ConjugateRayEstimate> conjugate = conjugate_rays(m, probe, scan, why_not);
-  if (conjugate) {
-    log("conjugate rays put the axis at column " + std::to_string(conjugate->u0_px) + " +- " +
-        std::to_string(conjugate->standard_error_px) + " px: the detector offset's scan starts there");
-    options.knob_starts["u0_px"] = conjugate->u0_px;
-  }
-  const RefinementResult r = refine_markerless(probe, fine, options, log);
-  const double loop_u0 = probe.nominal_principal_point().x() + r.geometry.du_px;
-  const nlohmann::json cross_check = cross_check_json(conjugate, why_not, loop_u0);
-  if (conjugate)
-    std::cout << "cross-check: conjugate rays " << conjugate->u0_px << " +- " << conjugate->standard_error_px << " px, the loop "
-              << loop_u0 << " px (difference " << conjugate->u0_px - loop_u0 << " px)\n";
+  const RefineScanSummary s = refine_scan(scan, geometry, o.options, log, std::ref(reading));
+  const RefinementResult& r = s.result;
+  if (s.clamped_pixels > 0) std::cout << "clamped " << s.clamped_pixels << " pixels\n";
+  if (s.masked_pixels > 0)
+    std::cout << "masked " << s.masked_pixels << " pixels that are not finite numbers (weight 0, their neighbours' mean)\n";
+  for (const auto& why : s.left_out) std::cerr << "warning: " << why << "\n";
+  if (s.conjugate)
+    std::cout << "cross-check: conjugate rays " << s.conjugate->u0_px << " +- " << s.conjugate->standard_error_px
+              << " px, the loop " << s.loop_u0_px << " px (difference " << s.conjugate->u0_px - s.loop_u0_px << " px)\n";
 
-  // The refined matrices replace the ok views' matrices; other views stay as they were.
-  const std::vector<ProjectionMatrix> refined = apply_global_geometry(r.geometry, m.matrices, probe.orbit());
-  for (std::size_t i = 0; i < m.view_indices.size(); ++i) {
-    GeometryView& v = geometry.views[static_cast<std::size_t>(m.view_indices[i])];
-    v.P = refined[i];
-    v.rms_px.reset();
-  }
   const fs::path geometry_file = beside(o.out, ".geometry.json"), scan_file = beside(o.out, ".scan.json");
-  write_geometry(geometry, geometry_file);
+  write_geometry(s.refined, geometry_file);
   ScanDescription corrected = scan;
   corrected.panda.reset();
-  corrected.matrices = MatricesPoseSource{fs::absolute(geometry_file).lexically_proximate(scan.folder).string(), geometry};
+  corrected.matrices = MatricesPoseSource{fs::absolute(geometry_file).lexically_proximate(scan.folder).string(), s.refined};
   write_scan(corrected, scan_file);
 
-  nlohmann::json report = refinement_to_json(r);
+  nlohmann::json report = s.report();
   report["scan"] = o.scan.string();
   report["corrected_geometry"] = geometry_file.string();
   report["corrected_scan"] = scan_file.string();
-  report["cross_check"] = cross_check;
   nlohmann::json lacks = nlohmann::json::array();
   if (r.model.blur_arc_rad > 0) lacks.push_back("angular_blur");
   if (r.model.hardening_c2 != 0) lacks.push_back("beam_hardening");
@@ -178,8 +112,7 @@ void run_refine(const RefineOptions& o) {
     write_image_float(Image{scan.detector.cols, scan.detector.rows, r.model.pixel_offset}, beside(o.out, ".pixel-offsets.tif"));
 
   outputs.publish();
-  std::cout << "held-out projection RMS " << r.heldout_rms_before << " -> " << r.heldout_rms_after << "; sharpness "
-            << r.sharpness_before << " -> " << r.sharpness_after << " per mm\n";
+  std::cout << s.brief() << "\n";
   for (const auto& e : r.effects)
     if (e.accepted) std::cout << "accepted " << e.name << " " << e.parameters.dump() << " +- " << e.uncertainty.dump() << "\n";
   std::cout << "report " << o.out.string() << ", refined matrices " << geometry_file.string() << ", scan " << scan_file.string()
@@ -198,16 +131,16 @@ void register_refine(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "Report (ctk-diagnosis/1); beside it <stem>.geometry.json, <stem>.scan.json, slices")
       ->required();
-  cmd->add_option("--coarsening", o->coarsening, "Voxel of the held-out predictions, in pixels seen at the axis")
+  cmd->add_option("--coarsening", o->options.coarsening, "Voxel of the held-out predictions, in pixels seen at the axis")
       ->check(CLI::Range(1.0, 8.0))
       ->capture_default_str();
-  cmd->add_option("--blur-arc", o->blur_arc_deg,
+  cmd->add_option("--blur-arc", o->options.blur_arc_deg,
                   "Arc of rotation each view is known to integrate, degrees (sets the blur scan's step)")
       ->check(non_negative_number);
-  cmd->add_option("--z", o->z_accept, "Acceptance: held-out improvement in standard errors")
+  cmd->add_option("--z", o->options.z_accept, "Acceptance: held-out improvement in standard errors")
       ->check(positive_number)
       ->capture_default_str();
-  cmd->add_option("--effects", o->effects, "Candidates (default: all)")
+  cmd->add_option("--effects", o->options.effects, "Candidates (default: all)")
       ->check(CLI::IsMember({"detector_offset", "detector_roll", "axis_tilt", "magnification", "angular_blur", "beam_hardening",
                              "pixel_gain", "column_gain"}));
   cmd->callback([o] { run_refine(*o); });

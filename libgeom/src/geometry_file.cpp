@@ -31,8 +31,9 @@ std::vector<int> Geometry::ok_views() const {
 
 std::string Geometry::source() const { return file.empty() ? std::string("geometry") : file.string(); }
 
-Geometry read_geometry(const std::filesystem::path& file) {
-  const nlohmann::json root = read_json_file(file);
+Geometry read_geometry(const std::filesystem::path& file) { return geometry_from_json(read_json_file(file), file); }
+
+Geometry geometry_from_json(const nlohmann::json& root, const std::filesystem::path& file) {
   std::vector<std::string> warnings;  // geometry files are machine-written; unknown keys are not reported
   const JsonNode top(root, file.string(), "", &warnings);
   const std::string format = top.at("format").string();

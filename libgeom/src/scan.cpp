@@ -175,10 +175,11 @@ ProjectionCensus require_projection_files(const ScanDescription& scan, const std
   return census;
 }
 
-ScanDescription read_scan(const fs::path& file) {
+ScanDescription read_scan(const fs::path& file) { return scan_from_json(read_json_file(file), file); }
+
+ScanDescription scan_from_json(const nlohmann::json& root, const fs::path& file) {
   ScanDescription scan;
   scan.folder = file.has_parent_path() ? file.parent_path() : fs::path(".");
-  const nlohmann::json root = read_json_file(file);
   const JsonNode top(root, file.string(), "", &scan.warnings);
   if (!root.is_object()) top.fail("expected a JSON object");
   top.warn_unknown_keys({"format", "detector", "source_to_detector_mm", "projections", "pose_source", "holder",

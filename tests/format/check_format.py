@@ -5,7 +5,7 @@ import pathlib
 import subprocess
 import sys
 
-FOLDERS = ["libgeom", "libproj", "librecon", "libcalib", "libplan", "phantoms", "tools", "tests", "benchmarks"]
+FOLDERS = ["libgeom", "libproj", "librecon", "libcalib", "libplan", "phantoms", "tools", "python", "tests", "benchmarks"]
 
 
 def main():

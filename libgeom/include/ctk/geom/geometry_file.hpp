@@ -1,6 +1,7 @@
 #pragma once
 // Calibrated (or nominal) per-view geometry, format "ctk-geometry/1" (scan-format.md).
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -35,6 +36,8 @@ struct Geometry {
 
 /// Throws InputError naming file and key; an "ok" view must carry P.
 Geometry read_geometry(const std::filesystem::path& file);
+/// The same checks on a document already in memory; `file` names it in errors.
+Geometry geometry_from_json(const nlohmann::json& root, const std::filesystem::path& file);
 nlohmann::json geometry_to_json(const Geometry& geometry);
 void write_geometry(const Geometry& geometry, const std::filesystem::path& file);
 

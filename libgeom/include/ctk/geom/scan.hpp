@@ -76,6 +76,9 @@ struct ScanDescription {
 /// Reads and validates; throws InputError naming the file and key on any violation, including
 /// a referenced file (joints, flat, dark, matrices) that cannot be read.
 ScanDescription read_scan(const std::filesystem::path& file);
+/// The same checks on a document already in memory, as if it were at `file` (names resolve against
+/// its folder, and errors name it).
+ScanDescription scan_from_json(const nlohmann::json& root, const std::filesystem::path& file);
 nlohmann::json scan_to_json(const ScanDescription& scan);
 
 /// Which of a scan's projection files exist (paths taken lexically: the scan's folder may not exist

@@ -1,0 +1,128 @@
+#include "ctk/recon/refine_scan.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "ctk/geom/error.hpp"
+#include "ctk/recon/default_volume.hpp"
+#include "ctk/recon/measurements.hpp"
+
+namespace ctk {
+
+namespace {
+
+// The axis' column from the data alone (conjugate rays of the row through the principal point):
+// an estimate that does not rest on the yardstick. Full circles at equal steps only; otherwise
+// `why_not` says why there is none.
+std::optional<ConjugateRayEstimate> conjugate_rays(const Measurements& m, const ConsistencyProbe& probe,
+                                                   const ScanDescription& scan, std::string& why_not) {
+  const Eigen::Vector2d pp = probe.nominal_principal_point();
+  try {
+    const FanSinogram s = row_sinogram(m.line_integrals, probe.orbit(), scan.detector, pp.y(), scan.source_to_detector_mm);
+    return conjugate_ray_u0(s, pp.x(), 30);
+  } catch (const std::invalid_argument& e) {
+    why_not = e.what();
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+void RefineScanOptions::validate() const {
+  require_option(coarsening >= 1 && coarsening <= 8, "RefineScanOptions.coarsening", "a number in [1, 8]", coarsening);
+  require_option(blur_arc_deg >= 0 && std::isfinite(blur_arc_deg), "RefineScanOptions.blur_arc_deg",
+                 "a finite number of 0 or more", blur_arc_deg);
+  require_option(z_accept > 0 && std::isfinite(z_accept), "RefineScanOptions.z_accept", "a finite positive number", z_accept);
+}
+
+RefineScanSummary refine_scan(const ScanDescription& scan, Geometry geometry, const RefineScanOptions& o,
+                              const std::function<void(const std::string&)>& log, const std::function<void(int, int)>& reading) {
+  o.validate();
+  RefinementOptions options;
+  options.z_accept = o.z_accept;
+  options.nominal_blur_arc_deg = o.blur_arc_deg;
+  if (!o.effects.empty()) options.candidates = o.effects;
+  options.validate();
+  const auto start = std::chrono::steady_clock::now();
+  const auto say = [&](const std::string& line) {
+    if (log) log(line);
+  };
+
+  const Measurements m = load_measurements(scan, geometry, {false}, reading);
+  if (m.view_indices.empty() && !m.left_out.empty())
+    throw InputError(geometry.source(), json_key("views"), "every ok view was left out: " + m.left_out.front());
+  // Sharpness and pictures need only the central axial slice at full resolution. The coarse grid
+  // reaches 20 % beyond the detector's field along the axis, so the cone's edge rays stay inside
+  // it and a vertical detector shift is not mistaken for a better fit of a truncated object.
+  VolumeLayout fine = default_volume_layout(scan, m.matrices);
+  fine = VolumeLayout::centred({fine.size[0], fine.size[1], 1}, fine.voxel_mm);
+  VolumeLayout coarse = default_volume_layout(scan, m.matrices, 0, o.coarsening);
+  // A one-row (fan-beam) detector sees one slice, in the orbit's plane: the grid is that slice.
+  const int coarse_slices = scan.detector.rows == 1 ? 1 : static_cast<int>(std::ceil(1.2 * coarse.size[2]));
+  coarse = VolumeLayout::centred({coarse.size[0], coarse.size[1], coarse_slices}, coarse.voxel_mm);
+  std::ostringstream grids;
+  grids << "held-out predictions on " << coarse.size[0] << " x " << coarse.size[1] << " x " << coarse.size[2] << " voxels of "
+        << coarse.voxel_mm.x() << " mm; sharpness on " << fine.size[0] << " x " << fine.size[1] << " x " << fine.size[2];
+  say(grids.str());
+  const ConsistencyProbe probe(m.line_integrals, m.matrices, scan.detector, coarse, interleaved_split(m.line_integrals.views));
+
+  RefineScanSummary s;
+  s.clamped_pixels = m.clamped_pixels;
+  s.masked_pixels = m.masked_pixels;
+  s.left_out = m.left_out;
+  s.conjugate = conjugate_rays(m, probe, scan, s.conjugate_why_not);
+  if (s.conjugate) {
+    say("conjugate rays put the axis at column " + std::to_string(s.conjugate->u0_px) + " +- " +
+        std::to_string(s.conjugate->standard_error_px) + " px: the detector offset's scan starts there");
+    options.knob_starts["u0_px"] = s.conjugate->u0_px;
+  }
+  s.result = refine_markerless(probe, fine, options, log);
+
+  // The refined matrices replace the ok views' matrices; other views stay as they were.
+  const std::vector<ProjectionMatrix> refined = apply_global_geometry(s.result.geometry, m.matrices, probe.orbit());
+  for (std::size_t i = 0; i < m.view_indices.size(); ++i) {
+    GeometryView& v = geometry.views[static_cast<std::size_t>(m.view_indices[i])];
+    v.P = refined[i];
+    v.rms_px.reset();
+  }
+  s.refined = std::move(geometry);
+  const double loop_u0 = probe.nominal_principal_point().x() + s.result.geometry.du_px;
+  s.loop_u0_px = loop_u0;
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return s;
+}
+
+nlohmann::json RefineScanSummary::report() const {
+  nlohmann::json r = refinement_to_json(result);
+  if (!conjugate) {
+    r["cross_check"] = {{"method", "conjugate rays"}, {"note", "not available: " + conjugate_why_not}};
+  } else {
+    r["cross_check"] = {{"method", "conjugate rays: each line measured half a turn apart must agree"},
+                        {"u0_px", conjugate->u0_px},
+                        {"uncertainty_px", conjugate->standard_error_px},
+                        {"rms_mismatch", conjugate->rms_mismatch},
+                        {"rms_mismatch_other_sense", conjugate->rms_mismatch_other_sense},
+                        {"loop_u0_px", loop_u0_px},
+                        {"difference_px", conjugate->u0_px - loop_u0_px}};
+  }
+  r["seconds"] = seconds;
+  return r;
+}
+
+std::string RefineScanSummary::brief() const {
+  std::ostringstream b;
+  b << "held-out projection RMS " << result.heldout_rms_before << " -> " << result.heldout_rms_after << "; sharpness "
+    << result.sharpness_before << " -> " << result.sharpness_after << " per mm; accepted:";
+  bool any = false;
+  for (const auto& e : result.effects)
+    if (e.accepted) {
+      b << " " << e.name;
+      any = true;
+    }
+  if (!any) b << " nothing";
+  return b.str();
+}
+
+}  // namespace ctk

@@ -1,0 +1,207 @@
+"""ctk: calibration and reconstruction of cone-beam CT along arbitrary trajectories.
+
+Arrays follow numpy order: volumes are float32 (z, y, x), projection stacks float32
+(views, rows, cols), matrices float64 (views, 3, 4) mapping holder-frame millimetres to detector
+pixels (u = column, v = row). Points and sizes in millimetres are (x, y, z).
+
+Float32 C-contiguous arrays are read and written in place (no copy); other arrays are converted
+once on the way in. The solvers copy their data term (b, weights) into their own storage; their
+result is returned without a copy.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+import os
+from typing import Callable, Optional, Sequence
+
+import numpy as np
+
+from ._ctk import (  # noqa: F401  (re-exported)
+    BinnedProjection,
+    InputError,
+    Operator,
+    Projector,
+    WeightedProjection,
+    __version__,
+    cone_vec_from_matrices,
+    circular_matrices,
+    fdk,
+    import_scan,
+    matrices_from_cone_vec,
+    read_image,
+    read_cone_vec,
+    read_geometry,
+    read_scan,
+    write_geometry,
+    write_scan,
+)
+from . import _ctk
+
+_log = logging.getLogger("ctk")
+
+__all__ = [
+    "BinnedProjection", "InputError", "RefineResult", "circular_matrices", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection",
+    "Measurements", "__version__", "as_linear_operator", "load_measurements", "read_image", "cone_vec_from_matrices", "fdk", "geometry_matrices",
+    "matrices_from_cone_vec", "read_cone_vec", "read_diagnosis", "read_geometry", "read_scan",
+    "sirt", "wls_cg", "write_geometry", "write_scan",
+]
+
+
+@dataclasses.dataclass
+class SolveResult:
+    """What a solver returns: the volume (z, y, x), the per-iteration log (iteration 0 is the
+    start: cost, data_term, regulariser_term, relative_gradient, seconds) and why it stopped."""
+
+    x: np.ndarray
+    iterations: list
+    stop_reason: str
+
+    @property
+    def cost(self) -> float:
+        """The objective after the last iteration."""
+        return self.iterations[-1]["cost"]
+
+
+def _iteration_hook(method: str, callback: Optional[Callable[[dict], Optional[bool]]]):
+    def hook(log: dict) -> bool:
+        _log.info("%s iteration %d: cost %.6g (%.2f s)", method, log["iteration"], log["cost"], log["seconds"])
+        return True if callback is None else callback(log) is not False
+    return hook
+
+
+def wls_cg(operator: Operator, b: np.ndarray, *, weights: Optional[np.ndarray] = None,
+           x0: Optional[np.ndarray] = None, iterations: int = 30, tolerance: float = 1e-4,
+           lam: float = 0.0, regulariser: str = "identity",
+           callback: Optional[Callable[[dict], Optional[bool]]] = None) -> SolveResult:
+    """Weighted least squares by conjugate gradients on the normal equations,
+    minimise 1/2 ||W^(1/2) (A x - b)||^2 + 1/2 lam ||G x||^2 with G the identity or the
+    discrete gradient ('gradient'). One forward and one back projection per iteration.
+
+    callback(log) is called after every iteration with its log entry; returning False stops the
+    solve. Ctrl-C (KeyboardInterrupt) stops it after the iteration under way. Progress goes to
+    the 'ctk' logger at INFO level."""
+    x, report = _ctk._wls_cg(operator, b, weights, x0, iterations, tolerance, lam, regulariser,
+                             _iteration_hook("wls-cg", callback))
+    return SolveResult(x, report["iterations"], report["stop_reason"])
+
+
+def sirt(operator: Operator, b: np.ndarray, *, x0: Optional[np.ndarray] = None, iterations: int = 100,
+         relaxation: float = 1.0, non_negative: bool = True,
+         callback: Optional[Callable[[dict], Optional[bool]]] = None) -> SolveResult:
+    """SIRT, x <- x + C A' R (b - A x) with R and C the inverse row and column sums of A,
+    relaxation in (0, 2), optionally kept non-negative. callback as for wls_cg."""
+    x, report = _ctk._sirt(operator, b, x0, iterations, relaxation, non_negative,
+                           _iteration_hook("sirt", callback))
+    return SolveResult(x, report["iterations"], report["stop_reason"])
+
+
+def as_linear_operator(operator: Operator):
+    """A scipy.sparse.linalg.LinearOperator on flattened arrays (volume raveled in (z, y, x)
+    order, projections in (views, rows, cols) order), so scipy's solvers (lsqr, cg, ...) run on
+    the projector. Vectors are converted to float32."""
+    from scipy.sparse.linalg import LinearOperator
+
+    n = int(np.prod(operator.volume_shape))
+    m = int(np.prod(operator.projection_shape))
+
+    def matvec(v):
+        x = np.ascontiguousarray(np.asarray(v).reshape(operator.volume_shape), dtype=np.float32)
+        return operator.forward(x).ravel()
+
+    def rmatvec(v):
+        y = np.ascontiguousarray(np.asarray(v).reshape(operator.projection_shape), dtype=np.float32)
+        return operator.adjoint(y).ravel()
+
+    return LinearOperator((m, n), matvec=matvec, rmatvec=rmatvec, dtype=np.float32)
+
+
+def geometry_matrices(geometry: dict) -> tuple[list[int], np.ndarray]:
+    """The ok views of a ctk-geometry/1 document (read_geometry) and their matrices
+    (views, 3, 4)."""
+    ok = [v for v in geometry["views"] if v["status"] == "ok"]
+    return [v["index"] for v in ok], np.array([np.reshape(v["P"], (3, 4)) for v in ok], dtype=np.float64).reshape(-1, 3, 4)
+
+
+@dataclasses.dataclass
+class Measurements:
+    """A scan's ok views as the solvers take them (see load_measurements)."""
+
+    view_indices: list
+    matrices: np.ndarray
+    line_integrals: np.ndarray
+    weights: Optional[np.ndarray]
+    detector_shape: tuple
+    pixel_mm: tuple
+    clamped_pixels: int
+    masked_pixels: int
+    left_out: list
+    notes: list
+
+    def projector(self, volume_shape, voxel_mm=1.0, origin_mm=None, threads: int = 0) -> Projector:
+        """The Joseph projector on these views' matrices and detector."""
+        return Projector(self.matrices, volume_shape, voxel_mm, origin_mm, detector_shape=self.detector_shape,
+                         threads=threads)
+
+
+def load_measurements(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] = None, *,
+                      statistical_weights: bool = True, undistort: bool = True) -> Measurements:
+    """The ok views of a scan (ctk-scan/1) as line integrals (views, rows, cols), their matrices
+    and Poisson weights (None for a scan of line integrals), read as `ctk reconstruct` reads
+    them: the geometry file's matrices, or the scan's nominal ones; counts become
+    -log((I - dark) / (flat - dark)); a declared detector distortion is resampled away."""
+    d = _ctk._load_measurements(os.fspath(scan), None if geometry is None else os.fspath(geometry),
+                                statistical_weights, undistort)
+    return Measurements(**d)
+
+
+@dataclasses.dataclass
+class RefineResult:
+    """What the markerless loop found: the ctk-diagnosis/1 report (dict), the refined geometry
+    (ctk-geometry/1 dict) and its ok views' matrices, the central axial slice of FDK with the
+    nominal and the refined geometry (y, x), and a one-line summary."""
+
+    report: dict
+    geometry: dict
+    matrices: np.ndarray
+    slice_before: np.ndarray
+    slice_after: np.ndarray
+    brief: str
+
+    @property
+    def accepted(self) -> list:
+        """The effects accepted, in the order they entered the model."""
+        return [e for e in self.report["effects"] if e.get("accepted")]
+
+
+def refine(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] = None, *,
+           effects: Optional[Sequence[str]] = None, coarsening: float = 2.0, blur_arc_deg: float = 0.0,
+           z: float = 3.0) -> RefineResult:
+    """The markerless loop of `ctk refine` on a circular scan: reconstruct from half of the views,
+    predict the others, and accept the effects (detector_offset, detector_roll, axis_tilt,
+    magnification, angular_blur, beam_hardening, pixel_gain, column_gain; default all) that
+    predict held-out views better by more than z standard errors. Each step is logged to the
+    'ctk' logger (INFO); Ctrl-C stops the loop between steps. Nothing is written: save the
+    geometry with write_geometry."""
+    d = _ctk._refine(os.fspath(scan), None if geometry is None else os.fspath(geometry), list(effects or []), coarsening,
+                     blur_arc_deg, z, lambda line: _log.info("refine: %s", line))
+    return RefineResult(**d)
+
+
+def read_diagnosis(file: str | os.PathLike) -> dict:
+    """A ctk-diagnosis/1 report (ctk diagnose, ctk refine) as a dict; InputError unless it is one."""
+    with open(file, encoding="utf-8") as f:
+        try:
+            report = json.load(f)
+        except json.JSONDecodeError as e:
+            raise _input_error(str(file), "", f"not JSON: {e}") from None
+    if not isinstance(report, dict) or report.get("format") != "ctk-diagnosis/1":
+        raise _input_error(str(file), "format", 'expected "ctk-diagnosis/1"')
+    return report
+
+
+def _input_error(file: str, key: str, what: str) -> InputError:
+    error = InputError(f"{file}: {key}: {what}" if key else f"{file}: {what}")
+    error.file, error.key = file, key
+    return error

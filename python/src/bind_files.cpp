@@ -1,0 +1,99 @@
+// The files of the toolkit as Python objects: scan and geometry documents as dicts (checked as the
+// command line checks them, written atomically), matrices as (views, 3, 4) arrays, ASTRA cone_vec
+// rows as (views, 12) arrays.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "bindings.hpp"
+#include "ctk/geom/astra.hpp"
+#include "ctk/geom/geometry_file.hpp"
+#include "ctk/geom/scan.hpp"
+#include "conversions.hpp"
+#include "numpy_arrays.hpp"
+
+namespace ctk::python {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+Detector detector_from(const std::array<int, 2>& shape, const std::array<double, 2>& pitch_mm) {
+  if (shape[0] < 1 || shape[1] < 1) throw py::value_error("detector_shape needs two positive sizes (rows, cols)");
+  if (!(pitch_mm[0] > 0 && pitch_mm[1] > 0)) throw py::value_error("pixel_mm needs two positive pitches (u, v)");
+  return {shape[1], shape[0], pitch_mm[0], pitch_mm[1]};
+}
+
+py::array_t<double> matrices_from_cone_vec(const DoubleArray& vecs, const std::array<int, 2>& detector_shape,
+                                           const std::array<double, 2>& pixel_mm, double mm_per_unit) {
+  if (vecs.ndim() != 2 || vecs.shape(1) != 12)
+    throw py::value_error("cone_vec rows have shape " + shape_text(vecs) + ", expected (views, 12)");
+  const Detector d = detector_from(detector_shape, pixel_mm);
+  std::vector<ProjectionMatrix> out;
+  for (py::ssize_t v = 0; v < vecs.shape(0); ++v) {
+    ConeVec c{};
+    for (int i = 0; i < 12; ++i) c[static_cast<std::size_t>(i)] = vecs.at(v, i);
+    out.push_back(from_cone_vec(c, d, mm_per_unit));
+  }
+  return matrices_to_numpy(out);
+}
+
+py::array_t<double> cone_vec_from_matrices(const DoubleArray& matrices, const std::array<int, 2>& detector_shape,
+                                           const std::array<double, 2>& pixel_mm, double mm_per_unit) {
+  const std::vector<ProjectionMatrix> P = matrices_from_numpy(matrices);
+  const Detector d = detector_from(detector_shape, pixel_mm);
+  py::array_t<double> out(std::vector<py::ssize_t>{static_cast<py::ssize_t>(P.size()), 12});
+  auto w = out.mutable_unchecked<2>();
+  for (py::ssize_t v = 0; v < static_cast<py::ssize_t>(P.size()); ++v) {
+    const ConeVec c = to_cone_vec(P[static_cast<std::size_t>(v)], d, mm_per_unit);
+    for (int i = 0; i < 12; ++i) w(v, i) = c[static_cast<std::size_t>(i)];
+  }
+  return out;
+}
+
+}  // namespace
+
+void bind_files(py::module_& m) {
+  m.def(
+      "read_scan", [](const fs::path& file) { return to_python(scan_to_json(read_scan(file))); }, py::arg("file"),
+      "A ctk-scan/1 file, checked (InputError naming file and key), as a dict.");
+  m.def(
+      "write_scan",
+      [](const py::object& scan, const fs::path& file) { write_scan(scan_from_json(from_python(scan), file), file); },
+      py::arg("scan"), py::arg("file"),
+      "Checks a ctk-scan/1 dict as if it were at `file` (names resolve against its folder), then writes it atomically.");
+  m.def(
+      "read_geometry", [](const fs::path& file) { return to_python(geometry_to_json(read_geometry(file))); }, py::arg("file"),
+      "A ctk-geometry/1 file, checked, as a dict (views[i]['P'] is the row-major 3x4 matrix of an ok view).");
+  m.def(
+      "write_geometry",
+      [](const py::object& geometry, const fs::path& file) {
+        write_geometry(geometry_from_json(from_python(geometry), file), file);
+      },
+      py::arg("geometry"), py::arg("file"), "Checks a ctk-geometry/1 dict, then writes it atomically.");
+  m.def(
+      "read_cone_vec",
+      [](const fs::path& file) {
+        const std::vector<ConeVec> rows = read_cone_vecs(file);
+        py::array_t<double> out(std::vector<py::ssize_t>{static_cast<py::ssize_t>(rows.size()), 12});
+        auto w = out.mutable_unchecked<2>();
+        for (std::size_t v = 0; v < rows.size(); ++v)
+          for (int i = 0; i < 12; ++i) w(static_cast<py::ssize_t>(v), i) = rows[v][static_cast<std::size_t>(i)];
+        return out;
+      },
+      py::arg("file"), "ASTRA cone_vec rows (a CWI .geom text file) as a (views, 12) array.");
+  m.def("matrices_from_cone_vec", &matrices_from_cone_vec, py::arg("vectors"), py::arg("detector_shape"),
+        py::arg("pixel_mm") = std::array<double, 2>{1.0, 1.0}, py::arg("mm_per_unit") = 1.0,
+        "ASTRA cone_vec rows (views, 12): source, detector centre, u and v pixel steps, in volume units of mm_per_unit "
+        "mm) as (views, 3, 4) matrices for a detector of detector_shape (rows, cols).");
+  m.def("cone_vec_from_matrices", &cone_vec_from_matrices, py::arg("matrices"), py::arg("detector_shape"),
+        py::arg("pixel_mm") = std::array<double, 2>{1.0, 1.0}, py::arg("mm_per_unit") = 1.0,
+        "(views, 3, 4) matrices as ASTRA cone_vec rows (views, 12), the detector placed so a column step is pixel_mm[0] long.");
+}
+
+}  // namespace ctk::python

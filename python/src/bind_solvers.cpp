@@ -1,0 +1,160 @@
+// The solvers on any operator: each iteration reported to a Python callable that may stop the
+// solve; Ctrl-C (KeyboardInterrupt) stops it after the iteration under way, the GIL released
+// while it computes.
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "bindings.hpp"
+#include "ctk/proj/joseph_operator.hpp"
+#include "ctk/recon/fdk.hpp"
+#include "ctk/recon/sirt.hpp"
+#include "ctk/recon/solver_state.hpp"
+#include "ctk/recon/wls_cg.hpp"
+#include "conversions.hpp"
+#include "numpy_arrays.hpp"
+
+namespace ctk::python {
+
+namespace {
+
+py::dict log_dict(const IterationLog& l) {
+  py::dict d;
+  d["iteration"] = l.iteration;
+  d["cost"] = l.cost;
+  d["data_term"] = l.data_term;
+  d["regulariser_term"] = l.regulariser_term;
+  d["relative_gradient"] = l.relative_gradient;
+  d["seconds"] = l.seconds;
+  return d;
+}
+
+// The bridge between a solver running without the GIL and Python: the callback sees each
+// iteration, returns False to stop; an exception in it, or a pending KeyboardInterrupt, stops the
+// solver and is raised once it has returned.
+class PythonControl {
+ public:
+  explicit PythonControl(py::object callback) : callback_(std::move(callback)) {
+    checkpointing_.save = [](const SolverSnapshot&) {};
+    checkpointing_.stop_requested = [this] {
+      py::gil_scoped_acquire hold;
+      if (!error_ && PyErr_CheckSignals() != 0) error_.emplace();
+      return stop_ || error_.has_value();
+    };
+  }
+  IterationCallback on_iteration() {
+    return [this](const IterationLog& l) {
+      if (callback_.is_none() || error_) return;
+      py::gil_scoped_acquire hold;
+      try {
+        const py::object answer = callback_(log_dict(l));
+        if (!answer.is_none() && !answer.cast<bool>()) stop_ = true;
+      } catch (py::error_already_set& e) {
+        error_.emplace(std::move(e));
+      }
+    };
+  }
+  const Checkpointing* checkpointing() const { return &checkpointing_; }
+  /// Raises what the callback or Ctrl-C raised; otherwise the report as a dict.
+  py::object finish(const SolverReport& report) {
+    if (error_) throw std::move(*error_);
+    py::object r = to_python(to_json(report));
+    if (stop_) r["stop_reason"] = "stopped by the callback";
+    return r;
+  }
+
+ private:
+  py::object callback_;
+  Checkpointing checkpointing_;
+  bool stop_ = false;
+  std::optional<py::error_already_set> error_;
+};
+
+Volume start_volume(const ProjectionOperator& A, const py::object& x0) {
+  Volume x(A.domain());
+  if (!x0.is_none()) {
+    const FloatArray given = x0.cast<FloatArray>();
+    const ConstVolumeSpan s = volume_span(given, A.domain());
+    std::copy(s.data, s.data + x.data.size(), x.data.begin());
+  }
+  return x;
+}
+
+ProjectionStack data_stack(const ProjectionOperator& A, const FloatArray& b, const char* what) {
+  const StackShape r = A.range();
+  require_shape(b, std::array<py::ssize_t, 3>{r.views, r.rows, r.cols}, what, "(views, rows, cols)");
+  return stack_copy(b, what);
+}
+
+py::tuple wls_cg(const ProjectionOperator& A, const FloatArray& b, const py::object& weights, const py::object& x0,
+                 int iterations, double tolerance, double lam, const std::string& regulariser, const py::object& callback) {
+  WlsOptions o;
+  o.iterations = iterations;
+  o.tolerance = tolerance;
+  o.lambda = lam;
+  if (regulariser != "identity" && regulariser != "gradient")
+    throw py::value_error("regulariser must be 'identity' or 'gradient', not '" + regulariser + "'");
+  o.regulariser = regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
+  o.validate();
+  const ProjectionStack data = data_stack(A, b, "b");
+  std::optional<ProjectionStack> w;
+  if (!weights.is_none()) w = data_stack(A, weights.cast<FloatArray>(), "weights");
+  Volume x = start_volume(A, x0);
+  PythonControl control(callback);
+  SolverReport report;
+  {
+    py::gil_scoped_release free;
+    report = solve_wls_cg(A, data, w ? &*w : nullptr, x, o, control.on_iteration(), control.checkpointing());
+  }
+  py::object r = control.finish(report);
+  return py::make_tuple(to_numpy(std::move(x)), r);
+}
+
+py::tuple sirt(const ProjectionOperator& A, const FloatArray& b, const py::object& x0, int iterations, double relaxation,
+               bool non_negative, const py::object& callback) {
+  const SirtOptions o{iterations, relaxation, non_negative};
+  o.validate();
+  const ProjectionStack data = data_stack(A, b, "b");
+  Volume x = start_volume(A, x0);
+  PythonControl control(callback);
+  SolverReport report;
+  {
+    py::gil_scoped_release free;
+    report = solve_sirt(A, data, x, o, control.on_iteration(), control.checkpointing());
+  }
+  py::object r = control.finish(report);
+  return py::make_tuple(to_numpy(std::move(x)), r);
+}
+
+py::array_t<float> fdk(const JosephOperator& A, const FloatArray& projections, const std::string& window) {
+  if (window != "hann" && window != "ram-lak") throw py::value_error("window must be 'hann' or 'ram-lak', not '" + window + "'");
+  ProjectionStack filtered = data_stack(A, projections, "the projections");  // filtered in place: a copy
+  Volume x(A.domain());
+  {
+    py::gil_scoped_release free;
+    // FDK's filter scale is the pixel pitch times the focal length in pixels: any pitch gives the same.
+    fdk_reconstruct(A.views(), filtered, {filtered.cols, filtered.rows, 1.0, 1.0}, x,
+                    window == "hann" ? RampWindow::hann : RampWindow::ram_lak);
+  }
+  return to_numpy(std::move(x));
+}
+
+}  // namespace
+
+void bind_solvers(py::module_& m) {
+  m.def("_wls_cg", &wls_cg, py::arg("operator"), py::arg("b"), py::arg("weights"), py::arg("x0"), py::arg("iterations"),
+        py::arg("tolerance"), py::arg("lam"), py::arg("regulariser"), py::arg("callback"));
+  m.def("_sirt", &sirt, py::arg("operator"), py::arg("b"), py::arg("x0"), py::arg("iterations"), py::arg("relaxation"),
+        py::arg("non_negative"), py::arg("callback"));
+  m.def("fdk", &fdk, py::arg("projector"), py::arg("projections"), py::arg("window") = "hann", R"doc(
+FDK for a circular scan on the projector's matrices, volume and detector: the sources must lie on
+a circle (ValueError with the deviation otherwise); short scans get Parker weights. `projections`
+are line integrals (views, rows, cols), copied (the filter works in place). Returns (z, y, x).
+)doc");
+}
+
+}  // namespace ctk::python

@@ -1,0 +1,136 @@
+// The workflows a lab runs from Python with the same library entry points as the command line:
+// a circular scan imported from its numbers, and the markerless loop.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bindings.hpp"
+#include "ctk/geom/nominal_geometry.hpp"
+#include "ctk/geom/run_files.hpp"
+#include "ctk/geom/scan_import.hpp"
+#include "ctk/recon/refine_scan.hpp"
+#include "conversions.hpp"
+#include "numpy_arrays.hpp"
+
+namespace ctk::python {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+py::array_t<double> circular(const std::vector<double>& angles_deg, const std::array<int, 2>& detector_shape,
+                             const std::array<double, 2>& pixel_mm, double sod, double sdd,
+                             const std::optional<std::array<double, 2>>& pp, int sense) {
+  CircularOrbit orbit;
+  orbit.detector = {detector_shape[1], detector_shape[0], pixel_mm[0], pixel_mm[1]};
+  orbit.principal_point_px = pp ? Eigen::Vector2d((*pp)[0], (*pp)[1]) : orbit.detector.centre_px();
+  orbit.source_to_axis_mm = sod;
+  orbit.source_to_detector_mm = sdd;
+  orbit.sense = sense;
+  for (double a : angles_deg) orbit.angles_rad.push_back(a * M_PI / 180.0);
+  return matrices_to_numpy(circular_matrices(orbit));
+}
+
+py::object import_scan(const fs::path& out, const DoubleArray& matrices, const std::vector<fs::path>& files,
+                       const std::array<int, 2>& detector_shape, const std::array<double, 2>& pixel_mm,
+                       const std::vector<fs::path>& flat, const std::vector<fs::path>& dark) {
+  const std::vector<ProjectionMatrix> P = matrices_from_numpy(matrices, static_cast<py::ssize_t>(files.size()));
+  if (flat.empty() != dark.empty()) throw py::value_error("raw counts need both flat and dark (line integrals neither)");
+  ProjectionSet projections;
+  for (const fs::path& f : files) projections.file_names.push_back(fs::absolute(f).string());
+  projections.count = static_cast<int>(files.size());
+  if (!flat.empty()) {
+    projections.kind = ProjectionKind::counts;
+    for (const fs::path& f : flat) projections.flat.push_back(fs::absolute(f).string());
+    for (const fs::path& d : dark) projections.dark.push_back(fs::absolute(d).string());
+  }
+  const ImportedScan imported =
+      import_matrices({detector_shape[1], detector_shape[0], pixel_mm[0], pixel_mm[1]}, P, projections, out);
+  RunFiles run;  // never write over what the scan reads
+  for (std::size_t v = 0; v < files.size(); ++v) run.input("files[" + std::to_string(v) + "]", files[v]);
+  for (const fs::path& f : flat) run.input("flat", f);
+  for (const fs::path& d : dark) run.input("dark", d);
+  run.output("out", out);
+  run.output("the matrices beside out", imported.scan.resolve(imported.scan.matrices->file));
+  run.check();
+  write_imported_scan(imported, out);
+  return to_python(scan_to_json(read_scan(out)));
+}
+
+py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geometry_file, const std::vector<std::string>& effects,
+                double coarsening, double blur_arc_deg, double z, const py::object& log) {
+  RefineScanOptions o;
+  o.effects = effects;
+  o.coarsening = coarsening;
+  o.blur_arc_deg = blur_arc_deg;
+  o.z_accept = z;
+  o.validate();
+  const ScanDescription scan = read_scan(scan_file);
+  const Geometry geometry = geometry_file ? read_geometry(*geometry_file) : nominal_geometry(scan);
+  std::optional<py::error_already_set> error;
+  const auto say = [&](const std::string& line) {
+    py::gil_scoped_acquire hold;
+    if (error) return;
+    try {
+      if (!log.is_none()) log(line);
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    } catch (py::error_already_set& e) {
+      error.emplace(std::move(e));
+    }
+    // Stopping the loop between steps: the exception reaches Python once the call returns.
+    if (error) throw std::runtime_error("interrupted");
+  };
+  std::optional<RefineScanSummary> s;
+  try {
+    py::gil_scoped_release free;
+    s = refine_scan(scan, geometry, o, say);
+  } catch (const std::runtime_error&) {
+    if (error) throw std::move(*error);
+    throw;
+  }
+  py::dict d;
+  d["report"] = to_python(s->report());
+  d["geometry"] = to_python(geometry_to_json(s->refined));
+  d["brief"] = s->brief();
+  std::vector<ProjectionMatrix> ok;
+  for (int i : s->refined.ok_views()) ok.push_back(*s->refined.views[static_cast<std::size_t>(i)].P);
+  d["matrices"] = matrices_to_numpy(ok);
+  auto slice = [](Volume v) {  // the central axial slice, (y, x)
+    const auto s3 = volume_shape(v.layout);
+    auto owner = std::make_unique<Volume>(std::move(v));
+    float* data = owner->data.data() + static_cast<std::size_t>(s3[0] / 2) * static_cast<std::size_t>(s3[1] * s3[2]);
+    return owning_array(std::move(owner), data, {s3[1], s3[2]});
+  };
+  d["slice_before"] = slice(std::move(s->result.volume_before));
+  d["slice_after"] = slice(std::move(s->result.volume_after));
+  return d;
+}
+
+}  // namespace
+
+void bind_workflows(py::module_& m) {
+  m.def("circular_matrices", &circular, py::arg("angles_deg"), py::arg("detector_shape"), py::arg("pixel_mm"), py::arg("sod"),
+        py::arg("sdd"), py::arg("principal_point") = py::none(), py::arg("sense") = 1, R"doc(
+A circular orbit by its numbers as (views, 3, 4) matrices: rotation axis +z through the origin, the
+source of view k at SOD (sin t, cos t, 0) with t = sense * angle_k, columns along (cos t, -sin t, 0),
+rows along -z; the axis projects onto the principal point's column (default: the detector centre).
+detector_shape (rows, cols), pixel_mm (u, v).
+)doc");
+  m.def("import_scan", &import_scan, py::arg("out"), py::arg("matrices"), py::arg("files"), py::arg("detector_shape"),
+        py::arg("pixel_mm"), py::arg("flat") = std::vector<fs::path>{}, py::arg("dark") = std::vector<fs::path>{}, R"doc(
+Writes a ctk-scan/1 file `out` (and its matrices beside it, <stem>.matrices.json) for projection
+files with one matrix each; raw counts when flat and dark frames are given, line integrals
+otherwise. Refuses (InputError) an `out` that is one of the inputs. Returns the scan as read back.
+)doc");
+  m.def("_refine", &refine, py::arg("scan"), py::arg("geometry"), py::arg("effects"), py::arg("coarsening"),
+        py::arg("blur_arc_deg"), py::arg("z"), py::arg("log"));
+}
+
+}  // namespace ctk::python

@@ -1,0 +1,39 @@
+// The `ctk._ctk` extension: files, operators, solvers. The package `ctk` (ctk/__init__.py) imports
+// it and adds what is Python's own (the scipy adapter, result classes).
+#include <pybind11/pybind11.h>
+
+#include <string>
+
+#include "bindings.hpp"
+#include "ctk/geom/error.hpp"
+
+namespace py = pybind11;
+
+PYBIND11_MODULE(_ctk, m) {
+  m.doc() = "ctk: calibration and reconstruction of cone-beam CT along arbitrary trajectories";
+  m.attr("__version__") = CTK_VERSION;
+
+  // InputError: a file the toolkit read is not what it must be; .file and .key say where.
+  static py::exception<ctk::InputError> input_error(m, "InputError", PyExc_ValueError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const ctk::InputError& e) {
+      py::object type = input_error;
+      py::object error = type(e.what());
+      error.attr("file") = e.file();
+      // where() reads "key 'views[3].P'" for a key; Python gets the key itself.
+      const std::string& where = e.where();
+      const bool is_key = where.size() > 6 && where.rfind("key '", 0) == 0 && where.back() == '\'';
+      error.attr("key") = is_key ? where.substr(5, where.size() - 6) : where;
+      PyErr_SetObject(input_error.ptr(), error.ptr());
+    }
+  });
+
+  ctk::python::bind_files(m);
+  ctk::python::bind_operators(m);
+  ctk::python::bind_solvers(m);
+  ctk::python::bind_measurements(m);
+  ctk::python::bind_workflows(m);
+  ctk::python::bind_benchmarks(m);
+}

@@ -1,0 +1,109 @@
+"""Files from Python: round trips of scan, geometry and cone_vec documents, the command line's
+reconstruction reproduced bit for bit, and every kind of bad input raising the named exception."""
+import json
+import pathlib
+
+import numpy as np
+import pytest
+
+import ctk
+from conftest import run
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory, ctk_command) -> pathlib.Path:
+    folder = tmp_path_factory.mktemp("sim") / "scan"
+    run([ctk_command, "simulate", "--out", str(folder), "--views", "12", "--cols", "64", "--rows", "64", "--pitch", "6.75",
+         "--phantom", "helix-holder"])
+    return folder
+
+
+def test_scan_and_geometry_round_trip(simulated, tmp_path):
+    scan = ctk.read_scan(simulated / "scan.json")
+    assert scan["format"] == "ctk-scan/1"
+    # Written elsewhere, a scan's relative names no longer resolve: it is refused, naming the key.
+    with pytest.raises(ctk.InputError) as refused:
+        ctk.write_scan(scan, tmp_path / "scan.json")
+    assert refused.value.file.endswith("scan.json") and refused.value.key
+    assert not (tmp_path / "scan.json").exists()
+    ctk.write_scan(scan, simulated / "copy.json")
+    assert ctk.read_scan(simulated / "copy.json") == scan
+
+    geometry = ctk.read_geometry(simulated / "truth-geometry.json")
+    ctk.write_geometry(geometry, tmp_path / "g.json")
+    assert ctk.read_geometry(tmp_path / "g.json") == geometry
+    indices, P = ctk.geometry_matrices(geometry)
+    assert indices == list(range(12)) and P.shape == (12, 3, 4)
+
+
+def test_cone_vec_rows_and_matrices_convert_both_ways(real_data):
+    rows = ctk.read_cone_vec(real_data / "walnut4-tubeV1-10views" / "scan_geom_corrected.geom")
+    assert rows.shape == (1201, 12)
+    P = ctk.matrices_from_cone_vec(rows[:20], (972, 768), (0.1496, 0.1496))
+    back = ctk.cone_vec_from_matrices(P, (972, 768), (0.1496, 0.1496))
+    np.testing.assert_allclose(back, rows[:20], rtol=0, atol=1e-6 * np.abs(rows[:20]).max())
+    # Every ray of the matrices goes through its pixel as the vectors place it.
+    s, d, u, v = rows[0, :3], rows[0, 3:6], rows[0, 6:9], rows[0, 9:12]
+    point = s + 0.5 * (d + 100.5 * u - 40.25 * v - s)  # half way to pixel (row 445.25, col 484.5)
+    uvw = P[0] @ np.append(point, 1)
+    np.testing.assert_allclose(uvw[:2] / uvw[2], [(768 - 1) / 2 + 100.5, (972 - 1) / 2 - 40.25], atol=1e-6)
+
+
+def test_python_reconstructs_the_command_lines_volume_bit_for_bit(simulated, tmp_path, ctk_command):
+    out = tmp_path / "volume.nrrd"
+    run([ctk_command, "reconstruct", "--scan", str(simulated / "scan.json"), "--geometry", str(simulated / "truth-geometry.json"),
+         "--out", str(out), "--size", "24", "--voxel", "2.5", "--iterations", "3"])
+    header, _, data = out.read_bytes().partition(b"\n\n")
+    assert b"type: float" in header and b"encoding: raw" in header and b"endian: little" in header
+    cli = np.frombuffer(data, dtype="<f4").reshape(24, 24, 24)
+
+    m = ctk.load_measurements(simulated / "scan.json", simulated / "truth-geometry.json")
+    A = m.projector((24, 24, 24), 2.5)
+    r = ctk.wls_cg(A, m.line_integrals, weights=m.weights, iterations=3)
+    np.testing.assert_array_equal(r.x, cli)
+    # The forward projection is the command line's projector too: its residual is what the log says.
+    log = json.loads((tmp_path / "volume.log.json").read_text())
+    residual = A.forward(r.x) - m.line_integrals
+    data_term = 0.5 * float(np.sum((m.weights if m.weights is not None else 1) * residual.astype(np.float64) ** 2))
+    assert data_term == pytest.approx(log["solver"]["iterations"][-1]["data_term"], rel=1e-4)
+
+
+def test_bad_inputs_raise_the_named_exception(simulated, tmp_path):
+    with pytest.raises(ctk.InputError, match="no such file") as missing:
+        ctk.read_scan(tmp_path / "none.json")
+    assert missing.value.file.endswith("none.json")
+    (tmp_path / "text.json").write_text("{not json")
+    with pytest.raises(ctk.InputError):
+        ctk.read_geometry(tmp_path / "text.json")
+    geometry = ctk.read_geometry(simulated / "truth-geometry.json")
+    geometry["format"] = "ctk-geometry/9"
+    with pytest.raises(ctk.InputError) as wrong_format:
+        ctk.write_geometry(geometry, tmp_path / "g.json")
+    assert wrong_format.value.key == "format"
+    geometry = ctk.read_geometry(simulated / "truth-geometry.json")
+    del geometry["views"][3]["P"]
+    with pytest.raises(ctk.InputError, match="P"):
+        ctk.write_geometry(geometry, tmp_path / "g.json")
+    assert not (tmp_path / "g.json").exists()
+    (tmp_path / "d.json").write_text('{"format": "ctk-geometry/1"}')
+    with pytest.raises(ctk.InputError) as not_a_report:
+        ctk.read_diagnosis(tmp_path / "d.json")
+    assert not_a_report.value.key == "format"
+    with pytest.raises(ValueError, match=r"\(views, 12\)"):
+        ctk.matrices_from_cone_vec(np.zeros((3, 11)), (8, 8))
+    with pytest.raises(ctk.InputError):
+        ctk.read_image(tmp_path / "text.json")
+    assert issubclass(ctk.InputError, ValueError)
+
+
+def test_an_import_never_writes_over_its_inputs(simulated):
+    image = simulated / "projections" / sorted(p.name for p in (simulated / "projections").iterdir())[0]
+    before = image.read_bytes()
+    P = ctk.circular_matrices([0.0], (64, 64), (6.75, 6.75), sod=500, sdd=1000)
+    with pytest.raises(ctk.InputError, match="out"):
+        ctk.import_scan(image, P, [image], (64, 64), (6.75, 6.75))
+    assert image.read_bytes() == before
+    with pytest.raises(ValueError, match="one per file"):
+        ctk.import_scan(simulated / "other.json", np.concatenate([P, P]), [image], (64, 64), (6.75, 6.75))
+    with pytest.raises(ValueError, match="RefineScanOptions.coarsening"):
+        ctk.refine(simulated / "scan.json", coarsening=0.5)

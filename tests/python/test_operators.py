@@ -1,0 +1,126 @@
+"""The projector from Python: adjointness, subsets, arrays shared rather than copied, shapes
+refused, scipy's solvers on the adapter."""
+import numpy as np
+import pytest
+from scipy.sparse.linalg import lsqr
+
+import ctk
+
+
+def adjoint_mismatch(A, seed):
+    rng = np.random.default_rng(seed)
+    x = rng.random(A.volume_shape, dtype=np.float32)
+    y = rng.random(A.projection_shape, dtype=np.float32)
+    Ax, Aty = A.forward(x), A.adjoint(y)
+    lhs = np.vdot(Ax.astype(np.float64), y)
+    rhs = np.vdot(x.astype(np.float64), Aty)
+    return abs(lhs - rhs) / (np.linalg.norm(Ax) * np.linalg.norm(y))
+
+
+def test_every_operator_is_adjoint_to_float_rounding(small_projector):
+    A = small_projector
+    binned = ctk.BinnedProjection(A, 3)
+    factors = np.random.default_rng(3).random(binned.projection_shape, dtype=np.float32)
+    for op in (A, binned, ctk.WeightedProjection(binned, factors), A.subset([5, 0, 17])):
+        assert adjoint_mismatch(op, 11) < 1e-5
+    assert binned.projection_shape == (24, 13, 18)  # partial last row and column dropped
+
+
+def test_a_subset_projects_its_views_as_the_whole_does(small_projector):
+    x = np.random.default_rng(4).random(small_projector.volume_shape, dtype=np.float32)
+    whole = small_projector.forward(x)
+    chosen = [7, 2, 23]
+    part = small_projector.subset(chosen).forward(x)
+    np.testing.assert_allclose(part, whole[chosen], rtol=1e-6, atol=1e-6)
+    np.testing.assert_array_equal(small_projector.subset(chosen).matrices, small_projector.matrices[chosen])
+
+
+def test_outputs_are_written_in_place_and_results_are_not_copied(small_projector):
+    A = small_projector
+    x = np.random.default_rng(5).random(A.volume_shape, dtype=np.float32)
+    out = np.empty(A.projection_shape, dtype=np.float32)
+    y = A.forward(x, out=out)
+    assert np.shares_memory(y, out)
+    back = np.empty(A.volume_shape, dtype=np.float32)
+    assert np.shares_memory(A.adjoint(y, out=back), back)
+    # A volume of another dtype or order is converted once, with the same result.
+    np.testing.assert_array_equal(A.forward(x.astype(np.float64)), y)
+    np.testing.assert_array_equal(A.forward(np.asfortranarray(x)), y)
+    # A solver's result is the C++ volume itself, handed over: writable, owning no copy of b.
+    result = ctk.wls_cg(A, y, iterations=1)
+    assert result.x.flags.c_contiguous and result.x.dtype == np.float32 and result.x.shape == A.volume_shape
+
+
+def test_shapes_that_do_not_fit_are_refused_with_the_shape_expected(small_projector):
+    A = small_projector
+    with pytest.raises(ValueError, match=r"expected \(18, 20, 22\)"):
+        A.forward(np.zeros((18, 20, 21), np.float32))
+    with pytest.raises(ValueError, match=r"\(views, rows, cols\)"):
+        A.adjoint(np.zeros((24, 40, 55), np.float32))
+    with pytest.raises(ValueError, match="out="):
+        A.forward(np.zeros(A.volume_shape, np.float32), out=np.zeros(A.projection_shape, np.float64))
+    with pytest.raises(IndexError):
+        A.subset([24])
+    with pytest.raises(ValueError, match=r"\(views, 3, 4\)"):
+        ctk.Projector(np.zeros((3, 4, 3)), (4, 4, 4), detector_shape=(8, 8))
+    with pytest.raises(ValueError):
+        ctk.BinnedProjection(A, 0)
+    with pytest.raises(ValueError, match="WlsOptions.iterations"):
+        ctk.wls_cg(A, np.zeros(A.projection_shape, np.float32), iterations=-1)
+    with pytest.raises(ValueError, match="SirtOptions.relaxation"):
+        ctk.sirt(A, np.zeros(A.projection_shape, np.float32), relaxation=2.5)
+    with pytest.raises(ValueError, match="regulariser"):
+        ctk.wls_cg(A, np.zeros(A.projection_shape, np.float32), regulariser="tv")
+
+
+def test_scipy_lsqr_on_the_adapter_converges(small_projector):
+    A = small_projector
+    truth = np.zeros(A.volume_shape, np.float32)
+    truth[5:13, 6:14, 7:15] = 0.02
+    b = A.forward(truth)
+    op = ctk.as_linear_operator(A)
+    assert op.shape == (b.size, truth.size)
+    solution = lsqr(op, b.ravel(), iter_lim=60, atol=0, btol=0)
+    x = solution[0]
+    assert np.linalg.norm(op.matvec(x) - b.ravel()) < 0.02 * np.linalg.norm(b)
+    # And the solver of ctk agrees on the data fit.
+    r = ctk.wls_cg(A, b, iterations=60, tolerance=0)
+    assert r.iterations[-1]["data_term"] < 1e-3 * r.iterations[0]["data_term"]
+
+
+def test_a_callback_sees_every_iteration_and_may_stop_the_solve(small_projector):
+    A = small_projector
+    b = A.forward(np.ones(A.volume_shape, np.float32))
+    seen = []
+    r = ctk.wls_cg(A, b, iterations=10, tolerance=0, callback=lambda log: (seen.append(log["iteration"]), log["iteration"] < 3)[1])
+    assert seen == [0, 1, 2, 3]
+    assert r.stop_reason == "stopped by the callback"
+    assert len(r.iterations) == 4
+    costs = [it["cost"] for it in r.iterations]
+    assert all(b < a for a, b in zip(costs, costs[1:]))
+    # An exception in the callback (Ctrl-C arrives as one) stops the solve and reaches the caller.
+    def interrupt(log):
+        if log["iteration"] == 2:
+            raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        ctk.sirt(A, b, iterations=50, callback=interrupt)
+
+
+def test_sirt_and_fdk_from_python(small_projector):
+    from conftest import orbit_matrices
+
+    A = ctk.Projector(orbit_matrices(120), (18, 20, 22), voxel_mm=1.5, detector_shape=(40, 56))
+    truth = np.zeros(A.volume_shape, np.float32)
+    truth[4:14, 5:15, 6:16] = 0.03
+    b = A.forward(truth)
+    r = ctk.sirt(A, b, iterations=30)
+    assert r.cost < 0.05 * r.iterations[0]["cost"]
+    assert (r.x >= 0).all()
+    x = ctk.fdk(A, b)
+    assert abs(float(np.mean(x[7:11, 8:12, 9:13])) - 0.03) < 0.003  # the cube's core
+    assert abs(float(np.mean(x[:, :2, :])) ) < 0.003  # outside it
+    # Sources at two radii are not a circle: FDK is refused, saying by how much.
+    mixed = np.concatenate([orbit_matrices(12, sod=300.0), orbit_matrices(12, sod=360.0)])
+    B = ctk.Projector(mixed, (18, 20, 22), voxel_mm=1.5, detector_shape=(40, 56))
+    with pytest.raises(ValueError, match="mm"):
+        ctk.fdk(B, np.zeros(B.projection_shape, np.float32))
