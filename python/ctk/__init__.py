@@ -42,7 +42,7 @@ from . import _ctk
 _log = logging.getLogger("ctk")
 
 __all__ = [
-    "BinnedProjection", "InputError", "RefineResult", "circular_matrices", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection",
+    "BinnedProjection", "CalibrationResult", "DiagnosisResult", "InputError", "RefineResult", "calibrate", "diagnose", "circular_matrices", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection",
     "Measurements", "__version__", "as_linear_operator", "load_measurements", "read_image", "cone_vec_from_matrices", "fdk", "geometry_matrices",
     "matrices_from_cone_vec", "read_cone_vec", "read_diagnosis", "read_geometry", "read_scan",
     "sirt", "wls_cg", "write_geometry", "write_scan",
@@ -187,6 +187,59 @@ def refine(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] = None
     d = _ctk._refine(os.fspath(scan), None if geometry is None else os.fspath(geometry), list(effects or []), coarsening,
                      blur_arc_deg, z, lambda line: _log.info("refine: %s", line))
     return RefineResult(**d)
+
+
+@dataclasses.dataclass
+class CalibrationResult:
+    """What the calibration found: the geometry (ctk-geometry/1 dict: one matrix per ok view, a
+    reason per rejected one), the report (ctk-calibration-report/1 dict: per-view table, holder
+    wall, robot prior) and a summary."""
+
+    geometry: dict
+    report: dict
+    brief: str
+
+    def matrices(self) -> tuple[list[int], np.ndarray]:
+        """The ok views and their matrices (views, 3, 4)."""
+        return geometry_matrices(self.geometry)
+
+
+def calibrate(scan: str | os.PathLike, *, min_spheres: int = 6, max_rms_px: float = 0.5, search_px: float = 40.0,
+              image_only: bool = False, progress: Optional[Callable[[int, int], None]] = None) -> CalibrationResult:
+    """`ctk calibrate` on a robot scan with a helix holder: every view's matrix from the spheres in
+    its image (the robot's forward kinematics as the first guess), an undeclared holder wall
+    measured from the images, the poses combined with the robot's prior unless image_only.
+    progress(done, total) after each view; Ctrl-C stops the batch (KeyboardInterrupt). Nothing is
+    written: save the geometry with write_geometry."""
+    d = _ctk._calibrate(os.fspath(scan), min_spheres, max_rms_px, search_px, image_only, progress)
+    _log.info("%s", d["brief"])
+    return CalibrationResult(**d)
+
+
+@dataclasses.dataclass
+class DiagnosisResult:
+    """What the diagnosis found: the ctk-diagnosis/1 report (dict), the scan with the accepted
+    effects declared (ctk-scan/1 dict, its names relative to the original scan's folder) and a
+    summary."""
+
+    report: dict
+    corrected_scan: dict
+    brief: str
+
+    @property
+    def accepted(self) -> list:
+        """The effects accepted."""
+        return [e for e in self.report["effects"] if e.get("accepted")]
+
+
+def diagnose(scan: str | os.PathLike, geometry: str | os.PathLike, *, repeatability_mm: Optional[float] = None,
+             repeatability_deg: Optional[float] = None) -> DiagnosisResult:
+    """`ctk diagnose`: which named effect explains the residual the calibration `geometry` leaves
+    (bundle adjustment, held-out acceptance; the robot's repeatability measured on the scan unless
+    given). Each step is logged to the 'ctk' logger."""
+    d = _ctk._diagnose(os.fspath(scan), os.fspath(geometry), repeatability_mm, repeatability_deg,
+                       lambda line: _log.info("diagnose: %s", line))
+    return DiagnosisResult(**d)
 
 
 def read_diagnosis(file: str | os.PathLike) -> dict:

@@ -12,6 +12,8 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "ctk/calib/calibration_run.hpp"
+#include "ctk/calib/diagnosis_run.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "ctk/geom/scan_import.hpp"
@@ -113,9 +115,104 @@ py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geomet
   return d;
 }
 
+// Python callables seen from threads without the GIL: a progress or log call, and whether Ctrl-C
+// (or an exception in a callable) asks the run to stop; the exception is raised once it returns.
+class PythonBridge {
+ public:
+  PythonBridge(py::object progress, py::object log) : progress_(std::move(progress)), log_(std::move(log)) {}
+  std::function<void(int, int)> progress() {
+    return [this](int done, int total) {
+      with_gil([&] {
+        if (!progress_.is_none()) progress_(done, total);
+      });
+    };
+  }
+  std::function<void(const std::string&)> log() {
+    return [this](const std::string& line) {
+      with_gil([&] {
+        if (!log_.is_none()) log_(line);
+      });
+    };
+  }
+  bool stop_requested() {
+    py::gil_scoped_acquire hold;
+    if (!error_ && PyErr_CheckSignals() != 0) error_.emplace();
+    return error_.has_value();
+  }
+  void raise_if_stopped() {
+    if (error_) throw std::move(*error_);
+  }
+
+ private:
+  // Every Python object is made and touched with the GIL held (the caller may be any thread).
+  template <class F>
+  void with_gil(const F& f) {
+    py::gil_scoped_acquire hold;
+    if (error_) return;
+    try {
+      f();
+    } catch (py::error_already_set& e) {
+      error_.emplace(std::move(e));
+    }
+  }
+  py::object progress_, log_;
+  std::optional<py::error_already_set> error_;
+};
+
+py::dict calibrate(const fs::path& scan_file, int min_spheres, double max_rms_px, double search_px, bool image_only,
+                   const py::object& progress) {
+  CalibrationRunOptions o;
+  o.calibration.min_spheres = min_spheres;
+  o.calibration.max_rms_px = max_rms_px;
+  o.calibration.search_px = search_px;
+  o.calibration.validate();
+  o.image_only = image_only;
+  const ScanDescription scan = read_scan(scan_file);
+  PythonBridge bridge(progress, py::none());
+  BatchControl control;
+  control.stop_requested = [&] { return bridge.stop_requested(); };
+  std::optional<CalibrationRun> run;
+  {
+    py::gil_scoped_release free;
+    run = run_calibration(scan, o, bridge.progress(), &control);
+  }
+  bridge.raise_if_stopped();
+  py::dict d;
+  d["geometry"] = to_python(geometry_to_json(run->calibration.geometry));
+  d["report"] = to_python(run->report());
+  d["brief"] = run->brief() + "\n" + run->wall_and_prior();
+  return d;
+}
+
+py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, const std::optional<double>& repeatability_mm,
+                  const std::optional<double>& repeatability_deg, const py::object& log) {
+  DiagnosisRunOptions o;
+  o.repeatability_mm = repeatability_mm;
+  o.repeatability_deg = repeatability_deg;
+  o.diagnosis.validate();
+  const ScanDescription scan = read_scan(scan_file);
+  const Geometry geometry = read_geometry(geometry_file);
+  PythonBridge bridge(py::none(), log);
+  std::optional<DiagnosisRun> run;
+  {
+    py::gil_scoped_release free;
+    run = run_diagnosis(scan, geometry, o, {}, bridge.log());
+  }
+  bridge.raise_if_stopped();
+  py::dict d;
+  d["report"] = to_python(run->report());
+  d["corrected_scan"] = to_python(scan_to_json(run->corrected));
+  d["brief"] = run->brief();
+  return d;
+}
+
 }  // namespace
 
 void bind_workflows(py::module_& m) {
+  m.def("_calibrate", &calibrate, py::arg("scan"), py::arg("min_spheres"), py::arg("max_rms_px"), py::arg("search_px"),
+        py::arg("image_only"), py::arg("progress"));
+  m.def("_diagnose", &diagnose, py::arg("scan"), py::arg("geometry"), py::arg("repeatability_mm"), py::arg("repeatability_deg"),
+        py::arg("log"));
   m.def("circular_matrices", &circular, py::arg("angles_deg"), py::arg("detector_shape"), py::arg("pixel_mm"), py::arg("sod"),
         py::arg("sdd"), py::arg("principal_point") = py::none(), py::arg("sense") = 1, R"doc(
 A circular orbit by its numbers as (views, 3, 4) matrices: rotation axis +z through the origin, the

@@ -1,0 +1,45 @@
+#pragma once
+// The calibration workflow on a whole scan, as `ctk calibrate` and Python's `ctk.calibrate` run
+// it: every view from its own image (calibrate_scan); a holder wall the scan does not declare
+// measured from the images and the views it cost calibrated again with it; the poses combined
+// with the robot's prior unless asked not to. Returns the calibration and its report; files
+// (geometry, journal, pictures) are the caller's.
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "ctk/calib/holder_wall.hpp"
+#include "ctk/calib/robot_prior.hpp"
+#include "ctk/calib/scan_calibration.hpp"
+
+namespace ctk {
+
+struct CalibrationRunOptions {
+  CalibrationOptions calibration;
+  bool image_only = false;  // poses from the images alone, no robot prior
+};
+
+struct CalibrationRun {
+  ScanCalibration calibration;  // left_undone > 0: stopped on request, nothing after the views was done
+  std::optional<HolderWall> declared_wall;
+  std::optional<WallMeasurement> wall;  // measured, when the scan does not declare it
+  bool has_holder = false;
+  RobotPriorFit prior;
+  CalibrationOptions options;
+
+  /// ctk-calibration-report/1: summary, options, per-view table, holder wall, robot prior (the
+  /// caller adds the file names and pictures).
+  nlohmann::json report() const;
+  /// "calibrated N of M views (...) in s (views/s); median reprojection RMS ...".
+  std::string brief() const;
+  /// What was done about the holder's wall and the robot's prior, a line each.
+  std::string wall_and_prior() const;
+};
+
+/// `progress(done, total)` after each view; `control` takes over an earlier run's views, journals
+/// each finished one and may stop the batch.
+CalibrationRun run_calibration(const ScanDescription& scan, const CalibrationRunOptions& options,
+                               const std::function<void(int, int)>& progress = {}, const BatchControl* control = nullptr);
+
+}  // namespace ctk

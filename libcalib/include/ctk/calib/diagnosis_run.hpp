@@ -1,0 +1,38 @@
+#pragma once
+// The diagnosis workflow on a calibrated scan, as `ctk diagnose` and Python's `ctk.diagnose` run
+// it: the detections behind the calibration found again from its poses, the robot's repeatability
+// measured on the scan unless stated, the bundle adjustment with held-out acceptance; returns the
+// diagnosis, its report and the corrected scan. Files and pictures are the caller's.
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "ctk/calib/diagnosis.hpp"
+#include "ctk/calib/scan_calibration.hpp"
+
+namespace ctk {
+
+struct DiagnosisRunOptions {
+  DiagnosisOptions diagnosis;
+  CalibrationOptions calibration;
+  std::optional<double> repeatability_mm, repeatability_deg;  // absent: measured on the scan
+};
+
+struct DiagnosisRun {
+  ScanObservations observations;
+  Diagnosis diagnosis;
+  ScanDescription corrected;  // the scan with the accepted effects declared
+  std::string repeatability;  // how the robot's repeatability was set, one line
+  /// ctk-diagnosis/1 (the caller adds file names and pictures).
+  nlohmann::json report() const;
+  /// The baseline and each accepted effect, a line each.
+  std::string brief() const;
+};
+
+/// Throws InputError naming the scan (no holder) or the geometry (fewer than 10 calibrated views).
+DiagnosisRun run_diagnosis(const ScanDescription& scan, const Geometry& geometry, const DiagnosisRunOptions& options,
+                           const std::function<void(int, int)>& progress = {},
+                           const std::function<void(const std::string&)>& log = {});
+
+}  // namespace ctk

@@ -1,0 +1,168 @@
+#include "ctk/calib/calibration_run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <vector>
+
+#include "ctk/geom/statistics.hpp"
+
+namespace ctk {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+nlohmann::json robot_prior_json(const RobotPriorFit& p) {
+  if (!p.applied) return {{"applied", false}, {"reason", p.reason}};
+  auto offset = [](const double* x) {
+    return nlohmann::json{{"rotation_deg", {x[0] * 180 / M_PI, x[1] * 180 / M_PI, x[2] * 180 / M_PI}},
+                          {"translation_mm", {x[3], x[4], x[5]}}};
+  };
+  return {{"applied", true},
+          {"views", p.views},
+          {"repeatability_measured", {{"translation_mm", p.sigma_mm}, {"rotation_deg", p.sigma_deg}}},
+          {"robot_model",
+           {{"robot_base_frame", offset(p.model.base)},
+            {"holder_mount", offset(p.model.mount)},
+            {"note",
+             "fitted together only to place the prior; on a trajectory that turns few joints they trade off against each "
+             "other and are not meaningful one by one (ctk diagnose attributes such offsets)"}}},
+          {"inconsistent_views", p.inconsistent_views},
+          {"median_rotation_sigma_deg", {{"image", p.image_rotation_sigma_deg}, {"combined", p.combined_rotation_sigma_deg}}}};
+}
+
+}  // namespace
+
+CalibrationRun run_calibration(const ScanDescription& scan, const CalibrationRunOptions& o,
+                               const std::function<void(int, int)>& progress, const BatchControl* control) {
+  CalibrationRun run;
+  run.options = o.calibration;
+  run.has_holder = scan.holder.has_value();
+  if (scan.holder && scan.holder->wall) run.declared_wall = scan.holder->wall;
+  ScanCalibration& c = run.calibration;
+  c = calibrate_scan(scan, o.calibration, progress, control);
+  if (c.left_undone > 0) return run;
+  // A holder whose wall the scan does not declare: measured from the images, and the views it
+  // cost (a sphere on the wall's silhouette taken for a misfit) calibrated again with it.
+  if (scan.holder && !scan.holder->wall) {
+    const auto start = std::chrono::steady_clock::now();
+    run.wall = measure_holder_wall(scan, c);
+    if (run.wall &&
+        std::any_of(c.views.begin(), c.views.end(), [](const ViewCalibration& v) { return v.status == ViewStatus::rejected; })) {
+      ScanDescription with_wall = scan;
+      with_wall.holder->wall = run.wall->wall;
+      std::map<int, ViewCalibration> kept;
+      for (std::size_t v = 0; v < c.views.size(); ++v)
+        if (c.views[v].status != ViewStatus::rejected) kept[static_cast<int>(v)] = c.views[v];
+      BatchControl again;
+      again.done = &kept;
+      const double seconds = c.seconds;
+      c = calibrate_scan(with_wall, o.calibration, {}, &again);
+      c.seconds += seconds;
+    }
+    c.seconds += seconds_since(start);
+  }
+  run.prior.reason = "switched off (--image-only)";
+  if (!o.image_only) {
+    const auto start = std::chrono::steady_clock::now();
+    run.prior = combine_with_robot(scan, c);
+    c.seconds += seconds_since(start);
+  }
+  return run;
+}
+
+nlohmann::json CalibrationRun::report() const {
+  const ScanCalibration& c = calibration;
+  nlohmann::json views = nlohmann::json::array();
+  std::vector<double> rms, depth_sigma, across_sigma;
+  int ok = 0, rejected = 0, skipped = 0;
+  for (std::size_t v = 0; v < c.views.size(); ++v) {
+    const ViewCalibration& r = c.views[v];
+    nlohmann::json j = {
+        {"index", v}, {"status", to_string(r.status)}, {"detections", r.detections}, {"spheres_used", r.spheres_used}};
+    if (!r.reason.empty()) j["reason"] = r.reason;
+    if (r.P) {
+      j["rms_px"] = r.rms_px;
+      j["translation_sigma_mm"] = {r.translation_sigma_mm[0], r.translation_sigma_mm[1], r.translation_sigma_mm[2]};
+      j["rotation_sigma_deg"] = r.rotation_sigma_deg;
+    }
+    views.push_back(j);
+    if (r.status == ViewStatus::ok) {
+      ++ok;
+      rms.push_back(r.rms_px);
+      depth_sigma.push_back(r.translation_sigma_mm[2]);
+      across_sigma.push_back(std::max(r.translation_sigma_mm[0], r.translation_sigma_mm[1]));
+    } else if (r.status == ViewStatus::rejected) {
+      ++rejected;
+    } else {
+      ++skipped;
+    }
+  }
+  nlohmann::json j = {
+      {"format", "ctk-calibration-report/1"},
+      {"summary",
+       {{"views", c.views.size()},
+        {"ok", ok},
+        {"rejected", rejected},
+        {"skipped", skipped},
+        {"median_rms_px", median(rms)},
+        {"median_translation_sigma_across_beam_mm", median(across_sigma)},
+        {"median_translation_sigma_along_beam_mm", median(depth_sigma)},
+        {"seconds", c.seconds},
+        {"views_per_second", c.seconds > 0 ? static_cast<double>(c.views.size()) / c.seconds : 0.0}}},
+      {"options", {{"min_spheres", options.min_spheres}, {"max_rms_px", options.max_rms_px}, {"search_px", options.search_px}}},
+      {"views", views}};
+  j["robot_prior"] = robot_prior_json(prior);
+  if (declared_wall)
+    j["holder_wall"] = {{"declared", true},
+                        {"inner_radius_mm", declared_wall->inner_radius_mm},
+                        {"outer_radius_mm", declared_wall->outer_radius_mm}};
+  else if (wall)
+    j["holder_wall"] = {{"declared", false},
+                        {"measured",
+                         {{"inner_radius_mm", wall->wall.inner_radius_mm},
+                          {"outer_radius_mm", wall->wall.outer_radius_mm},
+                          {"inner_sigma_mm", wall->inner_sigma_mm},
+                          {"outer_sigma_mm", wall->outer_sigma_mm},
+                          {"views", wall->views}}}};
+  else if (has_holder)
+    j["holder_wall"] = {{"declared", false}, {"measured", nullptr}};
+  return j;
+}
+
+std::string CalibrationRun::brief() const {
+  const nlohmann::json r = report();
+  const auto& s = r.at("summary");
+  std::ostringstream b;
+  b << "calibrated " << s.at("ok") << " of " << s.at("views") << " views (" << s.at("rejected") << " rejected, "
+    << s.at("skipped") << " skipped) in " << calibration.seconds << " s (" << s.at("views_per_second").get<double>()
+    << " views/s); median reprojection RMS " << s.at("median_rms_px").get<double>() << " px; median pose uncertainty "
+    << s.at("median_translation_sigma_across_beam_mm").get<double>() * 1000 << " um across the beam, "
+    << s.at("median_translation_sigma_along_beam_mm").get<double>() * 1000 << " um along it";
+  return b.str();
+}
+
+std::string CalibrationRun::wall_and_prior() const {
+  std::ostringstream b;
+  if (wall)
+    b << "holder wall not declared by the scan; measured in " << wall->views << " views: inner radius "
+      << wall->wall.inner_radius_mm << " +- " << wall->inner_sigma_mm << " mm, outer " << wall->wall.outer_radius_mm << " +- "
+      << wall->outer_sigma_mm << " mm (declare it as holder.wall to skip this)\n";
+  else if (has_holder && !declared_wall)
+    b << "holder wall not declared by the scan and not measurable (fewer than 3 views see the holder from the side)\n";
+  if (prior.applied)
+    b << "poses combined with the robot's prior over " << prior.views << " views: repeatability measured " << prior.sigma_mm
+      << " mm, " << prior.sigma_deg << " deg; median rotation uncertainty " << prior.image_rotation_sigma_deg
+      << " deg (image alone) -> " << prior.combined_rotation_sigma_deg << " deg; " << prior.inconsistent_views.size()
+      << " views disagree with the robot beyond both noises";
+  else
+    b << "poses from the images alone: " << prior.reason;
+  return b.str();
+}
+
+}  // namespace ctk

@@ -1,0 +1,83 @@
+#include "ctk/calib/diagnosis_run.hpp"
+
+#include <sstream>
+
+#include "ctk/calib/robot_prior.hpp"
+#include "ctk/geom/error.hpp"
+
+namespace ctk {
+
+namespace {
+
+// The robot's repeatability as the scan shows it (the scatter of the image poses about the
+// robot's model, less the image's own share; maximum likelihood, as calibrate's robot prior
+// measures it), unless the user stated it: a robot worse than its datasheet would otherwise make
+// every scan look structured, and a better one hide small effects. Returns what was done.
+std::string set_repeatability(const DiagnosisRunOptions& o, const ScanDescription& scan, const ScanCalibration& c,
+                              DiagnosisOptions& d) {
+  if (o.repeatability_mm) d.robot_sigma_mm = *o.repeatability_mm;
+  if (o.repeatability_deg) d.robot_sigma_deg = *o.repeatability_deg;
+  std::ostringstream said;
+  if ((o.repeatability_mm && o.repeatability_deg) || !scan.panda) return said.str();
+  ScanCalibration copy = c;
+  const RobotPriorFit prior = combine_with_robot(scan, copy);
+  if (!prior.applied) {
+    said << "robot repeatability not measured (" << prior.reason << "): assumed " << d.robot_sigma_mm << " mm, "
+         << d.robot_sigma_deg << " deg";
+    return said.str();
+  }
+  if (!o.repeatability_mm) d.robot_sigma_mm = prior.sigma_mm;
+  if (!o.repeatability_deg) d.robot_sigma_deg = prior.sigma_deg;
+  said << "robot repeatability measured on the scan: " << prior.sigma_mm << " mm, " << prior.sigma_deg << " deg (3-D RMS)";
+  return said.str();
+}
+
+}  // namespace
+
+DiagnosisRun run_diagnosis(const ScanDescription& scan, const Geometry& geometry, const DiagnosisRunOptions& o,
+                           const std::function<void(int, int)>& progress, const std::function<void(const std::string&)>& log) {
+  const auto say = [&](const std::string& line) {
+    if (log && !line.empty()) log(line);
+  };
+  if (!scan.holder) throw InputError(scan.folder.string(), "holder", "the diagnosis needs the holder's spheres (missing)");
+  // The detections and matches behind the given calibration, each view started from its pose.
+  const ScanCalibration c = recalibrate_scan(scan, geometry, o.calibration, progress);
+  DiagnosisOptions options = o.diagnosis;
+  DiagnosisRun run;
+  run.repeatability = set_repeatability(o, scan, c, options);
+  say(run.repeatability);
+  run.observations = observe_scan(scan, c, options);
+  if (run.observations.views.size() < 10)
+    throw InputError(
+        geometry.source(), "views",
+        "only " + std::to_string(run.observations.views.size()) + " calibrated views; the diagnosis needs at least 10");
+  std::ostringstream noise;
+  noise << run.observations.views.size() << " views, detection noise " << run.observations.centre_sigma_px << " px per axis";
+  say(noise.str());
+  run.diagnosis = diagnose(run.observations, options, log);
+  run.corrected = corrected_scan(scan, run.diagnosis);
+  return run;
+}
+
+nlohmann::json DiagnosisRun::report() const { return diagnosis_to_json(diagnosis, observations); }
+
+std::string DiagnosisRun::brief() const {
+  const Diagnosis& d = diagnosis;
+  std::ostringstream b;
+  b << "baseline " << d.baseline.rms_px << " px RMS (held out " << d.baseline.heldout_rms_px << ")";
+  if (observations.setup.robot) b << ", robot prediction error " << d.baseline.fk_translation_rms_mm << " mm RMS";
+  for (const EffectFinding& f : d.effects)
+    if (f.accepted) {
+      b << "\naccepted " << effect_name(f.effect) << ": " << f.before.rms_px << " -> " << f.after.rms_px << " px";
+      if (observations.setup.robot)
+        b << ", robot prediction " << f.before.fk_translation_rms_mm << " -> " << f.after.fk_translation_rms_mm << " mm";
+      if (!f.confounded_with.empty()) {
+        b << " (confounded with";
+        for (Effect e : f.confounded_with) b << " " << effect_name(e);
+        b << ")";
+      }
+    }
+  return b.str();
+}
+
+}  // namespace ctk

@@ -1,0 +1,46 @@
+"""The workflows from Python against the command line on the same simulated robot scan: the
+calibration the same matrices, the diagnosis the undeclared base offset, an interruption raised
+where the user can catch it."""
+import numpy as np
+import pytest
+
+import ctk
+from conftest import run
+
+
+@pytest.fixture(scope="module")
+def robot_scan(tmp_path_factory, ctk_command):
+    folder = tmp_path_factory.mktemp("robot") / "scan"
+    run([ctk_command, "simulate", "--out", str(folder), "--phantom", "helix-holder", "--views", "40", "--cols", "360", "--rows", "360",
+         "--pitch", "1.2", "--base-translation-mm", "0", "0", "1.3", "--robot-noise-mm", "0.05"])
+    return folder
+
+
+def test_calibrate_and_diagnose_from_python_as_the_command_line_does(robot_scan, tmp_path, ctk_command):
+    run([ctk_command, "calibrate", "--scan", str(robot_scan / "scan.json"), "--out", str(tmp_path / "cli.json")])
+    seen = []
+    result = ctk.calibrate(robot_scan / "scan.json", progress=lambda done, total: seen.append((done, total)))
+    assert seen[-1] == (40, 40)
+    assert result.report["summary"]["ok"] == 40
+    views, P = result.matrices()
+    cli_views, cli_P = ctk.geometry_matrices(ctk.read_geometry(tmp_path / "cli.json"))
+    assert views == cli_views
+    np.testing.assert_allclose(P, cli_P, rtol=1e-9, atol=1e-9)
+
+    ctk.write_geometry(result.geometry, tmp_path / "py.json")
+    d = ctk.diagnose(robot_scan / "scan.json", tmp_path / "py.json")
+    names = [e["name"] for e in d.accepted]
+    assert names == ["robot_base_frame"], d.brief
+    along_beam = d.accepted[0]["parameters"]["translation_mm"][2]
+    assert abs(along_beam - 1.3) < 0.1, d.brief
+    assert d.corrected_scan["format"] == "ctk-scan/1"
+
+
+def test_an_interrupted_calibration_raises_in_python(robot_scan):
+    def interrupt(done, total):
+        if done == 5:
+            raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        ctk.calibrate(robot_scan / "scan.json", progress=interrupt)
+    with pytest.raises(ValueError, match="CalibrationOptions.min_spheres"):
+        ctk.calibrate(robot_scan / "scan.json", min_spheres=2)
