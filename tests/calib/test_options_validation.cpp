@@ -76,6 +76,8 @@ TEST(OptionsValidation, DiagnosisOptions) {
       DiagnosisOptions{}, [](auto& o) { o.max_effects = 0; }, "DiagnosisOptions.max_effects");
   testing::expect_option_refused(
       DiagnosisOptions{}, [](auto& o) { o.min_image_effect_px = -0.01; }, "DiagnosisOptions.min_image_effect_px");
+  testing::expect_option_refused(
+      DiagnosisOptions{}, [](auto& o) { o.best_lead_z = -1; }, "DiagnosisOptions.best_lead_z");
   // The diagnosis checks before any work.
   DiagnosisOptions bad;
   bad.max_effects = 0;

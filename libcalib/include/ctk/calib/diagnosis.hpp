@@ -36,7 +36,10 @@ struct DiagnosisOptions {
   double robot_sigma_deg = 0.02;
   int max_effects = 4;
   double min_image_effect_px = 0.01;  // image-only effects must explain at least this much held-out RMS
-  void validate() const;              // std::invalid_argument naming the field
+  /// Of effects the held-out test cannot tell apart, the best-fitting is reported when it leads
+  /// the one first in the vocabulary by this many standard errors (paired, held out).
+  double best_lead_z = 1.0;
+  void validate() const;  // std::invalid_argument naming the field
 };
 
 /// How well a model explains the scan: image RMS (px, per sphere), held-out RMS, and how far the
