@@ -24,7 +24,10 @@ void multiply(const ProjectionStack& factors, const float* in, float* out) {
 WeightedProjection::WeightedProjection(std::shared_ptr<const ProjectionOperator> inner, ProjectionStack factors)
     : inner_(std::move(inner)), factors_(std::move(factors)) {
   if (!inner_) throw std::invalid_argument("WeightedProjection: no inner operator");
-  if (!(StackShape::of(factors_) == inner_->range()) || factors_.data.size() != inner_->range_zeros().data.size())
+  const StackShape r = inner_->range();
+  if (!(StackShape::of(factors_) == r) || factors_.data.size() != static_cast<std::size_t>(r.views) *
+                                                                      static_cast<std::size_t>(r.rows) *
+                                                                      static_cast<std::size_t>(r.cols))
     throw std::invalid_argument("WeightedProjection: the factors do not have the shape of the operator's projections");
 }
 
