@@ -110,7 +110,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   files.check();
   OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
-  const Geometry geometry = o.geometry.empty() ? nominal_geometry(scan) : read_geometry(o.geometry);
+  const Geometry geometry = geometry_or_nominal(scan, o.scan, o.geometry);
   const ReconstructionMethod method = o.method == "sirt"  ? ReconstructionMethod::sirt
                                       : o.method == "fdk" ? ReconstructionMethod::fdk
                                                           : ReconstructionMethod::wls_cg;
@@ -152,7 +152,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   if (!m.distortion_note.empty()) std::cout << m.distortion_note << "\n";
   if (m.clamped_pixels > 0)
     std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
-  report_masked_and_left_out(m, o.geometry.empty() ? o.scan : o.geometry);
+  report_masked_and_left_out(m, geometry.source());
 
   const nlohmann::json run = {
       {"scan", fs::absolute(o.scan).lexically_normal().string()},

@@ -18,6 +18,7 @@
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/image_io.hpp"
 #include "ctk/recon/refine_scan.hpp"
+#include "measurement_report.hpp"
 #include "progress.hpp"
 
 namespace ctk::tools {
@@ -68,7 +69,7 @@ void run_refine(const RefineOptions& o) {
   files.check();
   OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
-  const Geometry geometry = o.geometry.empty() ? nominal_geometry(scan) : read_geometry(o.geometry);
+  const Geometry geometry = geometry_or_nominal(scan, o.scan, o.geometry);
   Progress reading("reading projections", "views");
   auto log = [&](const std::string& line) {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -77,9 +78,7 @@ void run_refine(const RefineOptions& o) {
   const RefineScanSummary s = refine_scan(scan, geometry, o.options, log, std::ref(reading));
   const RefinementResult& r = s.result;
   if (s.clamped_pixels > 0) std::cout << "clamped " << s.clamped_pixels << " pixels\n";
-  if (s.masked_pixels > 0)
-    std::cout << "masked " << s.masked_pixels << " pixels that are not finite numbers (weight 0, their neighbours' mean)\n";
-  for (const auto& why : s.left_out) std::cerr << "warning: " << why << "\n";
+  report_masked_and_left_out(s.masked_pixels, s.left_out);
   if (s.conjugate)
     std::cout << "cross-check: conjugate rays " << s.conjugate->u0_px << " +- " << s.conjugate->standard_error_px
               << " px, the loop " << s.loop_u0_px << " px (difference " << s.conjugate->u0_px - s.loop_u0_px << " px)\n";

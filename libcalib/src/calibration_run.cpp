@@ -76,22 +76,11 @@ CalibrationRun run_calibration(const ScanDescription& scan, const CalibrationRun
   return run;
 }
 
-nlohmann::json CalibrationRun::report() const {
+nlohmann::json CalibrationRun::summary() const {
   const ScanCalibration& c = calibration;
-  nlohmann::json views = nlohmann::json::array();
   std::vector<double> rms, depth_sigma, across_sigma;
   int ok = 0, rejected = 0, skipped = 0;
-  for (std::size_t v = 0; v < c.views.size(); ++v) {
-    const ViewCalibration& r = c.views[v];
-    nlohmann::json j = {
-        {"index", v}, {"status", to_string(r.status)}, {"detections", r.detections}, {"spheres_used", r.spheres_used}};
-    if (!r.reason.empty()) j["reason"] = r.reason;
-    if (r.P) {
-      j["rms_px"] = r.rms_px;
-      j["translation_sigma_mm"] = {r.translation_sigma_mm[0], r.translation_sigma_mm[1], r.translation_sigma_mm[2]};
-      j["rotation_sigma_deg"] = r.rotation_sigma_deg;
-    }
-    views.push_back(j);
+  for (const ViewCalibration& r : c.views) {
     if (r.status == ViewStatus::ok) {
       ++ok;
       rms.push_back(r.rms_px);
@@ -103,18 +92,34 @@ nlohmann::json CalibrationRun::report() const {
       ++skipped;
     }
   }
+  return {{"views", c.views.size()},
+          {"ok", ok},
+          {"rejected", rejected},
+          {"skipped", skipped},
+          {"median_rms_px", median(rms)},
+          {"median_translation_sigma_across_beam_mm", median(across_sigma)},
+          {"median_translation_sigma_along_beam_mm", median(depth_sigma)},
+          {"seconds", c.seconds},
+          {"views_per_second", c.seconds > 0 ? static_cast<double>(c.views.size()) / c.seconds : 0.0}};
+}
+
+nlohmann::json CalibrationRun::report() const {
+  nlohmann::json views = nlohmann::json::array();
+  for (std::size_t v = 0; v < calibration.views.size(); ++v) {
+    const ViewCalibration& r = calibration.views[v];
+    nlohmann::json j = {
+        {"index", v}, {"status", to_string(r.status)}, {"detections", r.detections}, {"spheres_used", r.spheres_used}};
+    if (!r.reason.empty()) j["reason"] = r.reason;
+    if (r.P) {
+      j["rms_px"] = r.rms_px;
+      j["translation_sigma_mm"] = {r.translation_sigma_mm[0], r.translation_sigma_mm[1], r.translation_sigma_mm[2]};
+      j["rotation_sigma_deg"] = r.rotation_sigma_deg;
+    }
+    views.push_back(j);
+  }
   nlohmann::json j = {
       {"format", "ctk-calibration-report/1"},
-      {"summary",
-       {{"views", c.views.size()},
-        {"ok", ok},
-        {"rejected", rejected},
-        {"skipped", skipped},
-        {"median_rms_px", median(rms)},
-        {"median_translation_sigma_across_beam_mm", median(across_sigma)},
-        {"median_translation_sigma_along_beam_mm", median(depth_sigma)},
-        {"seconds", c.seconds},
-        {"views_per_second", c.seconds > 0 ? static_cast<double>(c.views.size()) / c.seconds : 0.0}}},
+      {"summary", summary()},
       {"options", {{"min_spheres", options.min_spheres}, {"max_rms_px", options.max_rms_px}, {"search_px", options.search_px}}},
       {"views", views}};
   j["robot_prior"] = robot_prior_json(prior);
@@ -136,8 +141,7 @@ nlohmann::json CalibrationRun::report() const {
 }
 
 std::string CalibrationRun::brief() const {
-  const nlohmann::json r = report();
-  const auto& s = r.at("summary");
+  const nlohmann::json s = summary();
   std::ostringstream b;
   b << "calibrated " << s.at("ok") << " of " << s.at("views") << " views (" << s.at("rejected") << " rejected, "
     << s.at("skipped") << " skipped) in " << calibration.seconds << " s (" << s.at("views_per_second").get<double>()

@@ -53,4 +53,12 @@ Geometry nominal_geometry(const ScanDescription& scan) {
   return g;
 }
 
+Geometry geometry_or_nominal(const ScanDescription& scan, const std::filesystem::path& scan_file,
+                             const std::filesystem::path& geometry_file) {
+  if (!geometry_file.empty()) return read_geometry(geometry_file);
+  Geometry g = nominal_geometry(scan);
+  g.file = scan_file;
+  return g;
+}
+
 }  // namespace ctk

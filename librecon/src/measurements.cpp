@@ -126,4 +126,9 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
   return m;
 }
 
+void require_views_left(const Measurements& m, const std::string& geometry_source) {
+  if (m.view_indices.empty() && !m.left_out.empty())
+    throw InputError(geometry_source, json_key("views"), "every ok view was left out: " + m.left_out.front());
+}
+
 }  // namespace ctk

@@ -51,8 +51,7 @@ RefineScanSummary refine_scan(const ScanDescription& scan, Geometry geometry, co
   };
 
   const Measurements m = load_measurements(scan, geometry, {false}, reading);
-  if (m.view_indices.empty() && !m.left_out.empty())
-    throw InputError(geometry.source(), json_key("views"), "every ok view was left out: " + m.left_out.front());
+  require_views_left(m, geometry.source());
   // Sharpness and pictures need only the central axial slice at full resolution. The coarse grid
   // reaches 20 % beyond the detector's field along the axis, so the cone's edge rays stay inside
   // it and a vertical detector shift is not mistaken for a better fit of a truncated object.
@@ -88,8 +87,7 @@ RefineScanSummary refine_scan(const ScanDescription& scan, Geometry geometry, co
     v.rms_px.reset();
   }
   s.refined = std::move(geometry);
-  const double loop_u0 = probe.nominal_principal_point().x() + s.result.geometry.du_px;
-  s.loop_u0_px = loop_u0;
+  s.loop_u0_px = probe.nominal_principal_point().x() + s.result.geometry.du_px;
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return s;
 }

@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 
 py::dict load(const fs::path& scan_file, const std::optional<fs::path>& geometry_file, bool statistical_weights, bool undistort) {
   const ScanDescription scan = read_scan(scan_file);
-  const Geometry geometry = geometry_file ? read_geometry(*geometry_file) : nominal_geometry(scan);
+  const Geometry geometry = geometry_or_nominal(scan, scan_file, geometry_file.value_or(fs::path()));
   Measurements m;
   {
     py::gil_scoped_release free;

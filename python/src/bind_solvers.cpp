@@ -17,6 +17,7 @@
 #include "ctk/recon/wls_cg.hpp"
 #include "conversions.hpp"
 #include "numpy_arrays.hpp"
+#include "python_bridge.hpp"
 
 namespace ctk::python {
 
@@ -33,45 +34,36 @@ py::dict log_dict(const IterationLog& l) {
   return d;
 }
 
-// The bridge between a solver running without the GIL and Python: the callback sees each
-// iteration, returns False to stop; an exception in it, or a pending KeyboardInterrupt, stops the
-// solver and is raised once it has returned.
-class PythonControl {
+// A solver running without the GIL, seen from Python: the callback sees each iteration and returns
+// False to stop; an exception in it, or Ctrl-C, stops the solver and is raised once it returns.
+class SolverControl {
  public:
-  explicit PythonControl(py::object callback) : callback_(std::move(callback)) {
+  explicit SolverControl(py::object callback) : callback_(std::move(callback)) {
     checkpointing_.save = [](const SolverSnapshot&) {};
-    checkpointing_.stop_requested = [this] {
-      py::gil_scoped_acquire hold;
-      if (!error_ && PyErr_CheckSignals() != 0) error_.emplace();
-      return stop_ || error_.has_value();
-    };
+    checkpointing_.stop_requested = [this] { return bridge_.stop_requested(); };
   }
   IterationCallback on_iteration() {
     return [this](const IterationLog& l) {
-      if (callback_.is_none() || error_) return;
-      py::gil_scoped_acquire hold;
-      try {
+      if (callback_.is_none()) return;
+      bridge_.with_gil([&] {
         const py::object answer = callback_(log_dict(l));
-        if (!answer.is_none() && !answer.cast<bool>()) stop_ = true;
-      } catch (py::error_already_set& e) {
-        error_.emplace(std::move(e));
-      }
+        if (!answer.is_none() && !answer.cast<bool>()) bridge_.request_stop();
+      });
     };
   }
   const Checkpointing* checkpointing() const { return &checkpointing_; }
   /// Raises what the callback or Ctrl-C raised; otherwise the report as a dict.
   py::object finish(const SolverReport& report) {
-    if (error_) throw std::move(*error_);
+    bridge_.raise_if_stopped();
     py::object r = to_python(to_json(report));
-    if (stop_) r["stop_reason"] = "stopped by the callback";
+    if (bridge_.stopped_by_request()) r["stop_reason"] = "stopped by the callback";
     return r;
   }
 
  private:
   py::object callback_;
+  PythonBridge bridge_;
   Checkpointing checkpointing_;
-  bool stop_ = false;
-  std::optional<py::error_already_set> error_;
 };
 
 Volume start_volume(const ProjectionOperator& A, const py::object& x0) {
@@ -104,7 +96,7 @@ py::tuple wls_cg(const ProjectionOperator& A, const FloatArray& b, const py::obj
   std::optional<ProjectionStack> w;
   if (!weights.is_none()) w = data_stack(A, weights.cast<FloatArray>(), "weights");
   Volume x = start_volume(A, x0);
-  PythonControl control(callback);
+  SolverControl control(callback);
   SolverReport report;
   {
     py::gil_scoped_release free;
@@ -120,7 +112,7 @@ py::tuple sirt(const ProjectionOperator& A, const FloatArray& b, const py::objec
   o.validate();
   const ProjectionStack data = data_stack(A, b, "b");
   Volume x = start_volume(A, x0);
-  PythonControl control(callback);
+  SolverControl control(callback);
   SolverReport report;
   {
     py::gil_scoped_release free;

@@ -20,6 +20,7 @@
 #include "ctk/recon/refine_scan.hpp"
 #include "conversions.hpp"
 #include "numpy_arrays.hpp"
+#include "python_bridge.hpp"
 
 namespace ctk::python {
 
@@ -75,28 +76,22 @@ py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geomet
   o.z_accept = z;
   o.validate();
   const ScanDescription scan = read_scan(scan_file);
-  const Geometry geometry = geometry_file ? read_geometry(*geometry_file) : nominal_geometry(scan);
-  std::optional<py::error_already_set> error;
-  const auto say = [&](const std::string& line) {
-    py::gil_scoped_acquire hold;
-    if (error) return;
-    try {
-      if (!log.is_none()) log(line);
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-    } catch (py::error_already_set& e) {
-      error.emplace(std::move(e));
-    }
-    // Stopping the loop between steps: the exception reaches Python once the call returns.
-    if (error) throw std::runtime_error("interrupted");
+  const Geometry geometry = geometry_or_nominal(scan, scan_file, geometry_file.value_or(fs::path()));
+  // The loop has no stop request of its own: a step's log line that finds the run stopping ends it
+  // by an exception, which the bridge then turns back into what Python raised.
+  struct Stopped {};
+  PythonBridge bridge;
+  const auto say = [&, line_to = bridge.log(log)](const std::string& line) {
+    line_to(line);
+    if (bridge.stop_requested()) throw Stopped{};
   };
   std::optional<RefineScanSummary> s;
   try {
     py::gil_scoped_release free;
     s = refine_scan(scan, geometry, o, say);
-  } catch (const std::runtime_error&) {
-    if (error) throw std::move(*error);
-    throw;
+  } catch (const Stopped&) {
   }
+  bridge.raise_if_stopped();
   py::dict d;
   d["report"] = to_python(s->report());
   d["geometry"] = to_python(geometry_to_json(s->refined));
@@ -115,50 +110,6 @@ py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geomet
   return d;
 }
 
-// Python callables seen from threads without the GIL: a progress or log call, and whether Ctrl-C
-// (or an exception in a callable) asks the run to stop; the exception is raised once it returns.
-class PythonBridge {
- public:
-  PythonBridge(py::object progress, py::object log) : progress_(std::move(progress)), log_(std::move(log)) {}
-  std::function<void(int, int)> progress() {
-    return [this](int done, int total) {
-      with_gil([&] {
-        if (!progress_.is_none()) progress_(done, total);
-      });
-    };
-  }
-  std::function<void(const std::string&)> log() {
-    return [this](const std::string& line) {
-      with_gil([&] {
-        if (!log_.is_none()) log_(line);
-      });
-    };
-  }
-  bool stop_requested() {
-    py::gil_scoped_acquire hold;
-    if (!error_ && PyErr_CheckSignals() != 0) error_.emplace();
-    return error_.has_value();
-  }
-  void raise_if_stopped() {
-    if (error_) throw std::move(*error_);
-  }
-
- private:
-  // Every Python object is made and touched with the GIL held (the caller may be any thread).
-  template <class F>
-  void with_gil(const F& f) {
-    py::gil_scoped_acquire hold;
-    if (error_) return;
-    try {
-      f();
-    } catch (py::error_already_set& e) {
-      error_.emplace(std::move(e));
-    }
-  }
-  py::object progress_, log_;
-  std::optional<py::error_already_set> error_;
-};
-
 py::dict calibrate(const fs::path& scan_file, int min_spheres, double max_rms_px, double search_px, bool image_only,
                    const py::object& progress) {
   CalibrationRunOptions o;
@@ -168,13 +119,13 @@ py::dict calibrate(const fs::path& scan_file, int min_spheres, double max_rms_px
   o.calibration.validate();
   o.image_only = image_only;
   const ScanDescription scan = read_scan(scan_file);
-  PythonBridge bridge(progress, py::none());
+  PythonBridge bridge;
   BatchControl control;
   control.stop_requested = [&] { return bridge.stop_requested(); };
   std::optional<CalibrationRun> run;
   {
     py::gil_scoped_release free;
-    run = run_calibration(scan, o, bridge.progress(), &control);
+    run = run_calibration(scan, o, bridge.progress(progress), &control);
   }
   bridge.raise_if_stopped();
   py::dict d;
@@ -192,11 +143,11 @@ py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, cons
   o.diagnosis.validate();
   const ScanDescription scan = read_scan(scan_file);
   const Geometry geometry = read_geometry(geometry_file);
-  PythonBridge bridge(py::none(), log);
+  PythonBridge bridge;
   std::optional<DiagnosisRun> run;
   {
     py::gil_scoped_release free;
-    run = run_diagnosis(scan, geometry, o, {}, bridge.log());
+    run = run_diagnosis(scan, geometry, o, {}, bridge.log(log));
   }
   bridge.raise_if_stopped();
   py::dict d;

@@ -31,6 +31,9 @@ struct CalibrationRun {
   /// ctk-calibration-report/1: summary, options, per-view table, holder wall, robot prior (the
   /// caller adds the file names and pictures).
   nlohmann::json report() const;
+  /// The report's summary alone: views ok / rejected / skipped, median RMS and pose
+  /// uncertainties, time and views/s.
+  nlohmann::json summary() const;
   /// "calibrated N of M views (...) in s (views/s); median reprojection RMS ...".
   std::string brief() const;
   /// What was done about the holder's wall and the robot's prior, a line each.

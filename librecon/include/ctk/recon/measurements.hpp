@@ -45,4 +45,8 @@ constexpr double kMostMaskedFraction = 0.01;
 Measurements load_measurements(const ScanDescription& scan, const Geometry& geometry, const MeasurementOptions& options = {},
                                const std::function<void(int, int)>& progress = {});
 
+/// Throws InputError naming `geometry_source` (key "views") when views were left out and none
+/// remains to reconstruct from.
+void require_views_left(const Measurements& m, const std::string& geometry_source);
+
 }  // namespace ctk
