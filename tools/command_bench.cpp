@@ -16,8 +16,9 @@
 #include <string>
 
 #include "commands.hpp"
-#include "ctk/geom/atomic_write.hpp"
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/machine.hpp"
+#include "ctk/core/atomic_write.hpp"
+#include "ctk/core/statistics.hpp"
 #include "ctk/proj/joseph_projector.hpp"
 #include "ctk/proj/reference_projector.hpp"
 #include "ctk/proj/standard_problem.hpp"
@@ -203,25 +204,6 @@ nlohmann::json measure(const StandardProblem& p, const BenchOptions& o, bool for
           {"voxel_views_per_s", voxel_views / fast_s},
           {"reference_voxel_views_per_s", voxel_views / ref_full},
           {"relative_difference_to_reference", agreement}};
-}
-
-// The processor, as Linux names it: figures from two machines must not be mixed up, and a
-// virtual machine's model name alone ("AMD EPYC") does not tell a Zen 3 from a Zen 5.
-nlohmann::json cpu_identity() {
-  nlohmann::json cpu = nlohmann::json::object();
-  std::ifstream info("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(info, line) && !line.empty()) {
-    const auto colon = line.find(':');
-    if (colon == std::string::npos) continue;
-    std::string key = line.substr(0, colon);
-    key.erase(key.find_last_not_of(" \t") + 1);
-    const std::string value = colon + 2 <= line.size() ? line.substr(colon + 2) : "";
-    if (key == "model name") cpu["model_name"] = value;
-    if (key == "cpu family") cpu["family"] = std::atoi(value.c_str());
-    if (key == "model") cpu["model"] = std::atoi(value.c_str());
-  }
-  return cpu;
 }
 
 void run_bench(const BenchOptions& o) {

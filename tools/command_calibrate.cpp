@@ -11,13 +11,13 @@
 #include <memory>
 
 #include "commands.hpp"
-#include "ctk/geom/output_set.hpp"
+#include "ctk/core/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/calib/calibration_journal.hpp"
 #include "ctk/calib/calibration_pictures.hpp"
 #include "ctk/calib/calibration_run.hpp"
-#include "ctk/geom/atomic_write.hpp"
+#include "ctk/core/atomic_write.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/projection_reading.hpp"
 #include "interruption.hpp"

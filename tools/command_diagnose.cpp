@@ -5,12 +5,12 @@
 #include <optional>
 
 #include "commands.hpp"
-#include "ctk/geom/output_set.hpp"
+#include "ctk/core/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/calib/diagnosis_pictures.hpp"
 #include "ctk/calib/diagnosis_run.hpp"
-#include "ctk/geom/atomic_write.hpp"
+#include "ctk/core/atomic_write.hpp"
 #include "progress.hpp"
 
 namespace ctk::tools {

@@ -6,7 +6,7 @@
 #include <iostream>
 
 #include "commands.hpp"
-#include "ctk/geom/output_set.hpp"
+#include "ctk/core/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "ctk/geom/astra.hpp"
 #include "ctk/geom/nominal_geometry.hpp"

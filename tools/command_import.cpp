@@ -9,12 +9,12 @@
 #include <stdexcept>
 
 #include "commands.hpp"
-#include "ctk/geom/output_set.hpp"
+#include "ctk/core/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/geom/scan_import.hpp"
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 
 namespace ctk::tools {
 

@@ -10,13 +10,13 @@
 #include <optional>
 
 #include "commands.hpp"
-#include "ctk/geom/output_set.hpp"
+#include "ctk/core/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
-#include "ctk/geom/atomic_write.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/atomic_write.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 #include "ctk/recon/refine_scan.hpp"
 #include "measurement_report.hpp"
 #include "progress.hpp"

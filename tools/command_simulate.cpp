@@ -1,25 +1,18 @@
-// ctk simulate: a scan folder from analytic phantoms — exact line integrals, robot poses from a
-// joint log through Panda FK (circular or spherical trajectory, or given matrices), detector
-// noise, and any undeclared effects, with the truth beside it (truth.json).
-#include <chrono>
+// ctk simulate: a scan folder from analytic phantoms (phantoms' run_simulation) — exact line
+// integrals, robot poses from a joint log through Panda FK (circular or spherical trajectory, or
+// given matrices), detector noise, and any undeclared effects, with the truth beside it.
 #include <filesystem>
 #include <iostream>
 
 #include "commands.hpp"
-#include "ctk/geom/output_set.hpp"
-#include "ctk/geom/run_files.hpp"
+#include "ctk/core/error.hpp"
+#include "ctk/phantoms/simulation_run.hpp"
 #include "option_checks.hpp"
-#include "ctk/geom/error.hpp"
-#include "ctk/geom/trajectory.hpp"
-#include "ctk/phantoms/builtin_phantoms.hpp"
-#include "ctk/phantoms/scan_simulation.hpp"
 #include "progress.hpp"
 
 namespace ctk::tools {
 
 namespace {
-
-constexpr double kDegree = M_PI / 180.0;
 
 struct SimulateOptions {
   std::filesystem::path out = "simulated-scan";
@@ -53,114 +46,72 @@ struct SimulateOptions {
   std::optional<int> false_blobs;
 };
 
-Eigen::Vector3d vec3(const std::vector<double>& v) {
-  return v.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(v[0], v[1], v[2]);
-}
-Eigen::Vector2d vec2(const std::vector<double>& v) { return v.empty() ? Eigen::Vector2d::Zero() : Eigen::Vector2d(v[0], v[1]); }
-
-SimulationEffects effects_from(const SimulateOptions& o, const PandaSetup& setup) {
-  SimulationEffects e;
-  if (o.sdd_error_mm || !o.principal_point_error_px.empty() || !o.tilt_deg.empty())
-    e.detector_intrinsics =
-        DetectorIntrinsicsError{o.sdd_error_mm.value_or(0.0), vec2(o.principal_point_error_px), vec2(o.tilt_deg)};
-  if (o.distortion_k1)
-    e.detector_distortion = RadialDistortion{
-        *o.distortion_k1, o.distortion_centre_px.empty() ? setup.detector.centre_px() : vec2(o.distortion_centre_px)};
-  if (o.displaced_spheres) e.sphere_positions = SphereDisplacement{*o.displaced_spheres, o.displacement_mm};
-  if (!o.base_translation_mm.empty() || !o.base_rotation_deg.empty())
-    e.robot_base_frame = RigidOffset{vec3(o.base_translation_mm), vec3(o.base_rotation_deg)};
-  if (!o.mount_translation_mm.empty() || !o.mount_rotation_deg.empty())
-    e.holder_mount = RigidOffset{vec3(o.mount_translation_mm), vec3(o.mount_rotation_deg)};
-  if (!o.joint_offsets_deg.empty()) {
-    panda::Joints q{};
-    for (std::size_t j = 0; j < q.size(); ++j) q[j] = o.joint_offsets_deg[j] * kDegree;
-    e.joint_offsets_rad = q;
+// The effect options by the names the library's request takes (simulation_run.hpp).
+nlohmann::json named_effects(const SimulateOptions& o) {
+  nlohmann::json e = nlohmann::json::object();
+  auto put = [&](const char* key, const auto& value) { e[key] = value; };
+  auto put_list = [&](const char* key, const std::vector<double>& v) {
+    if (!v.empty()) e[key] = v;
+  };
+  if (o.sdd_error_mm) put("sdd_error_mm", *o.sdd_error_mm);
+  put_list("principal_point_error_px", o.principal_point_error_px);
+  put_list("detector_tilt_deg", o.tilt_deg);
+  if (o.distortion_k1) put("distortion_k1", *o.distortion_k1);
+  put_list("distortion_centre_px", o.distortion_centre_px);
+  if (o.displaced_spheres) {
+    put("displaced_spheres", *o.displaced_spheres);
+    put("displacement_mm", o.displacement_mm);
   }
-  if (!o.source_drift_mm.empty()) e.source_drift_mm_per_100_views = vec2(o.source_drift_mm);
-  if (o.holder_sag_deg) e.holder_sag_deg = *o.holder_sag_deg;
-  if (!o.source_wobble_mm.empty()) e.source_wobble_mm = vec2(o.source_wobble_mm);
-  if (o.moving_sphere_mm) e.moving_sphere_mm = *o.moving_sphere_mm;
-  if (o.blur_fraction) e.blurred_views = BlurredViews{*o.blur_fraction, o.blur_sigma_px};
-  if (o.false_blobs) e.false_blobs_per_view = *o.false_blobs;
+  put_list("base_translation_mm", o.base_translation_mm);
+  put_list("base_rotation_deg", o.base_rotation_deg);
+  put_list("mount_translation_mm", o.mount_translation_mm);
+  put_list("mount_rotation_deg", o.mount_rotation_deg);
+  put_list("joint_offsets_deg", o.joint_offsets_deg);
+  put_list("source_drift_mm", o.source_drift_mm);
+  if (o.holder_sag_deg) put("holder_sag_deg", *o.holder_sag_deg);
+  put_list("source_wobble_mm", o.source_wobble_mm);
+  if (o.moving_sphere_mm) put("moving_sphere_mm", *o.moving_sphere_mm);
+  if (o.blur_fraction) {
+    put("blur_fraction", *o.blur_fraction);
+    put("blur_sigma_px", o.blur_sigma_px);
+  }
+  if (o.false_blobs) put("false_blobs", *o.false_blobs);
   return e;
 }
 
 void run_simulate(const SimulateOptions& o) {
-  const auto start = std::chrono::steady_clock::now();
-  // Running again into a simulation's folder replaces it; a scan that no simulation wrote (a
-  // measured one: scan.json without truth.json) is never overwritten by a slip of --out.
-  if (std::filesystem::exists(o.out / "scan.json") && !std::filesystem::exists(o.out / "truth.json"))
+  if (o.trajectory == "cap" && o.cap_deg[0] > o.cap_deg[1])
     throw InputError(
-        "--out", "",
-        o.out.string() + " holds a scan that ctk simulate did not write (scan.json without truth.json): choose another folder");
-  RunFiles files;
-  for (const std::string& name : o.phantoms)
-    if (std::filesystem::path(name).extension() == ".json") files.input("--phantom", name);
-  files.input("--poses", o.poses);
-  const std::vector<std::string> written = {"scan.json", "truth.json", "truth-geometry.json", "joints.csv", "poses.json",
-                                            "flat.tif",  "dark.tif",   "projections"};
-  for (const std::string& name : written)
-    if (name != "projections") files.output("--out: " + name, o.out / name);
-  files.output_folder("--out: projections", o.out / "projections");
-  files.check();
-  // The scan is written whole into a hidden folder beside --out and swapped in at the end: an
-  // interrupted run leaves the earlier scan as it was, never new projections under an old truth.
-  StagedFolder folder(o.out, written);
-  const Detector detector{o.cols, o.rows, o.pitch_mm, o.pitch_mm};
-  ScanSimulation sim;
-  sim.setup = reference_panda_setup(detector, o.sdd_mm, o.sod_mm);
-  sim.holder = reference_helix_holder();
-  sim.with_holder = false;
-  for (const std::string& name : o.phantoms) {
-    if (name == "helix-holder") {
-      sim.with_holder = true;
-      continue;
-    }
-    const bool is_file = std::filesystem::path(name).extension() == ".json";
-    std::vector<std::string> warnings;
-    const Phantom p = is_file ? read_phantom(name, &warnings) : builtin_phantom(name);
-    for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
-    sim.sample.name += (sim.sample.name.empty() ? "" : " + ") + p.name;
-    sim.sample.add(p);
-  }
-  if (!o.poses.empty()) {
-    sim.poses = read_geometry(o.poses);
-    if (sim.poses->detector.cols != o.cols || sim.poses->detector.rows != o.rows)
-      throw InputError(o.poses.string(), json_key("detector"), "is not the simulated detector (--cols, --rows)");
-  } else if (o.trajectory == "circular") {
-    sim.trajectory = circular_robot_trajectory(sim.setup, o.views);
-  } else {
-    std::vector<Eigen::Vector3d> directions;
-    if (o.trajectory == "spherical")
-      directions = HealpixSphere(o.nside).directions();
-    else if (o.trajectory == "cap" && o.cap_deg[0] > o.cap_deg[1])
-      throw InputError(
-          "--cap-deg", "",
-          "expected the least angle first, got " + std::to_string(o.cap_deg[0]) + " before " + std::to_string(o.cap_deg[1]));
-    else if (o.trajectory == "cap")
-      directions = spinning_cap_directions(o.views, o.cap_deg[0] * kDegree, o.cap_deg[1] * kDegree);
-    else
-      directions = random_directions(o.views, o.seed);
-    std::cerr << "planning " << directions.size() << " " << o.trajectory << " views (numerical IK) ...\n";
-    sim.trajectory = spherical_robot_trajectory(sim.setup, directions);
-  }
-  sim.supersampling = o.supersampling;
-  if (o.kvp) sim.spectrum = tube_spectrum(*o.kvp, o.filter_al_mm);
-  sim.output = o.output == "counts" ? SimulatedOutput::counts : SimulatedOutput::line_integrals;
-  sim.counts = {o.flat_counts, o.dark_counts};
-  sim.robot_noise = {o.robot_noise_mm, o.robot_noise_deg};
-  sim.effects = effects_from(o, sim.setup);
-  sim.seed = o.seed;
-
+        "--cap-deg", "",
+        "expected the least angle first, got " + std::to_string(o.cap_deg[0]) + " before " + std::to_string(o.cap_deg[1]));
+  SimulationRequest r;
+  r.phantoms = o.phantoms;
+  r.trajectory = o.trajectory;
+  r.views = o.views;
+  r.nside = o.nside;
+  r.cap_min_deg = o.cap_deg[0];
+  r.cap_max_deg = o.cap_deg[1];
+  r.poses = o.poses;
+  r.cols = o.cols;
+  r.rows = o.rows;
+  r.pitch_mm = o.pitch_mm;
+  r.sdd_mm = o.sdd_mm;
+  r.sod_mm = o.sod_mm;
+  r.supersampling = o.supersampling;
+  r.output = o.output == "counts" ? SimulatedOutput::counts : SimulatedOutput::line_integrals;
+  r.counts = {o.flat_counts, o.dark_counts};
+  r.kvp = o.kvp;
+  r.filter_al_mm = o.filter_al_mm;
+  r.robot_noise = {o.robot_noise_mm, o.robot_noise_deg};
+  r.seed = o.seed;
+  r.effects = simulation_effects_from_json(named_effects(o), Detector{o.cols, o.rows, o.pitch_mm, o.pitch_mm});
   Progress progress("simulate", "views");
-  const SimulationReport r = simulate_scan(sim, folder.path(), std::ref(progress));
-  folder.commit();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cout << "simulated scan written to " << (o.out / "scan.json").string() << ": " << r.views << " views (" << r.views_acquired
-            << " acquired, " << r.views - r.views_acquired << " unreachable), " << o.cols << " x " << o.rows
-            << " px, phantom: " << (sim.with_holder ? "helix-holder " : "") << sim.sample.name << "\n";
-  if (r.saturated_pixels > 0) std::cout << "warning: " << r.saturated_pixels << " pixels saturated at 65535 counts\n";
-  std::cout << "truth (true matrices, poses, effects applied) in " << (o.out / "truth.json").string() << "; " << seconds
+  const SimulationRun run =
+      run_simulation(r, o.out, std::ref(progress), [](const std::string& line) { std::cerr << line << "\n"; });
+  std::cout << run.brief() << "\n";
+  if (run.report.saturated_pixels > 0)
+    std::cout << "warning: " << run.report.saturated_pixels << " pixels saturated at 65535 counts\n";
+  std::cout << "truth (true matrices, poses, effects applied) in " << (o.out / "truth.json").string() << "; " << run.seconds
             << " s\n";
 }
 

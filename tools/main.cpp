@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "interruption.hpp"
 
 int main(int argc, char** argv) {

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/recon/measurements.hpp"
 
 namespace ctk::tools {

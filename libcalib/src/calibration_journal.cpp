@@ -3,8 +3,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "ctk/geom/error.hpp"
-#include "ctk/geom/json_access.hpp"
+#include "ctk/core/error.hpp"
+#include "ctk/core/json_access.hpp"
 
 namespace ctk {
 

@@ -5,8 +5,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "ctk/calib/chart.hpp"
-#include "ctk/geom/atomic_write.hpp"
+#include "ctk/core/chart.hpp"
+#include "ctk/core/atomic_write.hpp"
 #include "ctk/geom/sphere_map.hpp"
 
 namespace ctk {

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <vector>
 
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 
@@ -40,6 +40,7 @@ nlohmann::json robot_prior_json(const RobotPriorFit& p) {
 
 CalibrationRun run_calibration(const ScanDescription& scan, const CalibrationRunOptions& o,
                                const std::function<void(int, int)>& progress, const BatchControl* control) {
+  o.validate();
   CalibrationRun run;
   run.options = o.calibration;
   run.has_holder = scan.holder.has_value();

@@ -7,9 +7,9 @@
 #include <numeric>
 #include <sstream>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/geom/panda.hpp"
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "ctk/calib/chart.hpp"
+#include "ctk/core/chart.hpp"
 
 namespace ctk {
 

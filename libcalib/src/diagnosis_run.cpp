@@ -3,7 +3,7 @@
 #include <sstream>
 
 #include "ctk/calib/robot_prior.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 
 namespace ctk {
 
@@ -34,8 +34,22 @@ std::string set_repeatability(const DiagnosisRunOptions& o, const ScanDescriptio
 
 }  // namespace
 
+void DiagnosisRunOptions::validate() const {
+  diagnosis.validate();
+  calibration.validate();
+  // A stated repeatability is a physical spread: positive, and below what no robot CT setup
+  // would run with (10 mm, 10 deg).
+  if (repeatability_mm)
+    require_option(*repeatability_mm > 0 && *repeatability_mm <= 10, "DiagnosisRunOptions.repeatability_mm",
+                   "a length in (0, 10] mm", *repeatability_mm);
+  if (repeatability_deg)
+    require_option(*repeatability_deg > 0 && *repeatability_deg <= 10, "DiagnosisRunOptions.repeatability_deg",
+                   "an angle in (0, 10] deg", *repeatability_deg);
+}
+
 DiagnosisRun run_diagnosis(const ScanDescription& scan, const Geometry& geometry, const DiagnosisRunOptions& o,
                            const std::function<void(int, int)>& progress, const std::function<void(const std::string&)>& log) {
+  o.validate();
   const auto say = [&](const std::string& line) {
     if (log && !line.empty()) log(line);
   };

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <mutex>
 
-#include "ctk/geom/statistics.hpp"
-#include "ctk/proj/parallel.hpp"
+#include "ctk/core/statistics.hpp"
+#include "ctk/core/parallel.hpp"
 #include "ctk/proj/projection_reading.hpp"
 #include "small_problem.hpp"
 

@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "ctk/geom/panda.hpp"
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 

@@ -6,9 +6,9 @@
 #include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/calib/scan_model_fit.hpp"
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/statistics.hpp"
 #include "small_problem.hpp"
 
 namespace ctk {

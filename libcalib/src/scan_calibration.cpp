@@ -4,9 +4,9 @@
 #include <atomic>
 #include <chrono>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
-#include "ctk/proj/parallel.hpp"
+#include "ctk/core/parallel.hpp"
 #include "ctk/proj/projection_reading.hpp"
 
 namespace ctk {

@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "ctk/proj/parallel.hpp"
+#include "ctk/core/parallel.hpp"
 #include "small_problem.hpp"
 
 namespace ctk {

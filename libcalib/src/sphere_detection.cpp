@@ -5,8 +5,8 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
-#include "ctk/geom/error.hpp"
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/error.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 

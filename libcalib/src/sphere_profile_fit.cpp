@@ -1,5 +1,5 @@
 #include "ctk/calib/sphere_profile_fit.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 
 #include <ceres/ceres.h>
 

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <sstream>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/calib/pose_fit.hpp"
 #include "ctk/calib/sphere_profile_fit.hpp"
 #include "ctk/calib/sphere_matching.hpp"
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 

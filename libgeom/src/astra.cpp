@@ -4,8 +4,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "ctk/geom/atomic_write.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/atomic_write.hpp"
+#include "ctk/core/error.hpp"
 
 namespace ctk {
 

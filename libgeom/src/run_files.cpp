@@ -6,7 +6,7 @@
 #include <set>
 #include <utility>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/geom/scan.hpp"
 
 namespace ctk {

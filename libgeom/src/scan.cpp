@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "ctk/geom/atomic_write.hpp"
+#include "ctk/core/atomic_write.hpp"
 
 namespace ctk {
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "ctk/geom/atomic_write.hpp"
+#include "ctk/core/atomic_write.hpp"
 
 namespace ctk {
 

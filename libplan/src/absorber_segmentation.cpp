@@ -4,8 +4,8 @@
 #include <cmath>
 #include <vector>
 
-#include "ctk/geom/error.hpp"
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/error.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 

@@ -5,9 +5,9 @@
 #include <sstream>
 #include <thread>
 
-#include "ctk/geom/atomic_write.hpp"
-#include "ctk/geom/error.hpp"
-#include "ctk/geom/json_access.hpp"
+#include "ctk/core/atomic_write.hpp"
+#include "ctk/core/error.hpp"
+#include "ctk/core/json_access.hpp"
 
 namespace ctk {
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/geom/trajectory.hpp"
 
 namespace ctk {

@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/proj/detector_binning.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
-#include "ctk/calib/chart.hpp"
+#include "ctk/core/chart.hpp"
 #include "ctk/geom/sphere_map.hpp"
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 
 namespace ctk {
 

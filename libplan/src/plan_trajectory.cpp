@@ -4,7 +4,7 @@
 #include <chrono>
 #include <optional>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/proj/projection_reading.hpp"
 

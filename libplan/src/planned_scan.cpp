@@ -1,6 +1,6 @@
 #include "ctk/plan/planned_scan.hpp"
 
-#include "ctk/geom/atomic_write.hpp"
+#include "ctk/core/atomic_write.hpp"
 #include "ctk/geom/scan.hpp"
 
 namespace ctk {

@@ -1,5 +1,5 @@
 #include "ctk/plan/view_planner.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 
 #include <algorithm>
 #include <cmath>

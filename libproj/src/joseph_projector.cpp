@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "slab_lines.hpp"
 #include "ray_table.hpp"
 

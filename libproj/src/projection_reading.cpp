@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 
 namespace ctk {
 

@@ -5,7 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 

@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "ctk/proj/parallel.hpp"
+#include "ctk/core/parallel.hpp"
 #include "ctk/proj/voxel_backprojection.hpp"
 
 namespace ctk {

@@ -9,8 +9,8 @@
 #include <optional>
 #include <sstream>
 
-#include "ctk/geom/error.hpp"
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/error.hpp"
+#include "ctk/core/statistics.hpp"
 #include "ctk/recon/detector_pattern.hpp"
 
 namespace ctk {

@@ -5,8 +5,8 @@
 #include <optional>
 #include <sstream>
 
-#include "ctk/geom/error.hpp"
-#include "ctk/proj/parallel.hpp"
+#include "ctk/core/error.hpp"
+#include "ctk/core/parallel.hpp"
 #include "ctk/recon/detector_undistortion.hpp"
 
 namespace ctk {

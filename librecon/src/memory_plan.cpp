@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 namespace ctk {
 
@@ -12,12 +13,21 @@ const char* to_string(ReconstructionMethod m) {
   switch (m) {
     case ReconstructionMethod::wls_cg:
       return "wls-cg";
+    case ReconstructionMethod::os_sqs:
+      return "os-sqs";
     case ReconstructionMethod::sirt:
       return "sirt";
     case ReconstructionMethod::fdk:
       return "fdk";
   }
   return "?";
+}
+
+ReconstructionMethod reconstruction_method(const std::string& name) {
+  for (ReconstructionMethod m :
+       {ReconstructionMethod::wls_cg, ReconstructionMethod::os_sqs, ReconstructionMethod::sirt, ReconstructionMethod::fdk})
+    if (name == to_string(m)) return m;
+  throw std::invalid_argument("method: expected wls-cg, os-sqs, sirt or fdk, got '" + name + "'");
 }
 
 std::size_t MemoryPlan::total_bytes() const {
@@ -45,6 +55,10 @@ MemoryPlan plan_memory(ReconstructionMethod method, const VolumeLayout& layout, 
     case ReconstructionMethod::wls_cg:
       plan.volumes = 4;
       plan.stacks = 3 + (weighted ? 1 : 0);
+      break;
+    case ReconstructionMethod::os_sqs:
+      plan.volumes = 4;
+      plan.stacks = 2 + (weighted ? 1 : 0);
       break;
     case ReconstructionMethod::sirt:
       plan.volumes = 3;

@@ -5,7 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/recon/default_volume.hpp"
 #include "ctk/recon/measurements.hpp"
 

@@ -4,7 +4,7 @@
 #include <chrono>
 #include <utility>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "vector_ops.hpp"
 
 namespace ctk {

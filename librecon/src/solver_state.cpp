@@ -5,10 +5,10 @@
 #include <limits>
 #include <stdexcept>
 
-#include "ctk/geom/atomic_write.hpp"
-#include "ctk/geom/error.hpp"
-#include "ctk/geom/json_access.hpp"
-#include "ctk/geom/output_set.hpp"
+#include "ctk/core/atomic_write.hpp"
+#include "ctk/core/error.hpp"
+#include "ctk/core/json_access.hpp"
+#include "ctk/core/output_set.hpp"
 
 namespace ctk {
 

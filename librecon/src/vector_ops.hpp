@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "ctk/proj/float_buffer.hpp"
+#include "ctk/core/float_buffer.hpp"
 #include "ctk/proj/projection_operator.hpp"
 
 namespace ctk::detail {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "vector_ops.hpp"
 
 namespace ctk {

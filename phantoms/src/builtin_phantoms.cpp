@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 
 namespace ctk {
 

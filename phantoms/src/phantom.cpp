@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "ctk/geom/atomic_write.hpp"
-#include "ctk/geom/json_access.hpp"
+#include "ctk/core/atomic_write.hpp"
+#include "ctk/core/json_access.hpp"
 #include "ctk/phantoms/material_attenuation.hpp"
 
 namespace ctk {

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/phantoms/material_attenuation.hpp"
 
 namespace ctk {

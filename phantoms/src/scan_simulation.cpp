@@ -4,12 +4,12 @@
 #include <optional>
 #include <random>
 
-#include "ctk/geom/atomic_write.hpp"
-#include "ctk/geom/output_set.hpp"
+#include "ctk/core/atomic_write.hpp"
+#include "ctk/core/output_set.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/render.hpp"
-#include "ctk/proj/parallel.hpp"
+#include "ctk/core/parallel.hpp"
 
 namespace ctk {
 

@@ -42,7 +42,7 @@ from . import _ctk
 _log = logging.getLogger("ctk")
 
 __all__ = [
-    "BinnedProjection", "CalibrationResult", "DiagnosisResult", "InputError", "RefineResult", "calibrate", "diagnose", "circular_matrices", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection",
+    "BinnedProjection", "CalibrationResult", "DiagnosisResult", "InputError", "ReconstructionResult", "RefineResult", "SimulationResult", "calibrate", "diagnose", "reconstruct", "simulate", "circular_matrices", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection",
     "Measurements", "__version__", "as_linear_operator", "load_measurements", "read_image", "cone_vec_from_matrices", "fdk", "geometry_matrices",
     "matrices_from_cone_vec", "read_cone_vec", "read_diagnosis", "read_geometry", "read_scan",
     "sirt", "wls_cg", "write_geometry", "write_scan",
@@ -214,6 +214,81 @@ def calibrate(scan: str | os.PathLike, *, min_spheres: int = 6, max_rms_px: floa
     d = _ctk._calibrate(os.fspath(scan), min_spheres, max_rms_px, search_px, image_only, progress)
     _log.info("%s", d["brief"])
     return CalibrationResult(**d)
+
+
+@dataclasses.dataclass
+class SimulationResult:
+    """A simulated scan folder: its scan file, the scan (ctk-scan/1 dict, the nominal setup only)
+    and the truth (ctk-truth/1 dict: true matrices, poses and every effect applied)."""
+
+    scan_file: str
+    scan: dict
+    truth: dict
+    brief: str
+    saturated_pixels: int
+
+
+def simulate(out: str | os.PathLike, *, phantoms: Sequence[str] = ("helix-holder",), trajectory: str = "circular",
+             views: int = 360, nside: int = 3, cap_deg: tuple[float, float] = (5.0, 90.0),
+             poses: Optional[str | os.PathLike] = None, detector_shape: tuple[int, int] = (720, 720),
+             pitch_mm: float = 0.6, sdd_mm: float = 2150.0, sod_mm: float = 1360.0, supersampling: int = 2,
+             output: str = "counts", flat_counts: float = 1e4, dark_counts: float = 100.0, kvp: Optional[float] = None,
+             filter_al_mm: float = 2.0, robot_noise_mm: float = 0.1, robot_noise_deg: float = 0.02, seed: int = 1,
+             effects: Optional[dict] = None,
+             progress: Optional[Callable[[int, int], None]] = None) -> SimulationResult:
+    """`ctk simulate`: a scan folder `out` from analytic phantoms (built-in names or ctk-phantom/1
+    files) on the reference robot setup, with its truth beside it. trajectory: circular (joint-7
+    orbit of `views`), spherical (HEALPix, 12 nside^2 directions), cap (`views` directions from
+    cap_deg[0] to cap_deg[1] off the holder axis while it spins) or random; or `poses`, a
+    ctk-geometry/1 file of matrices. detector_shape (rows, cols). `effects` are undeclared errors
+    by the names `ctk simulate --help` lists, '-' as '_': {"base_translation_mm": (0, 0, 1.3),
+    "source_drift_mm": (0.5, 0), ...}; an unknown name is a ValueError. A folder holding a scan no
+    simulation wrote is refused (InputError)."""
+    named = None if effects is None else {k: (list(v) if isinstance(v, (tuple, list, np.ndarray)) else v)
+                                          for k, v in effects.items()}
+    d = _ctk._simulate(os.fspath(out), list(phantoms), trajectory, views, nside, tuple(cap_deg),
+                       None if poses is None else os.fspath(poses), tuple(detector_shape), pitch_mm, sdd_mm, sod_mm,
+                       supersampling, output, flat_counts, dark_counts, kvp, filter_al_mm, robot_noise_mm, robot_noise_deg,
+                       seed, named, progress, lambda line: _log.info("simulate: %s", line))
+    _log.info("%s", d["brief"])
+    scan_file = os.fspath(d["scan_file"])
+    with open(os.path.join(os.path.dirname(scan_file), "truth.json"), encoding="utf-8") as f:
+        truth = json.load(f)
+    return SimulationResult(scan_file=scan_file, scan=read_scan(scan_file), truth=truth, brief=d["brief"],
+                            saturated_pixels=d["saturated_pixels"])
+
+
+@dataclasses.dataclass
+class ReconstructionResult:
+    """What `reconstruct` made: the volume (z, y, x) in the holder frame, its voxel size and the
+    centre of voxel 0 (x, y, z, mm), the ctk-reconstruction-log/1 report (dict: memory plan,
+    views used, per-iteration log, why it stopped) and a summary."""
+
+    volume: np.ndarray
+    voxel_mm: float
+    origin_mm: tuple
+    report: dict
+    brief: str
+
+
+def reconstruct(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] = None, *, method: str = "wls-cg",
+                iterations: int = 0, subsets: int = 0, lambda_: float = 0.0, regulariser: str = "identity", tolerance: float = 1e-4,
+                weighted: bool = True, undistort: bool = True, size: Optional[tuple[int, int, int]] = None,
+                voxel_mm: float = 0.0, progress: Optional[Callable[[int, int], None]] = None) -> ReconstructionResult:
+    """`ctk reconstruct` without files out: the scan's ok views (of `geometry`, or the scan's
+    nominal geometry) read, the memory plan checked, and WLS-CG or OS-SQS (Poisson weights for
+    counts unless weighted=False), SIRT or FDK (circular scans) run. iterations 0: 30 for WLS-CG,
+    8 epochs of OS-SQS (subsets 0: about 9 views each, at most 40), 100 for SIRT.
+    size (z, y, x) voxels and voxel_mm default to the holder (or the field of view) at a detector
+    pixel seen at the holder origin. progress(done, total) while reading and while iterating;
+    Ctrl-C stops after the current iteration (KeyboardInterrupt)."""
+    d = _ctk._reconstruct(os.fspath(scan), None if geometry is None else os.fspath(geometry), method, iterations, subsets,
+                          lambda_,
+                          regulariser, tolerance, weighted, undistort, None if size is None else tuple(size), voxel_mm,
+                          progress)
+    _log.info("%s", d["brief"])
+    d["origin_mm"] = tuple(d["origin_mm"])
+    return ReconstructionResult(**d)
 
 
 @dataclasses.dataclass

@@ -11,7 +11,7 @@
 
 #include "bindings.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 #include "ctk/recon/measurements.hpp"
 #include "conversions.hpp"
 #include "numpy_arrays.hpp"

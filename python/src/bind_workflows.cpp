@@ -1,5 +1,6 @@
 // The workflows a lab runs from Python with the same library entry points as the command line:
-// a circular scan imported from its numbers, and the markerless loop.
+// a simulated scan, a circular scan imported from its numbers, calibration, diagnosis,
+// reconstruction and the markerless loop.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -17,6 +18,8 @@
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "ctk/geom/scan_import.hpp"
+#include "ctk/phantoms/simulation_run.hpp"
+#include "ctk/recon/reconstruction_run.hpp"
 #include "ctk/recon/refine_scan.hpp"
 #include "conversions.hpp"
 #include "numpy_arrays.hpp"
@@ -157,6 +160,93 @@ py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, cons
   return d;
 }
 
+py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& geometry_file, const std::string& method,
+                     int iterations, int subsets, double lambda, const std::string& regulariser, double tolerance, bool weighted,
+                     bool undistort, const std::optional<std::array<int, 3>>& size, double voxel_mm, const py::object& progress) {
+  ReconstructionOptions o;
+  if (regulariser != "identity" && regulariser != "gradient")
+    throw py::value_error("regulariser must be 'identity' or 'gradient', not '" + regulariser + "'");
+  o.method = reconstruction_method(method);  // std::invalid_argument (ValueError) naming the others
+  o.subsets = subsets;
+  o.iterations = iterations;
+  o.lambda = lambda;
+  o.regulariser = regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
+  o.tolerance = tolerance;
+  o.statistical_weights = weighted;
+  o.undistort = undistort;
+  if (size) {  // (z, y, x) as numpy orders a volume
+    o.size = {(*size)[2], (*size)[1], (*size)[0]};
+  }
+  o.voxel_mm = voxel_mm;
+  o.validate();
+  const ScanDescription scan = read_scan(scan_file);
+  const Geometry geometry = geometry_or_nominal(scan, scan_file, geometry_file.value_or(fs::path()));
+  PythonBridge bridge;
+  ReconstructionHooks hooks;
+  hooks.reading = bridge.progress(progress);
+  hooks.iterating = bridge.progress(progress);
+  hooks.stop_requested = [&] { return bridge.stop_requested(); };
+  std::optional<ReconstructionRun> run;
+  {
+    py::gil_scoped_release free;
+    run = run_reconstruction(scan, geometry, o, hooks);
+  }
+  bridge.raise_if_stopped();
+  py::dict d;
+  d["report"] = to_python(run->report());
+  d["brief"] = run->brief();
+  const VolumeLayout layout = run->volume.layout;
+  d["voxel_mm"] = layout.voxel_mm.x();
+  d["origin_mm"] = std::array<double, 3>{layout.origin_mm.x(), layout.origin_mm.y(), layout.origin_mm.z()};
+  d["volume"] = to_numpy(std::move(run->volume));
+  return d;
+}
+
+py::dict simulate(const fs::path& out, const std::vector<std::string>& phantoms, const std::string& trajectory, int views,
+                  int nside, const std::array<double, 2>& cap_deg, const std::optional<fs::path>& poses,
+                  const std::array<int, 2>& detector_shape, double pitch_mm, double sdd_mm, double sod_mm, int supersampling,
+                  const std::string& output, double flat_counts, double dark_counts, const std::optional<double>& kvp,
+                  double filter_al_mm, double robot_noise_mm, double robot_noise_deg, std::uint64_t seed,
+                  const py::object& effects, const py::object& progress, const py::object& log) {
+  if (output != "counts" && output != "line-integrals")
+    throw py::value_error("output must be 'counts' or 'line-integrals', not '" + output + "'");
+  SimulationRequest r;
+  r.phantoms = phantoms;
+  r.trajectory = trajectory;
+  r.views = views;
+  r.nside = nside;
+  r.cap_min_deg = cap_deg[0];
+  r.cap_max_deg = cap_deg[1];
+  if (poses) r.poses = *poses;
+  r.rows = detector_shape[0];
+  r.cols = detector_shape[1];
+  r.pitch_mm = pitch_mm;
+  r.sdd_mm = sdd_mm;
+  r.sod_mm = sod_mm;
+  r.supersampling = supersampling;
+  r.output = output == "counts" ? SimulatedOutput::counts : SimulatedOutput::line_integrals;
+  r.counts = {flat_counts, dark_counts};
+  r.kvp = kvp;
+  r.filter_al_mm = filter_al_mm;
+  r.robot_noise = {robot_noise_mm, robot_noise_deg};
+  r.seed = seed;
+  r.validate();
+  r.effects = simulation_effects_from_json(effects.is_none() ? nlohmann::json::object() : from_python(effects),
+                                           Detector{r.cols, r.rows, pitch_mm, pitch_mm});
+  PythonBridge bridge;
+  std::optional<SimulationRun> run;
+  {
+    py::gil_scoped_release free;
+    run = run_simulation(r, out, bridge.progress(progress), bridge.log(log));
+  }
+  bridge.raise_if_stopped();
+  py::dict d;
+  d["scan_file"] = run->scan_file;
+  d["brief"] = run->brief();
+  d["saturated_pixels"] = run->report.saturated_pixels;
+  return d;
+}
+
 }  // namespace
 
 void bind_workflows(py::module_& m) {
@@ -177,6 +267,14 @@ Writes a ctk-scan/1 file `out` (and its matrices beside it, <stem>.matrices.json
 files with one matrix each; raw counts when flat and dark frames are given, line integrals
 otherwise. Refuses (InputError) an `out` that is one of the inputs. Returns the scan as read back.
 )doc");
+  m.def("_simulate", &simulate, py::arg("out"), py::arg("phantoms"), py::arg("trajectory"), py::arg("views"), py::arg("nside"),
+        py::arg("cap_deg"), py::arg("poses"), py::arg("detector_shape"), py::arg("pitch_mm"), py::arg("sdd_mm"),
+        py::arg("sod_mm"), py::arg("supersampling"), py::arg("output"), py::arg("flat_counts"), py::arg("dark_counts"),
+        py::arg("kvp"), py::arg("filter_al_mm"), py::arg("robot_noise_mm"), py::arg("robot_noise_deg"), py::arg("seed"),
+        py::arg("effects"), py::arg("progress"), py::arg("log"));
+  m.def("_reconstruct", &reconstruct, py::arg("scan"), py::arg("geometry"), py::arg("method"), py::arg("iterations"),
+        py::arg("subsets"), py::arg("lambda_"), py::arg("regulariser"), py::arg("tolerance"), py::arg("weighted"),
+        py::arg("undistort"), py::arg("size"), py::arg("voxel_mm"), py::arg("progress"));
   m.def("_refine", &refine, py::arg("scan"), py::arg("geometry"), py::arg("effects"), py::arg("coarsening"),
         py::arg("blur_arc_deg"), py::arg("z"), py::arg("log"));
 }

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "bindings.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 
 namespace py = pybind11;
 

@@ -11,8 +11,8 @@
 #include <string>
 #include <utility>
 
-#include "ctk/proj/projection_stack.hpp"
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/projection_stack.hpp"
+#include "ctk/core/volume.hpp"
 
 namespace ctk::python {
 

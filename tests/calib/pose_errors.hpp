@@ -4,8 +4,8 @@
 #include <filesystem>
 
 #include "ctk/calib/scan_calibration.hpp"
-#include "ctk/geom/error.hpp"
-#include "ctk/geom/json_access.hpp"
+#include "ctk/core/error.hpp"
+#include "ctk/core/json_access.hpp"
 #include "ctk/geom/rigid.hpp"
 
 namespace ctk {

@@ -11,7 +11,7 @@
 #include "ctk/calib/holder_wall.hpp"
 #include "ctk/calib/scan_calibration.hpp"
 #include "ctk/calib/sphere_matching.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/robot_trajectory.hpp"
 #include "ctk/phantoms/scan_simulation.hpp"

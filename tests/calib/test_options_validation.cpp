@@ -5,7 +5,9 @@
 #include <string>
 
 #include "../test_support.hpp"
+#include "ctk/calib/calibration_run.hpp"
 #include "ctk/calib/diagnosis.hpp"
+#include "ctk/calib/diagnosis_run.hpp"
 #include "ctk/calib/robot_prior.hpp"
 #include "ctk/calib/sphere_detection.hpp"
 #include "ctk/calib/sphere_profile_fit.hpp"
@@ -26,6 +28,32 @@ TEST(OptionsValidation, CalibrationOptions) {
       CalibrationOptions{}, [](auto& o) { o.robust_px = 0; }, "CalibrationOptions.robust_px");
   testing::expect_option_refused(
       CalibrationOptions{}, [](auto& o) { o.max_first_guess_error_deg = 200; }, "CalibrationOptions.max_first_guess_error_deg");
+}
+
+TEST(OptionsValidation, CalibrationRunOptions) {
+  EXPECT_NO_THROW(CalibrationRunOptions{}.validate());
+  testing::expect_option_refused(
+      CalibrationRunOptions{}, [](auto& o) { o.calibration.min_spheres = 5; }, "CalibrationOptions.min_spheres");
+  // The workflow checks before it reads a file: this scan names no images at all.
+  CalibrationRunOptions bad;
+  bad.calibration.robust_px = 0;
+  EXPECT_THROW(run_calibration(ScanDescription{}, bad), std::invalid_argument);
+}
+
+TEST(OptionsValidation, DiagnosisRunOptions) {
+  EXPECT_NO_THROW(DiagnosisRunOptions{}.validate());
+  DiagnosisRunOptions stated;
+  stated.repeatability_mm = 0.05;
+  stated.repeatability_deg = 0.01;
+  EXPECT_NO_THROW(stated.validate());
+  testing::expect_option_refused(
+      DiagnosisRunOptions{}, [](auto& o) { o.repeatability_mm = 0.0; }, "DiagnosisRunOptions.repeatability_mm");
+  testing::expect_option_refused(
+      DiagnosisRunOptions{}, [](auto& o) { o.repeatability_deg = -0.01; }, "DiagnosisRunOptions.repeatability_deg");
+  testing::expect_option_refused(
+      DiagnosisRunOptions{}, [](auto& o) { o.calibration.max_rms_px = 0; }, "CalibrationOptions.max_rms_px");
+  testing::expect_option_refused(
+      DiagnosisRunOptions{}, [](auto& o) { o.diagnosis.best_lead_z = -1; }, "DiagnosisOptions.best_lead_z");
 }
 
 TEST(OptionsValidation, RobotPriorOptions) {

@@ -45,7 +45,7 @@ expect "refine --out onto --geometry" "would overwrite the input --geometry" \
 expect "import --out onto --flat" "would overwrite the input --flat" \
   "$ctk" import circular --out s/flat.tif --files 's/projections/proj_%04d.tif' --count 4 --flat s/flat.tif --dark s/dark.tif \
   --detector 48 48 --pitch 9 --sod 1360 --sdd 2150 --step 90
-expect "simulate into the folder of its --poses" "would overwrite the input --poses" \
+expect "simulate into the folder of its --poses" "would overwrite the input poses" \
   "$ctk" simulate --out s --poses s/truth-geometry.json --cols 48 --rows 48 --pitch 9
 after=$(cat s/*.json s/*.csv s/*.tif s/projections/* | md5sum)
 [ "$before" = "$after" ] || { echo "FAIL: an input changed"; failures=$((failures + 1)); }

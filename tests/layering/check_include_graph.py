@@ -9,12 +9,13 @@ import sys
 
 # folder -> (its headers' namespace, the namespaces it may include besides its own)
 LAYERS = {
-    "libgeom": ("geom", set()),
-    "libproj": ("proj", {"geom"}),
-    "librecon": ("recon", {"geom", "proj"}),
-    "libcalib": ("calib", {"geom", "proj"}),
-    "phantoms": ("phantoms", {"geom", "proj"}),
-    "libplan": ("plan", {"geom", "proj", "recon", "calib"}),
+    "libcore": ("core", set()),
+    "libgeom": ("geom", {"core"}),
+    "libproj": ("proj", {"core", "geom"}),
+    "librecon": ("recon", {"core", "geom", "proj"}),
+    "libcalib": ("calib", {"core", "geom", "proj"}),
+    "phantoms": ("phantoms", {"core", "geom"}),
+    "libplan": ("plan", {"core", "geom", "proj", "recon", "calib"}),
 }
 # One file may reach further than its library, named with what it may add: the simulated
 # acquisition is libplan's separate target ctk::plan_simulated.

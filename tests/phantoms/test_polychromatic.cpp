@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "../test_support.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/material_attenuation.hpp"
 #include "ctk/phantoms/render.hpp"

@@ -5,7 +5,7 @@
 #include <random>
 
 #include "../test_support.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/render.hpp"
 

@@ -9,7 +9,7 @@
 #include <thread>
 
 #include "../test_support.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/plan/simulated_acquisition.hpp"

@@ -66,6 +66,16 @@ def test_python_reconstructs_the_command_lines_volume_bit_for_bit(simulated, tmp
     residual = A.forward(r.x) - m.line_integrals
     data_term = 0.5 * float(np.sum((m.weights if m.weights is not None else 1) * residual.astype(np.float64) ** 2))
     assert data_term == pytest.approx(log["solver"]["iterations"][-1]["data_term"], rel=1e-4)
+    # The whole workflow from Python is the command line's, without the files.
+    seen = []
+    w = ctk.reconstruct(simulated / "scan.json", simulated / "truth-geometry.json", size=(24, 24, 24), voxel_mm=2.5,
+                        iterations=3, progress=lambda done, total: seen.append((done, total)))
+    np.testing.assert_array_equal(w.volume, cli)
+    assert seen[-1] == (3, 3)
+    assert w.voxel_mm == 2.5 and w.origin_mm == pytest.approx(log["volume"]["origin_mm"])
+    assert w.report["views_used"] == log["views_used"] and w.report["memory_plan"] == log["memory_plan"]
+    with pytest.raises(ValueError, match="os-sqs"):
+        ctk.reconstruct(simulated / "scan.json", method="art")
 
 
 def test_bad_inputs_raise_the_named_exception(simulated, tmp_path):

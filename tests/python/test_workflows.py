@@ -1,6 +1,9 @@
 """The workflows from Python against the command line on the same simulated robot scan: the
 calibration the same matrices, the diagnosis the undeclared base offset, an interruption raised
 where the user can catch it."""
+import json
+import os
+
 import numpy as np
 import pytest
 
@@ -44,3 +47,28 @@ def test_an_interrupted_calibration_raises_in_python(robot_scan):
         ctk.calibrate(robot_scan / "scan.json", progress=interrupt)
     with pytest.raises(ValueError, match="CalibrationOptions.min_spheres"):
         ctk.calibrate(robot_scan / "scan.json", min_spheres=2)
+
+
+def test_simulate_from_python_writes_the_command_lines_scan(tmp_path, ctk_command):
+    args = ["--views", "6", "--cols", "96", "--rows", "80", "--pitch", "4.5", "--base-translation-mm", "0.5", "0", "1.0",
+            "--source-drift-mm", "0.4", "-0.2", "--robot-noise-mm", "0.05", "--seed", "7"]
+    run([ctk_command, "simulate", "--out", str(tmp_path / "cli"), *args])
+    seen = []
+    s = ctk.simulate(tmp_path / "py", views=6, detector_shape=(80, 96), pitch_mm=4.5, robot_noise_mm=0.05, seed=7,
+                     effects={"base_translation_mm": (0.5, 0, 1.0), "source_drift_mm": [0.4, -0.2]},
+                     progress=lambda done, total: seen.append((done, total)))
+    assert seen[-1] == (6, 6)
+    assert s.scan["detector"]["cols"] == 96 and s.scan["projections"]["count"] == 6
+    cli_truth = json.loads((tmp_path / "cli" / "truth.json").read_text())
+    assert s.truth["effects"] == cli_truth["effects"]
+    for k in range(6):
+        py_image = ctk.read_image(tmp_path / "py" / "projections" / sorted(os.listdir(tmp_path / "py" / "projections"))[k])
+        cli_image = ctk.read_image(tmp_path / "cli" / "projections" / sorted(os.listdir(tmp_path / "cli" / "projections"))[k])
+        np.testing.assert_array_equal(py_image, cli_image, err_msg=f"projection {k}")
+    with pytest.raises(ValueError, match="no_such_effect"):
+        ctk.simulate(tmp_path / "bad", views=2, detector_shape=(16, 16), pitch_mm=20, effects={"no_such_effect": 1})
+    (tmp_path / "measured").mkdir()
+    (tmp_path / "measured" / "scan.json").write_text("{}")
+    with pytest.raises(ctk.InputError, match="did not write"):
+        ctk.simulate(tmp_path / "measured", views=2, detector_shape=(16, 16), pitch_mm=20)
+    assert (tmp_path / "measured" / "scan.json").read_text() == "{}"

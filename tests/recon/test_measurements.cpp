@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "../test_support.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/scan_simulation.hpp"
 #include "ctk/proj/projection_reading.hpp"

@@ -8,11 +8,26 @@
 #include "../test_support.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/markerless_refinement.hpp"
+#include "ctk/recon/refine_scan.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/wls_cg.hpp"
 
 namespace ctk {
 namespace {
+
+TEST(OptionsValidation, RefineScanOptions) {
+  EXPECT_NO_THROW(RefineScanOptions{}.validate());
+  testing::expect_option_refused(
+      RefineScanOptions{}, [](auto& o) { o.coarsening = 0.5; }, "RefineScanOptions.coarsening");
+  testing::expect_option_refused(
+      RefineScanOptions{}, [](auto& o) { o.blur_arc_deg = -1; }, "RefineScanOptions.blur_arc_deg");
+  testing::expect_option_refused(
+      RefineScanOptions{}, [](auto& o) { o.z_accept = std::numeric_limits<double>::infinity(); }, "RefineScanOptions.z_accept");
+  // The workflow checks before it reads a file: this scan names no images at all.
+  RefineScanOptions bad;
+  bad.z_accept = 0;
+  EXPECT_THROW(refine_scan(ScanDescription{}, Geometry{}, bad), std::invalid_argument);
+}
 
 TEST(OptionsValidation, SirtOptions) {
   EXPECT_NO_THROW(SirtOptions{}.validate());

@@ -5,7 +5,7 @@
 #include <fstream>
 
 #include "../test_support.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/sirt.hpp"

@@ -17,7 +17,8 @@ namespace ctk {
 
 struct CalibrationRunOptions {
   CalibrationOptions calibration;
-  bool image_only = false;  // poses from the images alone, no robot prior
+  bool image_only = false;                           // poses from the images alone, no robot prior
+  void validate() const { calibration.validate(); }  // std::invalid_argument naming the field
 };
 
 struct CalibrationRun {

@@ -17,6 +17,7 @@ struct DiagnosisRunOptions {
   DiagnosisOptions diagnosis;
   CalibrationOptions calibration;
   std::optional<double> repeatability_mm, repeatability_deg;  // absent: measured on the scan
+  void validate() const;                                      // std::invalid_argument naming the field, its own and its parts'
 };
 
 struct DiagnosisRun {

@@ -7,7 +7,7 @@
 #include <Eigen/Geometry>
 #include <vector>
 
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 
 namespace ctk {
 

@@ -2,7 +2,7 @@
 // Rigid transforms. T_A_B maps coordinates in frame B to frame A: x_A = T_A_B * x_B.
 #include <Eigen/Geometry>
 
-#include "ctk/geom/json_access.hpp"
+#include "ctk/core/json_access.hpp"
 
 namespace ctk {
 

@@ -8,7 +8,7 @@
 // about half the wall's level; a handful of voxels above the threshold is noise, not an absorber.
 #include <string>
 
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/volume.hpp"
 
 namespace ctk {
 

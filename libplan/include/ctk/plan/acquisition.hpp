@@ -16,7 +16,7 @@
 #include <string>
 
 #include "ctk/geom/panda.hpp"
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 
 namespace ctk {
 

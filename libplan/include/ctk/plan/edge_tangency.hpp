@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "ctk/plan/absorber_segmentation.hpp"
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/volume.hpp"
 
 namespace ctk {
 

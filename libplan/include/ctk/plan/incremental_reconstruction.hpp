@@ -8,7 +8,7 @@
 // view needs projecting through the volume to start the next step.
 #include <vector>
 
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 #include "ctk/proj/joseph_projector.hpp"
 #include "ctk/recon/wls_cg.hpp"
 

@@ -4,7 +4,7 @@
 // u = b u' + (b - 1) / 2. A last partial row or column is dropped.
 #include "ctk/geom/detector.hpp"
 #include "ctk/geom/projection_matrix.hpp"
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 
 namespace ctk {
 

@@ -8,8 +8,8 @@
 #include <memory>
 #include <vector>
 
-#include "ctk/proj/projection_stack.hpp"
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/projection_stack.hpp"
+#include "ctk/core/volume.hpp"
 
 namespace ctk {
 

@@ -6,7 +6,7 @@
 #include <optional>
 
 #include "ctk/geom/scan.hpp"
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 
 namespace ctk {
 

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "ctk/geom/projection_matrix.hpp"
-#include "ctk/proj/projection_stack.hpp"
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/projection_stack.hpp"
+#include "ctk/core/volume.hpp"
 
 namespace ctk {
 

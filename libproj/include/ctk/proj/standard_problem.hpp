@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "ctk/geom/projection_matrix.hpp"
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/volume.hpp"
 
 namespace ctk {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "ctk/geom/detector.hpp"
-#include "ctk/proj/projection_stack.hpp"
+#include "ctk/core/projection_stack.hpp"
 #include "ctk/recon/fdk.hpp"
 
 namespace ctk {

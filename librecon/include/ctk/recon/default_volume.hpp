@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "ctk/geom/scan.hpp"
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/volume.hpp"
 
 namespace ctk {
 

@@ -7,7 +7,7 @@
 // residuals, against its standard error, shows what a model leaves on the detector.
 #include <vector>
 
-#include "ctk/proj/projection_stack.hpp"
+#include "ctk/core/projection_stack.hpp"
 
 namespace ctk {
 

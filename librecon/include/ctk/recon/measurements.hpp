@@ -11,7 +11,7 @@
 #include "ctk/geom/geometry_file.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/proj/projection_reading.hpp"
-#include "ctk/proj/projection_stack.hpp"
+#include "ctk/core/projection_stack.hpp"
 
 namespace ctk {
 

@@ -4,12 +4,14 @@
 #include <cstddef>
 #include <string>
 
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/volume.hpp"
 
 namespace ctk {
 
-enum class ReconstructionMethod { wls_cg, sirt, fdk };
+enum class ReconstructionMethod { wls_cg, os_sqs, sirt, fdk };
 const char* to_string(ReconstructionMethod m);
+/// "wls-cg", "os-sqs", "sirt", "fdk"; std::invalid_argument naming the others.
+ReconstructionMethod reconstruction_method(const std::string& name);
 
 struct MemoryPlan {
   std::size_t volume_bytes = 0;  // one volume
@@ -23,6 +25,8 @@ struct MemoryPlan {
 };
 
 /// CG: x, gradient, direction, H direction; b, residual, scratch, and weights when weighted.
+/// OS-SQS: x, the extrapolated point, the curvature, the gradient; b, weights when weighted, and
+/// one subset's data, weights and residual (counted as a stack).
 /// SIRT: x, column sums, update; b, row sums, residual. FDK: the volume and the filtered stack.
 MemoryPlan plan_memory(ReconstructionMethod method, const VolumeLayout& layout, int views, int rows, int cols, bool weighted);
 

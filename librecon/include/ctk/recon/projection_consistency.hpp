@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "ctk/geom/detector.hpp"
-#include "ctk/proj/projection_stack.hpp"
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/projection_stack.hpp"
+#include "ctk/core/volume.hpp"
 #include "ctk/recon/global_geometry.hpp"
 
 namespace ctk {

@@ -4,7 +4,7 @@
 // voxel units so lambda does not depend on the voxel size.
 #include <string>
 
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/volume.hpp"
 
 namespace ctk {
 

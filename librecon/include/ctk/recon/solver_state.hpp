@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
-#include "ctk/proj/float_buffer.hpp"
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/float_buffer.hpp"
+#include "ctk/core/volume.hpp"
 #include "ctk/recon/iteration_log.hpp"
 
 namespace ctk {

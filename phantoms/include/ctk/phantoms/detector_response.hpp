@@ -5,7 +5,7 @@
 #include <random>
 #include <vector>
 
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 
 namespace ctk {
 

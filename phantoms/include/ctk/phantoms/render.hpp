@@ -14,7 +14,7 @@
 #include "ctk/geom/projection_matrix.hpp"
 #include "ctk/phantoms/phantom.hpp"
 #include "ctk/phantoms/xray_spectrum.hpp"
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 
 namespace ctk {
 

@@ -1,4 +1,4 @@
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 
 #include <OpenImageIO/imageio.h>
 
@@ -9,9 +9,9 @@
 #include <optional>
 #include <utility>
 
-#include "ctk/geom/atomic_write.hpp"
-#include "ctk/geom/error.hpp"
-#include "ctk/geom/output_set.hpp"
+#include "ctk/core/atomic_write.hpp"
+#include "ctk/core/error.hpp"
+#include "ctk/core/output_set.hpp"
 #include "tiff_reading.hpp"
 
 namespace ctk {

@@ -1,4 +1,4 @@
-#include "ctk/geom/json_access.hpp"
+#include "ctk/core/json_access.hpp"
 
 #include <algorithm>
 #include <cctype>

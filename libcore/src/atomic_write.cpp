@@ -1,9 +1,9 @@
-#include "ctk/geom/atomic_write.hpp"
+#include "ctk/core/atomic_write.hpp"
 
 #include <fstream>
 #include <stdexcept>
 
-#include "ctk/geom/output_set.hpp"
+#include "ctk/core/output_set.hpp"
 
 namespace ctk {
 

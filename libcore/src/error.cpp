@@ -1,4 +1,4 @@
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 
 #include <sstream>
 

@@ -2,7 +2,7 @@
 // A stack of projections, views x rows x cols, float32, row-major per view (u = column fastest).
 #include <cstddef>
 
-#include "ctk/proj/float_buffer.hpp"
+#include "ctk/core/float_buffer.hpp"
 
 namespace ctk {
 

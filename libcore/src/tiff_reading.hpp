@@ -11,7 +11,7 @@
 #include <optional>
 #include <string>
 
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 
 namespace ctk {
 

@@ -1,4 +1,4 @@
-#include "ctk/calib/chart.hpp"
+#include "ctk/core/chart.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -6,7 +6,7 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
-#include "ctk/geom/atomic_write.hpp"
+#include "ctk/core/atomic_write.hpp"
 
 namespace ctk {
 

@@ -1,6 +1,6 @@
 // Image and volume files: round trips, integer counts kept as counts, real TIFFs from the
 // measured data, and clear errors for missing, truncated or wrongly sized images.
-#include "ctk/proj/image_io.hpp"
+#include "ctk/core/image_io.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,7 +13,7 @@
 #include <fstream>
 
 #include "../test_support.hpp"
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 
 namespace ctk {
 namespace {

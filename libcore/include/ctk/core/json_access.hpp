@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "ctk/geom/error.hpp"
+#include "ctk/core/error.hpp"
 
 namespace ctk {
 

@@ -1,4 +1,4 @@
-#include "ctk/geom/output_set.hpp"
+#include "ctk/core/output_set.hpp"
 
 #include <fcntl.h>
 #include <signal.h>

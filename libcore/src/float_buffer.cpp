@@ -1,4 +1,4 @@
-#include "ctk/proj/float_buffer.hpp"
+#include "ctk/core/float_buffer.hpp"
 
 #include <cstdlib>
 #if defined(__linux__)

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 namespace {

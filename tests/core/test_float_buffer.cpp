@@ -8,9 +8,9 @@
 #include <sstream>
 #include <string>
 
-#include "ctk/proj/float_buffer.hpp"
-#include "ctk/proj/projection_stack.hpp"
-#include "ctk/proj/volume.hpp"
+#include "ctk/core/float_buffer.hpp"
+#include "ctk/core/projection_stack.hpp"
+#include "ctk/core/volume.hpp"
 
 namespace ctk {
 namespace {

@@ -1,4 +1,4 @@
-#include "ctk/geom/statistics.hpp"
+#include "ctk/core/statistics.hpp"
 
 #include <Eigen/Dense>
 #include <limits>

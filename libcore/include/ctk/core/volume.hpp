@@ -5,7 +5,7 @@
 #include <array>
 #include <cstddef>
 
-#include "ctk/proj/float_buffer.hpp"
+#include "ctk/core/float_buffer.hpp"
 
 namespace ctk {
 

@@ -1,0 +1,12 @@
+#pragma once
+// The machine a measurement was made on, as Linux names it: figures from two machines must not
+// be mixed up, and a virtual machine's model name alone ("AMD EPYC") does not tell a Zen 3 from a
+// Zen 5, so family and model come with it.
+#include <nlohmann/json.hpp>
+
+namespace ctk {
+
+/// {"model_name", "family", "model"} of the first processor in /proc/cpuinfo (those found).
+nlohmann::json cpu_identity();
+
+}  // namespace ctk

@@ -1,0 +1,100 @@
+#pragma once
+// The reconstruction workflow: a volume in the holder frame from a scan's projections and per-view
+// matrices, by weighted least squares (CG), SIRT, or FDK for circular scans. The layout and the
+// memory plan are decided from the matrices before any image is read, and a run that cannot fit
+// is refused then; an iterative run hands its state over for checkpoints and continues from one.
+// `ctk reconstruct` and `ctk.reconstruct` wrap it with files.
+#include <array>
+#include <cstddef>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ctk/core/volume.hpp"
+#include "ctk/geom/geometry_file.hpp"
+#include "ctk/geom/scan.hpp"
+#include "ctk/recon/fdk.hpp"
+#include "ctk/recon/iteration_log.hpp"
+#include "ctk/recon/measurements.hpp"
+#include "ctk/recon/memory_plan.hpp"
+#include "ctk/recon/regulariser.hpp"
+#include "ctk/recon/solver_state.hpp"
+
+namespace ctk {
+
+struct ReconstructionOptions {
+  ReconstructionMethod method = ReconstructionMethod::wls_cg;
+  int iterations = 0;  // 0: 30 for WLS-CG, 8 epochs for OS-SQS, 100 for SIRT (FDK has none)
+  int subsets = 0;     // OS-SQS: 0 chooses from the view count (default_subset_count)
+  double lambda = 0;   // WLS-CG's regularisation weight
+  Regulariser regulariser = Regulariser::identity;
+  double tolerance = 1e-4;           // WLS-CG stops when the gradient has fallen by this factor
+  bool statistical_weights = true;   // WLS-CG on counts: Poisson weights (line integrals: unit weights)
+  bool undistort = true;             // a declared detector distortion resampled away (MeasurementOptions)
+  std::array<int, 3> size{0, 0, 0};  // voxels; 0: cover the holder, or the field of view
+  double voxel_mm = 0;               // 0: a detector pixel seen at the holder origin
+  void validate() const;             // std::invalid_argument naming the field
+  int iteration_count() const;       // `iterations`, or the method's default
+};
+
+/// OS-SQS's subsets when none are asked for: about 9 views each, at most 40 (measured in
+/// benchmarks/bench_time_to_quality.cpp).
+int default_subset_count(int views);
+
+/// What a run will do, decided from the matrices alone.
+struct ReconstructionPlan {
+  ReconstructionMethod method = ReconstructionMethod::wls_cg;
+  bool weighted = false;
+  VolumeLayout layout;
+  int views = 0;  // ok views of the geometry
+  MemoryPlan memory;
+  std::size_t available_bytes = 0;
+};
+
+/// Everything is optional. `resume` receives the run's identity (data fingerprint, views, volume,
+/// solver options) and returns a saved state to continue, which must have been saved with the same
+/// identity; `save` receives each checkpoint with it.
+struct ReconstructionHooks {
+  std::function<void(const ReconstructionPlan&)> planned;  // before the memory check and any image
+  std::function<void(int, int)> reading;                   // images read, of all
+  std::function<void(const Measurements&)> measured;       // after reading, before solving
+  std::function<void(int, int)> iterating;                 // iterations done, of all
+  std::function<std::optional<SolverState>(const nlohmann::json& identity)> resume;
+  int checkpoint_every = 0;  // 0: a state is saved only when a stop is requested
+  std::function<void(const SolverSnapshot&, const nlohmann::json& identity)> save;
+  std::function<bool()> stop_requested;  // asked after every iteration
+};
+
+struct ReconstructionRun {
+  Volume volume;
+  ReconstructionPlan plan;
+  ReconstructionOptions options;
+  std::vector<int> views_used;  // scan view indices
+  std::size_t clamped_pixels = 0, masked_pixels = 0;
+  std::vector<std::string> views_left_out, notes;
+  std::string distortion_note;
+  std::optional<CircularTrajectory> circle;  // FDK: the orbit fitted to the matrices
+  SolverReport solver;
+  double seconds = 0;
+  /// Stopped on request (WLS-CG and SIRT with their state saved; OS-SQS after an epoch): the
+  /// volume is the last iterate.
+  bool stopped() const;
+  /// ctk-reconstruction-log/1 without file names (the caller adds scan and geometry).
+  nlohmann::json report() const;
+  /// One line: method, why it stopped, cost first -> last, seconds.
+  std::string brief() const;
+};
+
+/// Throws InputError naming the geometry when no view is ok; the options' own errors as validate().
+ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geometry& geometry,
+                                       const ReconstructionOptions& options);
+
+/// Plans (refusing a run whose memory plan exceeds what is available, with the plan in the
+/// message), reads the ok views, solves. Throws InputError for unreadable images, std::invalid_argument
+/// for FDK on a scan that is not circular, with the deviation found.
+ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry& geometry, const ReconstructionOptions& options,
+                                     const ReconstructionHooks& hooks = {});
+
+}  // namespace ctk

@@ -1,0 +1,165 @@
+#include "ctk/recon/os_sqs.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "ctk/core/error.hpp"
+#include "vector_ops.hpp"
+
+namespace ctk {
+
+namespace {
+
+// Views `views` of `all`, in that order, into `out` (reshaped).
+void gather_views(const ProjectionStack& all, const std::vector<int>& views, ProjectionStack& out) {
+  const std::size_t pixels = static_cast<std::size_t>(all.rows) * static_cast<std::size_t>(all.cols);
+  out.views = static_cast<int>(views.size());
+  out.rows = all.rows;
+  out.cols = all.cols;
+  out.data.resize(static_cast<std::size_t>(out.views) * pixels);  // shrinking keeps the allocation
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(views.size());
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t k = 0; k < n; ++k)
+    std::copy_n(all.data.data() + static_cast<std::size_t>(views[static_cast<std::size_t>(k)]) * pixels, pixels,
+                out.data.data() + static_cast<std::size_t>(k) * pixels);
+}
+
+// Throws unless `subsets` hold every view of 0 .. views-1 exactly once.
+void require_partition(const std::vector<std::vector<int>>& subsets, int views) {
+  if (subsets.empty()) throw std::invalid_argument("solve_os_sqs: no subsets");
+  std::vector<int> seen(static_cast<std::size_t>(views), 0);
+  for (const auto& s : subsets) {
+    if (s.empty()) throw std::invalid_argument("solve_os_sqs: an empty subset");
+    for (int v : s) {
+      if (v < 0 || v >= views)
+        throw std::invalid_argument("solve_os_sqs: view " + std::to_string(v) + " is not one of the " + std::to_string(views) +
+                                    " views");
+      if (seen[static_cast<std::size_t>(v)]++)
+        throw std::invalid_argument("solve_os_sqs: view " + std::to_string(v) + " is in two subsets");
+    }
+  }
+  for (int v = 0; v < views; ++v)
+    if (!seen[static_cast<std::size_t>(v)])
+      throw std::invalid_argument("solve_os_sqs: view " + std::to_string(v) + " is in no subset");
+}
+
+// r = A x - b, then its weighted half square sum, then r *= w (w empty: unit weights).
+double weighted_residual(const ProjectionOperator& A, const Volume& x, const ProjectionStack& b, const FloatBuffer& w,
+                         ProjectionStack& r) {
+  A.apply(x, r);
+  detail::axpy(-1.0, b.data, r.data);
+  const double half = 0.5 * detail::weighted_square_sum(r.data, w);
+  if (!w.empty()) detail::weighted_copy(r.data, w, r.data);
+  return half;
+}
+
+}  // namespace
+
+void OsSqsOptions::validate() const {
+  require_option(epochs >= 0, "OsSqsOptions.epochs", "at least 0", epochs);
+  require_option(lambda >= 0 && std::isfinite(lambda), "OsSqsOptions.lambda", "a finite number of at least 0", lambda);
+}
+
+SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
+                          const std::vector<std::vector<int>>& subsets, const OsSqsOptions& o,
+                          const IterationCallback& on_iteration, const std::function<bool()>& stop_requested) {
+  o.validate();
+  detail::require_problem_shapes("solve_os_sqs", A, b, x);
+  if (weights && weights->data.size() != b.data.size())
+    throw std::invalid_argument("solve_os_sqs: weights and line integrals differ in size");
+  require_partition(subsets, b.views);
+  const int M = static_cast<int>(subsets.size());
+  static const FloatBuffer unit;
+  auto start = std::chrono::steady_clock::now();
+
+  std::vector<std::shared_ptr<const ProjectionOperator>> parts;
+  for (const auto& s : subsets) parts.push_back(A.subset(s));
+  ProjectionStack b_part, w_part, r_part;  // one subset's data, weights and residual
+  const auto load_part = [&](int s) {
+    gather_views(b, subsets[static_cast<std::size_t>(s)], b_part);
+    if (weights) gather_views(*weights, subsets[static_cast<std::size_t>(s)], w_part);
+  };
+
+  // The surrogate's curvature D = A'W A 1 + lambda c, subset by subset (no full-size stack).
+  Volume D(x.layout), ones(x.layout), g(x.layout);
+  std::fill(ones.data.begin(), ones.data.end(), 1.0f);
+  for (int s = 0; s < M; ++s) {
+    load_part(s);
+    parts[static_cast<std::size_t>(s)]->apply(ones, r_part);
+    if (weights) detail::weighted_copy(r_part.data, w_part.data, r_part.data);
+    parts[static_cast<std::size_t>(s)]->apply_adjoint(r_part, g);
+    detail::axpy(1.0, g.data, D.data);
+  }
+  ones = Volume();
+  const double curvature_of_penalty = o.lambda * (o.regulariser == Regulariser::identity ? 1.0 : 12.0);
+
+  // x is the result so far (the last projected step), which the callback sees; with momentum the
+  // gradients are taken at the extrapolated point y.
+  Volume y = o.momentum ? x : Volume();
+  Volume& at = o.momentum ? y : x;
+  const auto cost_now = [&](double data_term, int epoch) {
+    IterationLog log;
+    log.iteration = epoch;
+    log.data_term = data_term;
+    log.regulariser_term = o.lambda > 0 ? o.lambda * regulariser_value(o.regulariser, x) : 0.0;
+    log.cost = log.data_term + log.regulariser_term;
+    log.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (on_iteration) on_iteration(log);
+    start = std::chrono::steady_clock::now();
+    return log;
+  };
+  const auto exact_data_term = [&] {
+    double sum = 0;
+    for (int s = 0; s < M; ++s) {
+      load_part(s);
+      sum += weighted_residual(*parts[static_cast<std::size_t>(s)], x, b_part, weights ? w_part.data : unit, r_part);
+    }
+    return sum;
+  };
+
+  SolverReport report;
+  // A cold start's residual is -b: no projection needed for its cost.
+  const bool cold = std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; });
+  report.iterations.push_back(
+      cost_now(cold ? 0.5 * detail::weighted_square_sum(b.data, weights ? weights->data : unit) : exact_data_term(), 0));
+  double t = 1;  // Nesterov's sequence
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(x.data.size());
+  for (int epoch = 1; epoch <= o.epochs; ++epoch) {
+    double seen = 0;
+    for (int s = 0; s < M; ++s) {
+      load_part(s);
+      const ProjectionOperator& As = *parts[static_cast<std::size_t>(s)];
+      seen += weighted_residual(As, at, b_part, weights ? w_part.data : unit, r_part);
+      As.apply_adjoint(r_part, g);
+      // The subset stands for the scan: its gradient times M, plus the penalty's.
+      const float scale = static_cast<float>(M);
+#pragma omp parallel for schedule(static)
+      for (std::ptrdiff_t i = 0; i < n; ++i) g.data[static_cast<std::size_t>(i)] *= scale;
+      add_regulariser_normal(o.regulariser, o.lambda, at, g);
+      const double t_next = o.momentum ? 0.5 * (1 + std::sqrt(1 + 4 * t * t)) : 1;
+      const float carry = static_cast<float>(o.momentum ? (t - 1) / t_next : 0);
+#pragma omp parallel for schedule(static)
+      for (std::ptrdiff_t i = 0; i < n; ++i) {
+        const std::size_t k = static_cast<std::size_t>(i);
+        const double d = double(D.data[k]) + curvature_of_penalty;
+        float step = d > 0 ? static_cast<float>(double(at.data[k]) - double(g.data[k]) / d) : at.data[k];
+        if (o.non_negative && step < 0) step = 0;
+        if (o.momentum) y.data[k] = step + carry * (step - x.data[k]);
+        x.data[k] = step;
+      }
+      t = t_next;
+    }
+    report.iterations.push_back(cost_now(o.exact_cost ? exact_data_term() : seen, epoch));
+    if (epoch < o.epochs && stop_requested && stop_requested()) {
+      report.stop_reason = kStoppedWithoutState;
+      return report;
+    }
+  }
+  report.stop_reason = "epoch limit (" + std::to_string(o.epochs) + ") reached, " + std::to_string(M) + " subsets";
+  return report;
+}
+
+}  // namespace ctk
