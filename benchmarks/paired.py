@@ -2,8 +2,8 @@
 """Two builds of `ctk` compared on the projector benchmark: do they compute the same, and is
 the new one faster? Python's standard library only.
 
-On a shared machine whole runs drift by 15-25 % within minutes (benchmarks/README.md, session
-34), more than most single changes gain, so comparing one run of each build says little. Here
+On a shared machine whole runs drift by 15-25 % within minutes (`ctk bench --repeat N` keeps
+every run and shows it), more than most single changes gain, so comparing one run of each build says little. Here
 the builds take turns run by run, in the order old, new, new, old, old, new, ... (a drift that
 is steady over a few runs then favours neither), and each round gives a paired ratio
 old seconds / new seconds per case. The median of those ratios is the verdict; the spread

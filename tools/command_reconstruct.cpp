@@ -32,7 +32,7 @@ struct ReconstructOptions {
   std::string method = "wls-cg";
   int iterations = 0;  // 0: the method's default
   int subsets = 0;     // OS-SQS: 0 chosen from the views
-  double lambda = 0, tolerance = 1e-4;
+  double lambda = 0, tolerance = 1e-4, huber_delta = 0;
   std::string regulariser = "identity";
   bool unweighted = false;
   bool as_measured = false;
@@ -50,6 +50,7 @@ ReconstructionOptions library_options(const ReconstructOptions& o) {
   r.lambda = o.lambda;
   r.tolerance = o.tolerance;
   r.regulariser = o.regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
+  r.huber_delta = o.huber_delta;
   r.statistical_weights = !o.unweighted;
   r.undistort = !o.as_measured;
   for (std::size_t a = 0; a < 3 && !o.size.empty(); ++a) r.size[a] = o.size[std::min(a, o.size.size() - 1)];
@@ -191,12 +192,16 @@ void register_reconstruct(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--iterations", o->iterations, "Iterations (default: 30 for wls-cg, 8 epochs for os-sqs, 100 for sirt)")
       ->check(CLI::Range(1, 100000));
-  cmd->add_option("--subsets", o->subsets, "os-sqs: ordered subsets (default: about 9 views each, at most 40)")
+  cmd->add_option("--subsets", o->subsets, "os-sqs: ordered subsets (default: about 15 views each, at most 24)")
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--lambda", o->lambda, "Regularisation weight")->check(non_negative_number)->capture_default_str();
   cmd->add_option("--regulariser", o->regulariser, "identity (Tikhonov) or gradient")
       ->check(CLI::IsMember({"identity", "gradient"}))
       ->capture_default_str();
+  cmd->add_option("--huber-delta", o->huber_delta,
+                  "os-sqs: an edge-preserving Huber penalty of neighbour differences (weight --lambda) instead of the "
+                  "quadratic one; differences below delta (attenuation per mm) are smoothed, edges above it kept")
+      ->check(positive_number);
   cmd->add_option("--tolerance", o->tolerance, "Stop when the gradient has fallen by this factor (0 <= tolerance < 1)")
       ->check(fraction_below_one)
       ->capture_default_str();

@@ -7,7 +7,22 @@
 
 #include "commands.hpp"
 #include "ctk/core/error.hpp"
+#include "ctk/proj/joseph_projector.hpp"
+#include "git_version.h"
 #include "interruption.hpp"
+
+namespace {
+
+// What a lab needs to know which build made a result: version and commit, compiler, and the SIMD
+// targets compiled in and the one this processor runs.
+std::string version_text() {
+  std::string targets;
+  for (const std::string& t : ctk::JosephProjector::simd_targets()) targets += (targets.empty() ? "" : " ") + t;
+  return std::string("ctk ") + CTK_VERSION + " (" + CTK_GIT_DESCRIBE + ")\ncompiler: " + __VERSION__ +
+         "\nSIMD targets compiled: " + targets + "; chosen at run time: " + ctk::JosephProjector::simd_target();
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   // Every view passes through a few image-sized buffers (2 MB at 720 x 720). By default glibc maps
@@ -16,6 +31,7 @@ int main(int argc, char** argv) {
   mallopt(M_MMAP_THRESHOLD, 64 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
   CLI::App app{"ctk — calibrate and reconstruct cone-beam CT scans taken along arbitrary (robot) trajectories"};
+  app.set_version_flag("--version", version_text());
   app.require_subcommand(1);
   ctk::tools::register_simulate(app);
   ctk::tools::register_phantom(app);

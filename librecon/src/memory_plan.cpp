@@ -57,7 +57,7 @@ MemoryPlan plan_memory(ReconstructionMethod method, const VolumeLayout& layout, 
       plan.stacks = 3 + (weighted ? 1 : 0);
       break;
     case ReconstructionMethod::os_sqs:
-      plan.volumes = 4;
+      plan.volumes = 5;  // and the Huber penalty's curvature
       plan.stacks = 2 + (weighted ? 1 : 0);
       break;
     case ReconstructionMethod::sirt:

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "ctk/core/error.hpp"
+#include "ctk/recon/huber_penalty.hpp"
 #include "vector_ops.hpp"
 
 namespace ctk {
@@ -61,6 +62,8 @@ double weighted_residual(const ProjectionOperator& A, const Volume& x, const Pro
 void OsSqsOptions::validate() const {
   require_option(epochs >= 0, "OsSqsOptions.epochs", "at least 0", epochs);
   require_option(lambda >= 0 && std::isfinite(lambda), "OsSqsOptions.lambda", "a finite number of at least 0", lambda);
+  require_option(huber_delta >= 0 && std::isfinite(huber_delta), "OsSqsOptions.huber_delta",
+                 "0 (a quadratic penalty) or a finite positive number", huber_delta);
 }
 
 SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
@@ -94,7 +97,10 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
     detail::axpy(1.0, g.data, D.data);
   }
   ones = Volume();
-  const double curvature_of_penalty = o.lambda * (o.regulariser == Regulariser::identity ? 1.0 : 12.0);
+  const bool huber = o.huber_delta > 0;
+  const HuberPenalty penalty{o.lambda, o.huber_delta};
+  const double curvature_of_penalty = huber ? 0.0 : o.lambda * (o.regulariser == Regulariser::identity ? 1.0 : 12.0);
+  Volume huber_curvature = huber ? Volume(x.layout) : Volume();  // follows the volume
 
   // x is the result so far (the last projected step), which the callback sees; with momentum the
   // gradients are taken at the extrapolated point y.
@@ -104,7 +110,9 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
     IterationLog log;
     log.iteration = epoch;
     log.data_term = data_term;
-    log.regulariser_term = o.lambda > 0 ? o.lambda * regulariser_value(o.regulariser, x) : 0.0;
+    log.regulariser_term = o.lambda == 0 ? 0.0
+                           : huber       ? huber_penalty_value(penalty, x)
+                                         : o.lambda * regulariser_value(o.regulariser, x);
     log.cost = log.data_term + log.regulariser_term;
     log.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (on_iteration) on_iteration(log);
@@ -138,13 +146,16 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
       const float scale = static_cast<float>(M);
 #pragma omp parallel for schedule(static)
       for (std::ptrdiff_t i = 0; i < n; ++i) g.data[static_cast<std::size_t>(i)] *= scale;
-      add_regulariser_normal(o.regulariser, o.lambda, at, g);
+      if (huber)
+        add_huber_gradient_and_curvature(penalty, at, g, huber_curvature);
+      else
+        add_regulariser_normal(o.regulariser, o.lambda, at, g);
       const double t_next = o.momentum ? 0.5 * (1 + std::sqrt(1 + 4 * t * t)) : 1;
       const float carry = static_cast<float>(o.momentum ? (t - 1) / t_next : 0);
 #pragma omp parallel for schedule(static)
       for (std::ptrdiff_t i = 0; i < n; ++i) {
         const std::size_t k = static_cast<std::size_t>(i);
-        const double d = double(D.data[k]) + curvature_of_penalty;
+        const double d = double(D.data[k]) + (huber ? double(huber_curvature.data[k]) : curvature_of_penalty);
         float step = d > 0 ? static_cast<float>(double(at.data[k]) - double(g.data[k]) / d) : at.data[k];
         if (o.non_negative && step < 0) step = 0;
         if (o.momentum) y.data[k] = step + carry * (step - x.data[k]);

@@ -49,6 +49,7 @@ nlohmann::json run_identity(const ReconstructionPlan& plan, const Reconstruction
           {"weights", plan.weighted ? "poisson" : "unit"},
           {"lambda", o.lambda},
           {"regulariser", to_string(o.regulariser)},
+          {"huber_delta", o.huber_delta},
           {"tolerance", o.tolerance},
           {"volume", {{"size", plan.layout.size}, {"voxel_mm", plan.layout.voxel_mm.x()}}},
           {"views_used", m.view_indices},
@@ -59,6 +60,8 @@ nlohmann::json run_identity(const ReconstructionPlan& plan, const Reconstruction
 
 void ReconstructionOptions::validate() const {
   require_option(iterations >= 0, "ReconstructionOptions.iterations", "0 (the method's default) or more", iterations);
+  require_option(huber_delta == 0 || (method == ReconstructionMethod::os_sqs && huber_delta > 0 && std::isfinite(huber_delta)),
+                 "ReconstructionOptions.huber_delta", "0, or a finite positive number with the os-sqs method", huber_delta);
   require_option(subsets >= 0, "ReconstructionOptions.subsets", "0 (chosen from the views) or more", subsets);
   require_option(lambda >= 0 && std::isfinite(lambda), "ReconstructionOptions.lambda", "a finite number of 0 or more", lambda);
   require_option(tolerance >= 0 && tolerance < 1, "ReconstructionOptions.tolerance", "a number in [0, 1)", tolerance);
@@ -82,7 +85,7 @@ int ReconstructionOptions::iteration_count() const {
   return 0;
 }
 
-int default_subset_count(int views) { return std::clamp((views + 4) / 9, 1, 40); }
+int default_subset_count(int views) { return std::clamp((views + 7) / 15, 1, 24); }
 
 bool ReconstructionRun::stopped() const {
   return solver.stop_reason == kStoppedOnRequest || solver.stop_reason == kStoppedWithoutState;
@@ -95,7 +98,8 @@ nlohmann::json ReconstructionRun::report() const {
       {"method", to_string(plan.method)},
       {"weights", plan.weighted ? "poisson" : "unit"},
       {"lambda", options.lambda},
-      {"regulariser", to_string(options.regulariser)},
+      {"regulariser", options.huber_delta > 0 ? "huber" : to_string(options.regulariser)},
+      {"huber_delta", options.huber_delta},
       {"volume",
        {{"size", l.size}, {"voxel_mm", l.voxel_mm.x()}, {"origin_mm", {l.origin_mm.x(), l.origin_mm.y(), l.origin_mm.z()}}}},
       {"views_used", views_used},
@@ -198,6 +202,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
       os.epochs = iterations;
       os.lambda = o.lambda;
       os.regulariser = o.regulariser;
+      os.huber_delta = o.huber_delta;
       const auto& n = plan.layout.size;
       const Eigen::Vector3d volume_centre =
           0.5 * (plan.layout.centre_of(0, 0, 0) + plan.layout.centre_of(n[0] - 1, n[1] - 1, n[2] - 1));

@@ -1,5 +1,6 @@
 #include "ctk/recon/regulariser.hpp"
 
+#include "neighbour_pairs.hpp"
 #include "vector_ops.hpp"
 
 namespace ctk {
@@ -8,22 +9,7 @@ const char* to_string(Regulariser r) { return r == Regulariser::identity ? "iden
 
 double regulariser_value(Regulariser r, const Volume& x) {
   if (r == Regulariser::identity) return 0.5 * detail::dot(x.data, x.data);
-  const auto& n = x.layout.size;
-  const auto stride = x.layout.strides();
-  double sum = 0;
-#pragma omp parallel for reduction(+ : sum) schedule(static)
-  for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i) {
-        const std::size_t at = x.index(i, j, k);
-        const int index[3] = {i, j, k};
-        for (int a = 0; a < 3; ++a)
-          if (index[a] + 1 < n[a]) {
-            const double d = double(x.data[at + static_cast<std::size_t>(stride[a])]) - x.data[at];
-            sum += d * d;
-          }
-      }
-  return 0.5 * sum;
+  return 0.5 * detail::sum_over_neighbour_pairs(x, [](double d) { return d * d; });
 }
 
 void add_regulariser_normal(Regulariser r, double lambda, const Volume& x, Volume& out) {

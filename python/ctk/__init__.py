@@ -272,19 +272,20 @@ class ReconstructionResult:
 
 
 def reconstruct(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] = None, *, method: str = "wls-cg",
-                iterations: int = 0, subsets: int = 0, lambda_: float = 0.0, regulariser: str = "identity", tolerance: float = 1e-4,
+                iterations: int = 0, subsets: int = 0, lambda_: float = 0.0, regulariser: str = "identity",
+                huber_delta: float = 0.0, tolerance: float = 1e-4,
                 weighted: bool = True, undistort: bool = True, size: Optional[tuple[int, int, int]] = None,
                 voxel_mm: float = 0.0, progress: Optional[Callable[[int, int], None]] = None) -> ReconstructionResult:
     """`ctk reconstruct` without files out: the scan's ok views (of `geometry`, or the scan's
     nominal geometry) read, the memory plan checked, and WLS-CG or OS-SQS (Poisson weights for
     counts unless weighted=False), SIRT or FDK (circular scans) run. iterations 0: 30 for WLS-CG,
-    8 epochs of OS-SQS (subsets 0: about 9 views each, at most 40), 100 for SIRT.
+    8 epochs of OS-SQS (subsets 0: about 15 views each, at most 24), 100 for SIRT. huber_delta > 0
+    (OS-SQS only): an edge-preserving Huber penalty weighted by lambda_ instead of the quadratic one.
     size (z, y, x) voxels and voxel_mm default to the holder (or the field of view) at a detector
     pixel seen at the holder origin. progress(done, total) while reading and while iterating;
     Ctrl-C stops after the current iteration (KeyboardInterrupt)."""
     d = _ctk._reconstruct(os.fspath(scan), None if geometry is None else os.fspath(geometry), method, iterations, subsets,
-                          lambda_,
-                          regulariser, tolerance, weighted, undistort, None if size is None else tuple(size), voxel_mm,
+                          lambda_, regulariser, huber_delta, tolerance, weighted, undistort, None if size is None else tuple(size), voxel_mm,
                           progress)
     _log.info("%s", d["brief"])
     d["origin_mm"] = tuple(d["origin_mm"])

@@ -65,7 +65,7 @@ def _calibrate(scan: str, min_spheres: int, max_rms_px: float, search_px: float,
 def _diagnose(scan: str, geometry: str, repeatability_mm: Optional[float], repeatability_deg: Optional[float],
               log: Callable[[str], None]) -> dict[str, Any]: ...
 def _reconstruct(scan: str, geometry: Optional[str], method: str, iterations: int, subsets: int, lambda_: float, regulariser: str,
-                 tolerance: float, weighted: bool, undistort: bool, size: Optional[tuple[int, int, int]], voxel_mm: float,
+                 huber_delta: float, tolerance: float, weighted: bool, undistort: bool, size: Optional[tuple[int, int, int]], voxel_mm: float,
                  progress: Optional[Callable[[int, int], None]]) -> dict[str, Any]: ...
 def _simulate(out: str, phantoms: list[str], trajectory: str, views: int, nside: int, cap_deg: tuple[float, float],
               poses: Optional[str], detector_shape: tuple[int, int], pitch_mm: float, sdd_mm: float, sod_mm: float,

@@ -161,8 +161,9 @@ py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, cons
 }
 
 py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& geometry_file, const std::string& method,
-                     int iterations, int subsets, double lambda, const std::string& regulariser, double tolerance, bool weighted,
-                     bool undistort, const std::optional<std::array<int, 3>>& size, double voxel_mm, const py::object& progress) {
+                     int iterations, int subsets, double lambda, const std::string& regulariser, double huber_delta,
+                     double tolerance, bool weighted, bool undistort, const std::optional<std::array<int, 3>>& size,
+                     double voxel_mm, const py::object& progress) {
   ReconstructionOptions o;
   if (regulariser != "identity" && regulariser != "gradient")
     throw py::value_error("regulariser must be 'identity' or 'gradient', not '" + regulariser + "'");
@@ -171,6 +172,7 @@ py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& g
   o.iterations = iterations;
   o.lambda = lambda;
   o.regulariser = regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
+  o.huber_delta = huber_delta;
   o.tolerance = tolerance;
   o.statistical_weights = weighted;
   o.undistort = undistort;
@@ -273,8 +275,8 @@ otherwise. Refuses (InputError) an `out` that is one of the inputs. Returns the 
         py::arg("kvp"), py::arg("filter_al_mm"), py::arg("robot_noise_mm"), py::arg("robot_noise_deg"), py::arg("seed"),
         py::arg("effects"), py::arg("progress"), py::arg("log"));
   m.def("_reconstruct", &reconstruct, py::arg("scan"), py::arg("geometry"), py::arg("method"), py::arg("iterations"),
-        py::arg("subsets"), py::arg("lambda_"), py::arg("regulariser"), py::arg("tolerance"), py::arg("weighted"),
-        py::arg("undistort"), py::arg("size"), py::arg("voxel_mm"), py::arg("progress"));
+        py::arg("subsets"), py::arg("lambda_"), py::arg("regulariser"), py::arg("huber_delta"), py::arg("tolerance"),
+        py::arg("weighted"), py::arg("undistort"), py::arg("size"), py::arg("voxel_mm"), py::arg("progress"));
   m.def("_refine", &refine, py::arg("scan"), py::arg("geometry"), py::arg("effects"), py::arg("coarsening"),
         py::arg("blur_arc_deg"), py::arg("z"), py::arg("log"));
 }

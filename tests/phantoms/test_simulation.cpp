@@ -12,6 +12,7 @@
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/panda_ik.hpp"
 #include "ctk/phantoms/scan_simulation.hpp"
+#include "ctk/phantoms/simulation_run.hpp"
 
 namespace ctk {
 namespace {
@@ -222,6 +223,40 @@ TEST(ScanSimulation, CountsScanHasFlatDarkAndOpenBeamAtTheFlatLevel) {
   const nlohmann::json truth = read_json_file(dir / "truth.json");
   EXPECT_EQ(truth.at("effects").at("false_blobs").at("blobs").size(), 6u);
   EXPECT_EQ(scan.panda->joints.rows().size(), 2u);
+}
+
+}  // namespace
+}  // namespace ctk
+
+namespace ctk {
+namespace {
+
+TEST(SimulationRequest, ChecksItselfAndNamesUnknownEffects) {
+  EXPECT_NO_THROW(SimulationRequest{}.validate());
+  testing::expect_option_refused(
+      SimulationRequest{}, [](auto& r) { r.views = 0; }, "SimulationRequest.views");
+  testing::expect_option_refused(
+      SimulationRequest{}, [](auto& r) { r.nside = 0; }, "SimulationRequest.nside");
+  testing::expect_option_refused(
+      SimulationRequest{}, [](auto& r) { r.cap_min_deg = 50, r.cap_max_deg = 40; }, "SimulationRequest.cap_min_deg");
+  testing::expect_option_refused(
+      SimulationRequest{}, [](auto& r) { r.sod_mm = 3000; }, "SimulationRequest.sod_mm");
+  testing::expect_option_refused(
+      SimulationRequest{}, [](auto& r) { r.supersampling = 0; }, "SimulationRequest.supersampling");
+  testing::expect_option_refused(
+      SimulationRequest{}, [](auto& r) { r.kvp = 10.0; }, "SimulationRequest.kvp");
+  testing::expect_option_refused(
+      SimulationRequest{}, [](auto& r) { r.trajectory = "helical"; }, "SimulationRequest.trajectory");
+  // Effects by name: the values land where the simulator reads them; a misspelt one is refused.
+  const Detector detector{100, 80, 1, 1};
+  const SimulationEffects e = simulation_effects_from_json(
+      {{"base_translation_mm", {0.5, 0, 1}}, {"source_drift_mm", {0.4, -0.2}}, {"distortion_k1", 2e-8}}, detector);
+  ASSERT_TRUE(e.robot_base_frame && e.source_drift_mm_per_100_views && e.detector_distortion);
+  EXPECT_EQ(e.robot_base_frame->translation_mm, Eigen::Vector3d(0.5, 0, 1));
+  EXPECT_EQ(e.detector_distortion->centre_px, detector.centre_px());
+  EXPECT_FALSE(e.holder_mount);
+  EXPECT_THROW(simulation_effects_from_json({{"base_translation", {0, 0, 1}}}, detector), std::invalid_argument);
+  EXPECT_THROW(simulation_effects_from_json({{"source_drift_mm", {0.4}}}, detector), std::invalid_argument);
 }
 
 }  // namespace

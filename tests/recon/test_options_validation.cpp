@@ -8,6 +8,8 @@
 #include "../test_support.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/markerless_refinement.hpp"
+#include "ctk/recon/os_sqs.hpp"
+#include "ctk/recon/reconstruction_run.hpp"
 #include "ctk/recon/refine_scan.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/wls_cg.hpp"
@@ -27,6 +29,45 @@ TEST(OptionsValidation, RefineScanOptions) {
   RefineScanOptions bad;
   bad.z_accept = 0;
   EXPECT_THROW(refine_scan(ScanDescription{}, Geometry{}, bad), std::invalid_argument);
+}
+
+TEST(OptionsValidation, ReconstructionOptions) {
+  EXPECT_NO_THROW(ReconstructionOptions{}.validate());
+  testing::expect_option_refused(
+      ReconstructionOptions{}, [](auto& o) { o.iterations = -1; }, "ReconstructionOptions.iterations");
+  testing::expect_option_refused(
+      ReconstructionOptions{}, [](auto& o) { o.subsets = -2; }, "ReconstructionOptions.subsets");
+  testing::expect_option_refused(
+      ReconstructionOptions{}, [](auto& o) { o.lambda = -1; }, "ReconstructionOptions.lambda");
+  testing::expect_option_refused(
+      ReconstructionOptions{}, [](auto& o) { o.tolerance = 1; }, "ReconstructionOptions.tolerance");
+  testing::expect_option_refused(
+      ReconstructionOptions{},
+      [](auto& o) {
+        o.size = {64, -1, 64};
+      },
+      "ReconstructionOptions.size");
+  testing::expect_option_refused(
+      ReconstructionOptions{}, [](auto& o) { o.voxel_mm = -0.5; }, "ReconstructionOptions.voxel_mm");
+  // A Huber penalty only with the method that minimises it.
+  testing::expect_option_refused(
+      ReconstructionOptions{}, [](auto& o) { o.huber_delta = 0.001; }, "ReconstructionOptions.huber_delta");
+  ReconstructionOptions huber;
+  huber.method = ReconstructionMethod::os_sqs;
+  huber.huber_delta = 0.001;
+  EXPECT_NO_THROW(huber.validate());
+  EXPECT_THROW(reconstruction_method("art"), std::invalid_argument);
+  EXPECT_EQ(reconstruction_method("os-sqs"), ReconstructionMethod::os_sqs);
+}
+
+TEST(OptionsValidation, OsSqsOptions) {
+  EXPECT_NO_THROW(OsSqsOptions{}.validate());
+  testing::expect_option_refused(
+      OsSqsOptions{}, [](auto& o) { o.epochs = -1; }, "OsSqsOptions.epochs");
+  testing::expect_option_refused(
+      OsSqsOptions{}, [](auto& o) { o.lambda = std::numeric_limits<double>::quiet_NaN(); }, "OsSqsOptions.lambda");
+  testing::expect_option_refused(
+      OsSqsOptions{}, [](auto& o) { o.huber_delta = -0.001; }, "OsSqsOptions.huber_delta");
 }
 
 TEST(OptionsValidation, SirtOptions) {

@@ -25,7 +25,8 @@ struct MemoryPlan {
 };
 
 /// CG: x, gradient, direction, H direction; b, residual, scratch, and weights when weighted.
-/// OS-SQS: x, the extrapolated point, the curvature, the gradient; b, weights when weighted, and
+/// OS-SQS: x, the extrapolated point, the curvature, the gradient, the Huber penalty's curvature; b,
+/// weights when weighted, and
 /// one subset's data, weights and residual (counted as a stack).
 /// SIRT: x, column sums, update; b, row sums, residual. FDK: the volume and the filtered stack.
 MemoryPlan plan_memory(ReconstructionMethod method, const VolumeLayout& layout, int views, int rows, int cols, bool weighted);

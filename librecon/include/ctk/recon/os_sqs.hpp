@@ -1,7 +1,9 @@
 #pragma once
 // Ordered-subsets separable quadratic surrogates (OS-SQS) with Nesterov momentum, for the same
 // weighted objective as WLS-CG,
-//   minimise 1/2 ||W^(1/2) (A x - b)||^2 + 1/2 lambda ||G x||^2   (x >= 0 if asked).
+//   minimise 1/2 ||W^(1/2) (A x - b)||^2 + 1/2 lambda ||G x||^2   (x >= 0 if asked),
+// or with the edge-preserving Huber penalty in place of the quadratic one (its curvature then
+// follows the volume: huber_penalty.hpp).
 // SQS majorises the objective by a separable quadratic with curvature D = A'W A 1 + lambda c
 // (c: 1 for the identity penalty, 12 for the gradient penalty, the bound of G'G's row sums), so
 // a step x - grad / D never raises the cost, and non-negativity is a clip. Ordered subsets take
@@ -27,6 +29,9 @@ struct OsSqsOptions {
   bool non_negative = true;
   double lambda = 0;
   Regulariser regulariser = Regulariser::identity;
+  /// > 0: lambda weighs the edge-preserving Huber penalty of neighbour differences with this
+  /// delta (huber_penalty.hpp) instead of the quadratic `regulariser`.
+  double huber_delta = 0;
   /// true: the full cost is computed after every epoch (one more forward projection each). false:
   /// the log's data term is the sum of the subsets' data terms at the iterates they saw.
   bool exact_cost = false;
