@@ -28,31 +28,15 @@ double huber_penalty_value(const HuberPenalty& p, const Volume& x) {
 }
 
 void add_huber_gradient_and_curvature(const HuberPenalty& p, const Volume& x, Volume& gradient, Volume& curvature) {
-  const auto& n = x.layout.size;
-  const auto stride = x.layout.strides();
-#pragma omp parallel for schedule(static)
-  for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i) {
-        const std::size_t at = x.index(i, j, k);
-        const int index[3] = {i, j, k};
-        double g = 0, c = 0;
-        for (int a = 0; a < 3; ++a) {
-          const std::size_t s = static_cast<std::size_t>(stride[a]);
-          if (index[a] > 0) {
-            const double t = double(x.data[at]) - x.data[at - s];
-            g += psi_derivative(t, p.delta);
-            c += 2 * weight(t, p.delta);
-          }
-          if (index[a] + 1 < n[a]) {
-            const double t = double(x.data[at]) - x.data[at + s];
-            g += psi_derivative(t, p.delta);
-            c += 2 * weight(t, p.delta);
-          }
-        }
-        gradient.data[at] += static_cast<float>(p.lambda * g);
-        curvature.data[at] = static_cast<float>(p.lambda * c);
-      }
+  detail::for_each_voxel_with_its_neighbours(x, [&](std::size_t at, const double* d, int count) {
+    double g = 0, c = 0;
+    for (int m = 0; m < count; ++m) {
+      g += psi_derivative(d[m], p.delta);
+      c += 2 * weight(d[m], p.delta);
+    }
+    gradient.data[at] += static_cast<float>(p.lambda * g);
+    curvature.data[at] = static_cast<float>(p.lambda * c);
+  });
 }
 
 }  // namespace ctk

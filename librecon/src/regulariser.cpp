@@ -20,21 +20,11 @@ void add_regulariser_normal(Regulariser r, double lambda, const Volume& x, Volum
   }
   // G'G is the negative Laplacian with zero flux across the boundary: per axis, each neighbour
   // present contributes (x_here - x_neighbour).
-  const auto& n = x.layout.size;
-  const auto stride = x.layout.strides();
-#pragma omp parallel for schedule(static)
-  for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i) {
-        const std::size_t at = x.index(i, j, k);
-        const int index[3] = {i, j, k};
-        double s = 0;
-        for (int a = 0; a < 3; ++a) {
-          if (index[a] > 0) s += double(x.data[at]) - x.data[at - static_cast<std::size_t>(stride[a])];
-          if (index[a] + 1 < n[a]) s += double(x.data[at]) - x.data[at + static_cast<std::size_t>(stride[a])];
-        }
-        out.data[at] += static_cast<float>(lambda * s);
-      }
+  detail::for_each_voxel_with_its_neighbours(x, [&](std::size_t at, const double* d, int count) {
+    double s = 0;
+    for (int m = 0; m < count; ++m) s += d[m];
+    out.data[at] += static_cast<float>(lambda * s);
+  });
 }
 
 }  // namespace ctk
