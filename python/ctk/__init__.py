@@ -45,7 +45,7 @@ __all__ = [
     "BinnedProjection", "CalibrationResult", "DiagnosisResult", "InputError", "ReconstructionResult", "RefineResult", "SimulationResult", "calibrate", "diagnose", "reconstruct", "simulate", "circular_matrices", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection",
     "Measurements", "__version__", "as_linear_operator", "load_measurements", "read_image", "cone_vec_from_matrices", "fdk", "geometry_matrices",
     "matrices_from_cone_vec", "read_cone_vec", "read_diagnosis", "read_geometry", "read_scan",
-    "sirt", "wls_cg", "write_geometry", "write_scan",
+    "os_sqs", "sirt", "wls_cg", "write_geometry", "write_scan",
 ]
 
 
@@ -84,6 +84,18 @@ def wls_cg(operator: Operator, b: np.ndarray, *, weights: Optional[np.ndarray] =
     the 'ctk' logger at INFO level."""
     x, report = _ctk._wls_cg(operator, b, weights, x0, iterations, tolerance, lam, regulariser,
                              _iteration_hook("wls-cg", callback))
+    return SolveResult(x, report["iterations"], report["stop_reason"])
+
+
+def os_sqs(operator: Operator, b: np.ndarray, *, weights: Optional[np.ndarray] = None, x0: Optional[np.ndarray] = None,
+           epochs: int = 8, subsets: int = 12, lam: float = 0.0, regulariser: str = "identity", huber_delta: float = 0.0,
+           non_negative: bool = True, callback: Optional[Callable[[dict], Optional[bool]]] = None) -> SolveResult:
+    """OS-SQS with Nesterov momentum on wls_cg's objective (optionally the edge-preserving Huber
+    penalty, huber_delta > 0, weighted by lam): one step per ordered subset, the subsets spread
+    over the views' source directions for a Projector (interleaved by index for other
+    operators). One log entry per epoch; callback as for wls_cg (called after each epoch)."""
+    x, report = _ctk._os_sqs(operator, b, weights, x0, epochs, subsets, lam, regulariser, huber_delta, non_negative,
+                             _iteration_hook("os-sqs", callback))
     return SolveResult(x, report["iterations"], report["stop_reason"])
 
 

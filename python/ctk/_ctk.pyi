@@ -72,3 +72,6 @@ def _simulate(out: str, phantoms: list[str], trajectory: str, views: int, nside:
               supersampling: int, output: str, flat_counts: float, dark_counts: float, kvp: Optional[float],
               filter_al_mm: float, robot_noise_mm: float, robot_noise_deg: float, seed: int, effects: Optional[dict[str, Any]],
               progress: Optional[Callable[[int, int], None]], log: Callable[[str], None]) -> dict[str, Any]: ...
+def _os_sqs(operator: Operator, b: npt.ArrayLike, weights: Optional[npt.ArrayLike], x0: Optional[npt.ArrayLike], epochs: int,
+            subsets: int, lam: float, regulariser: str, huber_delta: float, non_negative: bool,
+            callback: Callable[[dict[str, Any]], Optional[bool]]) -> tuple[np.ndarray, dict[str, Any]]: ...

@@ -12,6 +12,8 @@
 #include "bindings.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/fdk.hpp"
+#include "ctk/recon/ordered_subsets.hpp"
+#include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/solver_state.hpp"
 #include "ctk/recon/wls_cg.hpp"
@@ -122,6 +124,43 @@ py::tuple sirt(const ProjectionOperator& A, const FloatArray& b, const py::objec
   return py::make_tuple(to_numpy(std::move(x)), r);
 }
 
+py::tuple os_sqs(const ProjectionOperator& A, const FloatArray& b, const py::object& weights, const py::object& x0, int epochs,
+                 int subsets, double lam, const std::string& regulariser, double huber_delta, bool non_negative,
+                 const py::object& callback) {
+  OsSqsOptions o;
+  o.epochs = epochs;
+  o.lambda = lam;
+  if (regulariser != "identity" && regulariser != "gradient")
+    throw py::value_error("regulariser must be 'identity' or 'gradient', not '" + regulariser + "'");
+  o.regulariser = regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
+  o.huber_delta = huber_delta;
+  o.non_negative = non_negative;
+  o.validate();
+  if (subsets < 1) throw py::value_error("subsets must be at least 1");
+  const ProjectionStack data = data_stack(A, b, "b");
+  std::optional<ProjectionStack> w;
+  if (!weights.is_none()) w = data_stack(A, weights.cast<FloatArray>(), "weights");
+  // Subsets spread over the views' source directions where the operator knows its matrices (the
+  // projector); otherwise interleaved by index.
+  std::vector<std::vector<int>> groups;
+  if (const auto* joseph = dynamic_cast<const JosephOperator*>(&A)) {
+    groups = ordered_subsets(joseph->views(), subsets);
+  } else {
+    groups.resize(static_cast<std::size_t>(std::min(subsets, A.range().views)));
+    for (int v = 0; v < A.range().views; ++v) groups[static_cast<std::size_t>(v) % groups.size()].push_back(v);
+  }
+  Volume x = start_volume(A, x0);
+  SolverControl control(callback);
+  SolverReport report;
+  {
+    py::gil_scoped_release free;
+    report =
+        solve_os_sqs(A, data, w ? &*w : nullptr, x, groups, o, control.on_iteration(), control.checkpointing()->stop_requested);
+  }
+  py::object r = control.finish(report);
+  return py::make_tuple(to_numpy(std::move(x)), r);
+}
+
 py::array_t<float> fdk(const JosephOperator& A, const FloatArray& projections, const std::string& window) {
   if (window != "hann" && window != "ram-lak") throw py::value_error("window must be 'hann' or 'ram-lak', not '" + window + "'");
   ProjectionStack filtered = data_stack(A, projections, "the projections");  // filtered in place: a copy
@@ -142,6 +181,9 @@ void bind_solvers(py::module_& m) {
         py::arg("tolerance"), py::arg("lam"), py::arg("regulariser"), py::arg("callback"));
   m.def("_sirt", &sirt, py::arg("operator"), py::arg("b"), py::arg("x0"), py::arg("iterations"), py::arg("relaxation"),
         py::arg("non_negative"), py::arg("callback"));
+  m.def("_os_sqs", &os_sqs, py::arg("operator"), py::arg("b"), py::arg("weights"), py::arg("x0"), py::arg("epochs"),
+        py::arg("subsets"), py::arg("lam"), py::arg("regulariser"), py::arg("huber_delta"), py::arg("non_negative"),
+        py::arg("callback"));
   m.def("fdk", &fdk, py::arg("projector"), py::arg("projections"), py::arg("window") = "hann", R"doc(
 FDK for a circular scan on the projector's matrices, volume and detector: the sources must lie on
 a circle (ValueError with the deviation otherwise); short scans get Parker weights. `projections`
