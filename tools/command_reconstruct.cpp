@@ -49,7 +49,7 @@ ReconstructionOptions library_options(const ReconstructOptions& o) {
   r.iterations = o.iterations;
   r.lambda = o.lambda;
   r.tolerance = o.tolerance;
-  r.regulariser = o.regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
+  r.regulariser = regulariser_from_string(o.regulariser);
   r.huber_delta = o.huber_delta;
   r.statistical_weights = !o.unweighted;
   r.undistort = !o.as_measured;
@@ -127,7 +127,7 @@ void run_reconstruct(const ReconstructOptions& o) {
     if (!m.distortion_note.empty()) std::cout << m.distortion_note << "\n";
     if (m.clamped_pixels > 0)
       std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
-    report_masked_and_left_out(m, geometry.source());
+    report_masked_and_left_out(m.masked_pixels, m.left_out);  // run_reconstruction then requires views left
   };
   hooks.iterating = [&](int done, int total) { (*solving)(done, total); };
   hooks.resume = [&](const nlohmann::json& identity) -> std::optional<SolverState> {

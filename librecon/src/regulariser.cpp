@@ -1,11 +1,19 @@
 #include "ctk/recon/regulariser.hpp"
 
+#include <stdexcept>
+
 #include "neighbour_pairs.hpp"
 #include "vector_ops.hpp"
 
 namespace ctk {
 
 const char* to_string(Regulariser r) { return r == Regulariser::identity ? "identity" : "gradient"; }
+
+Regulariser regulariser_from_string(const std::string& name) {
+  for (Regulariser r : {Regulariser::identity, Regulariser::gradient})
+    if (name == to_string(r)) return r;
+  throw std::invalid_argument("regulariser: expected identity or gradient, got '" + name + "'");
+}
 
 double regulariser_value(Regulariser r, const Volume& x) {
   if (r == Regulariser::identity) return 0.5 * detail::dot(x.data, x.data);

@@ -90,9 +90,7 @@ py::tuple wls_cg(const ProjectionOperator& A, const FloatArray& b, const py::obj
   o.iterations = iterations;
   o.tolerance = tolerance;
   o.lambda = lam;
-  if (regulariser != "identity" && regulariser != "gradient")
-    throw py::value_error("regulariser must be 'identity' or 'gradient', not '" + regulariser + "'");
-  o.regulariser = regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
+  o.regulariser = regulariser_from_string(regulariser);  // std::invalid_argument: ValueError
   o.validate();
   const ProjectionStack data = data_stack(A, b, "b");
   std::optional<ProjectionStack> w;
@@ -130,9 +128,7 @@ py::tuple os_sqs(const ProjectionOperator& A, const FloatArray& b, const py::obj
   OsSqsOptions o;
   o.epochs = epochs;
   o.lambda = lam;
-  if (regulariser != "identity" && regulariser != "gradient")
-    throw py::value_error("regulariser must be 'identity' or 'gradient', not '" + regulariser + "'");
-  o.regulariser = regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
+  o.regulariser = regulariser_from_string(regulariser);  // std::invalid_argument: ValueError
   o.huber_delta = huber_delta;
   o.non_negative = non_negative;
   o.validate();

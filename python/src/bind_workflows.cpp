@@ -165,13 +165,11 @@ py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& g
                      double tolerance, bool weighted, bool undistort, const std::optional<std::array<int, 3>>& size,
                      double voxel_mm, const py::object& progress) {
   ReconstructionOptions o;
-  if (regulariser != "identity" && regulariser != "gradient")
-    throw py::value_error("regulariser must be 'identity' or 'gradient', not '" + regulariser + "'");
   o.method = reconstruction_method(method);  // std::invalid_argument (ValueError) naming the others
   o.subsets = subsets;
   o.iterations = iterations;
   o.lambda = lambda;
-  o.regulariser = regulariser == "gradient" ? Regulariser::gradient : Regulariser::identity;
+  o.regulariser = regulariser_from_string(regulariser);
   o.huber_delta = huber_delta;
   o.tolerance = tolerance;
   o.statistical_weights = weighted;

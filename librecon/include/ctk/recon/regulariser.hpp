@@ -10,6 +10,8 @@ namespace ctk {
 
 enum class Regulariser { identity, gradient };
 const char* to_string(Regulariser r);
+/// "identity" or "gradient"; std::invalid_argument naming the others.
+Regulariser regulariser_from_string(const std::string& name);
 
 /// 1/2 ||G x||^2
 double regulariser_value(Regulariser r, const Volume& x);
