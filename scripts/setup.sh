@@ -12,6 +12,7 @@ packages=(
   openimageio-tools      # its CMake package file refers to these binaries
   libopenexr-dev         # EXR
   libtiff-dev            # TIFF projections read directly (libdeflate)
+  libhdf5-dev            # HDF5 volumes
   libgeographiclib-dev   # equal-area map projection
   libhealpix-cxx-dev     # sphere pixelisation
   libcli11-dev           # command line

@@ -22,6 +22,7 @@
 #include "ctk/proj/joseph_projector.hpp"
 #include "ctk/proj/reference_projector.hpp"
 #include "ctk/proj/standard_problem.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk::tools {
 
@@ -84,6 +85,7 @@ void write_dump_manifest(const StandardProblem& p, const std::vector<ProjectionM
   }
   const nlohmann::json j = {
       {"format", "ctk-bench-dump/1"},
+      {"provenance", provenance()},
       {"trajectory", p.trajectory},
       {"subset", subset},
       {"volume",

@@ -36,11 +36,18 @@ struct CalibrateOptions {
   bool resume = false;
 };
 
+// A scan's content as the views depend on it: its JSON without the provenance of whoever wrote it.
+std::string scan_content(const ScanDescription& scan) {
+  nlohmann::json j = scan_to_json(scan);
+  j.erase("provenance");
+  return j.dump();
+}
+
 // What a journal's views belong to: the same scan (its content) and the options a view depends on.
 nlohmann::json calibration_run(const CalibrateOptions& o, const ScanDescription& scan) {
   const CalibrationOptions& c = o.calibration;
   return {{"scan", fs::absolute(o.scan).lexically_normal().string()},
-          {"scan_content", std::to_string(std::hash<std::string>{}(scan_to_json(scan).dump()))},
+          {"scan_content", std::to_string(std::hash<std::string>{}(scan_content(scan)))},
           {"min_spheres", c.min_spheres},
           {"max_rms_px", c.max_rms_px},
           {"search_px", c.search_px},

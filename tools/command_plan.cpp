@@ -11,6 +11,7 @@
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/core/atomic_write.hpp"
+#include "ctk/core/volume_file.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
@@ -21,6 +22,7 @@
 #include "ctk/proj/projection_reading.hpp"
 #include "ctk/recon/measurements.hpp"
 #include "ctk/recon/wls_cg.hpp"
+#include "ctk/core/provenance.hpp"
 #include "progress.hpp"
 
 namespace ctk::tools {
@@ -192,7 +194,7 @@ Volume evaluation_reconstruction(const fs::path& folder, const VolumeLayout& lay
     recon.add_view(m.matrices[static_cast<std::size_t>(v)], p, w);
   }
   recon.update();
-  write_volume_nrrd(recon.volume(), folder / "volume.nrrd");
+  write_volume(recon.volume(), folder / "volume.nrrd");
   return recon.volume();
 }
 
@@ -261,7 +263,7 @@ void compare(const PlanCommandOptions& o, const ScanSimulation& simulation) {
   const int n = read_scan(o.out / "planned" / "scan.json").projections.count;
   const VolumeLayout layout = evaluation_layout(o, simulation);
   const Volume truth = voxelised(sample, layout);
-  write_volume_nrrd(truth, o.out / "truth.nrrd");
+  write_volume(truth, o.out / "truth.nrrd");
   const SampleRegion region;
   const std::array<int, 3> through = centre_of_mass_voxel(truth, region);
   // Absorbers in the truth by the planner's own rule: more than times_wall the holder's wall.
@@ -295,6 +297,7 @@ void compare(const PlanCommandOptions& o, const ScanSimulation& simulation) {
   compared.resize(3);  // the picture shows planned, whole sphere and the first random draw
   write_trajectory_comparison_png(compared, truth, o.out / "comparison.png");
   nlohmann::json j = {{"format", "ctk-plan-comparison/1"},
+                      {"provenance", provenance()},
                       {"sample", sample.name},
                       {"volume",
                        {{"size", layout.size},
@@ -346,7 +349,7 @@ void run_plan(const PlanCommandOptions& o) {
       if (v.acquired) v.projection_file = fs::relative(fs::absolute(o.lab / v.projection_file), fs::absolute(o.out)).string();
     write_planned_scan(r, setup, o.out);
     write_plan_map_png(r, o.out / "plan-map.png");
-    write_volume_nrrd(r.coarse, o.out / "coarse.nrrd");
+    write_volume(r.coarse, o.out / "coarse.nrrd");
     report_plan(r, o.out);
     return;
   }
@@ -366,7 +369,7 @@ void run_plan(const PlanCommandOptions& o) {
   const PlanningResult r = plan_trajectory(acquisition, setup, options, on_view);
   write_planned_scan(r, setup, folder);
   write_plan_map_png(r, folder / "plan-map.png");
-  write_volume_nrrd(r.coarse, folder / "coarse.nrrd");
+  write_volume(r.coarse, folder / "coarse.nrrd");
   report_plan(r, folder);
   if (o.compare) {
     acquire_others(o, lab.simulation(), setup, r.calibrated());

@@ -11,6 +11,7 @@
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/core/image_io.hpp"
+#include "ctk/core/volume_file.hpp"
 #include "ctk/core/json_access.hpp"
 #include "ctk/core/output_set.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
@@ -74,7 +75,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   require_projection_files(scan, o.scan.string(), "projections.count");
   files.scan("--scan", o.scan, scan);
   files.input("--geometry", o.geometry);
-  files.output("--out", o.out);
+  for (const fs::path& written : volume_files(o.out)) files.output("--out", written);
   const fs::path log_file = fs::path(o.out).replace_extension(".log.json");
   files.output("the log beside --out", log_file);
   const fs::path state_file = fs::path(o.out).replace_extension(".state");
@@ -163,7 +164,7 @@ void run_reconstruct(const ReconstructOptions& o) {
               << " deg" << (run.circle->arc_rad < 2 * M_PI - 1e-9 ? " (short scan: Parker weights)" : "") << "\n";
   std::cout << run.brief() << "\n";
 
-  write_volume_nrrd(run.volume, o.out);
+  write_volume(run.volume, o.out);
   write_previews(run.volume, o.out);
   nlohmann::json log = run.report();
   log["scan"] = o.scan.string();
@@ -184,7 +185,11 @@ void register_reconstruct(CLI::App& app) {
   cmd->add_option("--scan", o->scan, "scan.json (ctk-scan/1)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--geometry", o->geometry, "Per-view matrices (ctk-geometry/1); default: the scan's nominal geometry")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--out", o->out, "Volume to write (.nrrd: header and data in one file)")->required();
+  cmd->add_option("--out", o->out,
+                  "Volume to write, the format by extension: .nrrd, .mha (one file each), .mhd (+ .raw), .tif (float "
+                  "pages, Fiji), .h5 (HDF5 dataset 'volume', z y x)")
+      ->required()
+      ->check(volume_file_name);
   cmd->add_option("--method", o->method,
                   "wls-cg; os-sqs (ordered subsets with momentum, the same objective in fewer passes over the data); sirt; "
                   "fdk (circular scans only)")

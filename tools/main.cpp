@@ -7,8 +7,8 @@
 
 #include "commands.hpp"
 #include "ctk/core/error.hpp"
+#include "ctk/core/provenance.hpp"
 #include "ctk/proj/joseph_projector.hpp"
-#include "git_version.h"
 #include "interruption.hpp"
 
 namespace {
@@ -18,8 +18,8 @@ namespace {
 std::string version_text() {
   std::string targets;
   for (const std::string& t : ctk::JosephProjector::simd_targets()) targets += (targets.empty() ? "" : " ") + t;
-  return std::string("ctk ") + CTK_VERSION + " (" + CTK_GIT_DESCRIBE + ")\ncompiler: " + __VERSION__ +
-         "\nSIMD targets compiled: " + targets + "; chosen at run time: " + ctk::JosephProjector::simd_target();
+  return "ctk " + ctk::build_version() + "\ncompiler: " + __VERSION__ + "\nSIMD targets compiled: " + targets +
+         "; chosen at run time: " + ctk::JosephProjector::simd_target();
 }
 
 }  // namespace
@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   // for every view (15 % of a calibration's time); keep such blocks in the heap instead.
   mallopt(M_MMAP_THRESHOLD, 64 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
+  ctk::set_invocation(argc, argv);
   CLI::App app{"ctk — calibrate and reconstruct cone-beam CT scans taken along arbitrary (robot) trajectories"};
   app.set_version_flag("--version", version_text());
   app.require_subcommand(1);

@@ -7,6 +7,9 @@
 #include <cmath>
 #include <string>
 
+#include "ctk/core/error.hpp"
+#include "ctk/core/volume_file.hpp"
+
 namespace ctk::tools {
 
 // A finite number above zero (`strictly`) or at least zero.
@@ -33,5 +36,18 @@ inline const CLI::Validator fraction_below_one(
     },
     "[0, 1)", "fraction below one");
 inline const CLI::Validator non_negative_number = finite_number_from_zero(false);
+
+// A volume file whose extension names a format ctk writes, so a mistyped one is refused before
+// any work.
+inline const CLI::Validator volume_file_name(
+    [](std::string& input) -> std::string {
+      try {
+        volume_format(input, "");
+        return {};
+      } catch (const InputError& e) {
+        return e.what();
+      }
+    },
+    "VOLUME", "volume file");
 
 }  // namespace ctk::tools

@@ -5,6 +5,7 @@
 
 #include "ctk/core/error.hpp"
 #include "ctk/core/json_access.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -106,7 +107,7 @@ CalibrationJournal::CalibrationJournal(fs::path file, const nlohmann::json& run)
   if (file_.has_parent_path()) fs::create_directories(file_.parent_path());
   out_.open(file_, std::ios::trunc);
   if (!out_) throw std::runtime_error(file_.string() + ": cannot write the calibration journal");
-  out_ << nlohmann::json({{"format", kFormat}, {"run", run}}).dump() << "\n" << std::flush;
+  out_ << nlohmann::json({{"format", kFormat}, {"provenance", provenance()}, {"run", run}}).dump() << "\n" << std::flush;
 }
 
 std::unique_ptr<CalibrationJournal> CalibrationJournal::resume(fs::path file, const nlohmann::json& run) {

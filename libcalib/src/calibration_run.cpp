@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "ctk/core/statistics.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -46,28 +47,20 @@ CalibrationRun run_calibration(const ScanDescription& scan, const CalibrationRun
   run.has_holder = scan.holder.has_value();
   if (scan.holder && scan.holder->wall) run.declared_wall = scan.holder->wall;
   ScanCalibration& c = run.calibration;
-  c = calibrate_scan(scan, o.calibration, progress, control);
-  if (c.left_undone > 0) return run;
-  // A holder whose wall the scan does not declare: measured from the images, and the views it
-  // cost (a sphere on the wall's silhouette taken for a misfit) calibrated again with it.
+  // A holder whose wall the scan does not declare: measured first in a sample of views that see it
+  // from the side, then every view calibrated with it as if declared (its shadow part of the
+  // spheres' background, the spheres on its silhouette kept).
+  double wall_seconds = 0;
+  ScanDescription with_wall = scan;
   if (scan.holder && !scan.holder->wall) {
     const auto start = std::chrono::steady_clock::now();
-    run.wall = measure_holder_wall(scan, c);
-    if (run.wall &&
-        std::any_of(c.views.begin(), c.views.end(), [](const ViewCalibration& v) { return v.status == ViewStatus::rejected; })) {
-      ScanDescription with_wall = scan;
-      with_wall.holder->wall = run.wall->wall;
-      std::map<int, ViewCalibration> kept;
-      for (std::size_t v = 0; v < c.views.size(); ++v)
-        if (c.views[v].status != ViewStatus::rejected) kept[static_cast<int>(v)] = c.views[v];
-      BatchControl again;
-      again.done = &kept;
-      const double seconds = c.seconds;
-      c = calibrate_scan(with_wall, o.calibration, {}, &again);
-      c.seconds += seconds;
-    }
-    c.seconds += seconds_since(start);
+    run.wall = measure_holder_wall(scan, calibrate_scan_views(scan, wall_sample_views(scan), o.calibration));
+    if (run.wall) with_wall.holder->wall = run.wall->wall;
+    wall_seconds = seconds_since(start);
   }
+  c = calibrate_scan(with_wall, o.calibration, progress, control);
+  c.seconds += wall_seconds;
+  if (c.left_undone > 0) return run;
   run.prior.reason = "switched off (--image-only)";
   if (!o.image_only) {
     const auto start = std::chrono::steady_clock::now();
@@ -120,6 +113,7 @@ nlohmann::json CalibrationRun::report() const {
   }
   nlohmann::json j = {
       {"format", "ctk-calibration-report/1"},
+      {"provenance", provenance()},
       {"summary", summary()},
       {"options", {{"min_spheres", options.min_spheres}, {"max_rms_px", options.max_rms_px}, {"search_px", options.search_px}}},
       {"views", views}};
@@ -129,13 +123,7 @@ nlohmann::json CalibrationRun::report() const {
                         {"inner_radius_mm", declared_wall->inner_radius_mm},
                         {"outer_radius_mm", declared_wall->outer_radius_mm}};
   else if (wall)
-    j["holder_wall"] = {{"declared", false},
-                        {"measured",
-                         {{"inner_radius_mm", wall->wall.inner_radius_mm},
-                          {"outer_radius_mm", wall->wall.outer_radius_mm},
-                          {"inner_sigma_mm", wall->inner_sigma_mm},
-                          {"outer_sigma_mm", wall->outer_sigma_mm},
-                          {"views", wall->views}}}};
+    j["holder_wall"] = {{"declared", false}, {"measured", to_json(*wall)}};
   else if (has_holder)
     j["holder_wall"] = {{"declared", false}, {"measured", nullptr}};
   return j;

@@ -10,6 +10,7 @@
 #include "ctk/core/error.hpp"
 #include "ctk/geom/panda.hpp"
 #include "ctk/core/statistics.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -519,6 +520,7 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& o) 
   }
   return {
       {"format", "ctk-diagnosis/1"},
+      {"provenance", provenance()},
       {"baseline", baseline},
       {"final", after},
       {"effects", effects},

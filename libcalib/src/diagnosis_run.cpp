@@ -54,10 +54,29 @@ DiagnosisRun run_diagnosis(const ScanDescription& scan, const Geometry& geometry
     if (log && !line.empty()) log(line);
   };
   if (!scan.holder) throw InputError(scan.folder.string(), "holder", "the diagnosis needs the holder's spheres (missing)");
-  // The detections and matches behind the given calibration, each view started from its pose.
-  const ScanCalibration c = recalibrate_scan(scan, geometry, o.calibration, progress);
-  DiagnosisOptions options = o.diagnosis;
   DiagnosisRun run;
+  // A wall the scan does not declare is measured in the views that see it from the side (from
+  // the given poses) and then modelled as if declared, as ctk calibrate does.
+  ScanDescription modelled = scan;
+  if (!scan.holder->wall) {
+    Geometry sample = geometry;
+    std::vector<char> in_sample(sample.views.size(), 0);
+    for (int v : wall_sample_views(scan))
+      if (v < static_cast<int>(in_sample.size())) in_sample[static_cast<std::size_t>(v)] = 1;
+    for (std::size_t v = 0; v < sample.views.size(); ++v)
+      if (!in_sample[v]) sample.views[v].status = ViewStatus::skipped;
+    run.wall = measure_holder_wall(scan, recalibrate_scan(scan, sample, o.calibration));
+    if (run.wall) {
+      modelled.holder->wall = run.wall->wall;
+      std::ostringstream wall;
+      wall << "holder wall not declared by the scan; measured in " << run.wall->views << " views: radii "
+           << run.wall->wall.inner_radius_mm << " and " << run.wall->wall.outer_radius_mm << " mm, modelled as declared";
+      say(wall.str());
+    }
+  }
+  // The detections and matches behind the given calibration, each view started from its pose.
+  const ScanCalibration c = recalibrate_scan(modelled, geometry, o.calibration, progress);
+  DiagnosisOptions options = o.diagnosis;
   run.repeatability = set_repeatability(o, scan, c, options);
   say(run.repeatability);
   run.observations = observe_scan(scan, c, options);
@@ -69,11 +88,15 @@ DiagnosisRun run_diagnosis(const ScanDescription& scan, const Geometry& geometry
   noise << run.observations.views.size() << " views, detection noise " << run.observations.centre_sigma_px << " px per axis";
   say(noise.str());
   run.diagnosis = diagnose(run.observations, options, log);
-  run.corrected = corrected_scan(scan, run.diagnosis);
+  run.corrected = corrected_scan(modelled, run.diagnosis);
   return run;
 }
 
-nlohmann::json DiagnosisRun::report() const { return diagnosis_to_json(diagnosis, observations); }
+nlohmann::json DiagnosisRun::report() const {
+  nlohmann::json j = diagnosis_to_json(diagnosis, observations);
+  if (wall) j["holder_wall"] = {{"declared", false}, {"measured", to_json(*wall)}};
+  return j;
+}
 
 std::string DiagnosisRun::brief() const {
   const Diagnosis& d = diagnosis;

@@ -115,15 +115,34 @@ ViewCamera view_camera(const ScanDescription& scan, int view) {
   return camera;
 }
 
-ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
-                               const std::function<void(int, int)>& progress, const BatchControl* control) {
+namespace {
+
+std::vector<FirstGuess> nominal_guesses(const ScanDescription& scan) {
   std::vector<FirstGuess> guesses;
   for (const NominalView& nominal : nominal_views(scan)) {
     FirstGuess g{nominal.T_camera_holder, nominal.reason};
     if (!g.T_camera_holder && nominal.P) g.T_camera_holder = nominal.P->decompose().T_camera_frame;
     guesses.push_back(g);
   }
-  return calibrate_views(scan, guesses, options, progress, control);
+  return guesses;
+}
+
+}  // namespace
+
+ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
+                               const std::function<void(int, int)>& progress, const BatchControl* control) {
+  return calibrate_views(scan, nominal_guesses(scan), options, progress, control);
+}
+
+ScanCalibration calibrate_scan_views(const ScanDescription& scan, const std::vector<int>& views,
+                                     const CalibrationOptions& options) {
+  std::vector<FirstGuess> guesses = nominal_guesses(scan);
+  std::vector<char> wanted(guesses.size(), 0);
+  for (int v : views)
+    if (v >= 0 && v < static_cast<int>(guesses.size())) wanted[static_cast<std::size_t>(v)] = 1;
+  for (std::size_t v = 0; v < guesses.size(); ++v)
+    if (!wanted[v]) guesses[v] = FirstGuess{std::nullopt, "not in the sample"};
+  return calibrate_views(scan, guesses, options, {}, nullptr);
 }
 
 ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& calibrated, const CalibrationOptions& options,

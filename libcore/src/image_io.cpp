@@ -107,42 +107,6 @@ void write_image_uint16(const Image& counts, const fs::path& file) {
   write_single_image(counts.cols, counts.rows, TypeDesc::UINT16, pixels.data(), file);
 }
 
-void write_volume_nrrd(const Volume& v, const fs::path& nrrd_file) {
-  // Header and data in one file (NRRD's attached form): the file is written whole or not at all,
-  // never a header over another run's data.
-  const auto& l = v.layout;
-  std::ostringstream h;
-  h.precision(17);
-  h << "NRRD0004\n# written by ctk (run " << this_run_id() << "): holder frame, millimetres\ntype: float\ndimension: 3\n"
-    << "space: right-anterior-superior\n"
-    << "sizes: " << l.size[0] << " " << l.size[1] << " " << l.size[2] << "\n"
-    << "space directions: (" << l.voxel_mm.x() << ",0,0) (0," << l.voxel_mm.y() << ",0) (0,0," << l.voxel_mm.z() << ")\n"
-    << "space origin: (" << l.origin_mm.x() << "," << l.origin_mm.y() << "," << l.origin_mm.z() << ")\n"
-    << "kinds: domain domain domain\nendian: little\nencoding: raw\n\n";
-  write_file_atomically(nrrd_file, [&](std::ostream& out) {
-    out << h.str();
-    out.write(reinterpret_cast<const char*>(v.data.data()), static_cast<std::streamsize>(v.data.size() * sizeof(float)));
-  });
-}
-
-void write_volume_tiff(const Volume& v, const fs::path& file) {
-  write_path_atomically(file, [&](const fs::path& tmp) {
-    auto out = ImageOutput::create(file.string());
-    if (!out || !out->supports("multiimage")) throw std::runtime_error(file.string() + ": cannot write multi-page TIFF");
-    const int nz = v.layout.size[2];
-    std::vector<ImageSpec> specs(static_cast<std::size_t>(nz), ImageSpec(v.layout.size[0], v.layout.size[1], 1, TypeDesc::FLOAT));
-    if (!out->open(tmp.string(), nz, specs.data())) throw std::runtime_error(file.string() + ": " + out->geterror());
-    const std::size_t slice = static_cast<std::size_t>(v.layout.size[0]) * static_cast<std::size_t>(v.layout.size[1]);
-    for (int z = 0; z < nz; ++z) {
-      if (z > 0 && !out->open(tmp.string(), specs[static_cast<std::size_t>(z)], ImageOutput::AppendSubimage))
-        throw std::runtime_error(file.string() + ": " + out->geterror());
-      if (!out->write_image(TypeDesc::FLOAT, v.data.data() + static_cast<std::size_t>(z) * slice))
-        throw std::runtime_error(file.string() + ": " + out->geterror());
-    }
-    out->close();
-  });
-}
-
 float preview_ceiling(const Volume& volume) {
   if (volume.data.empty()) return 1e-6f;
   std::vector<float> sorted(volume.data.begin(), volume.data.end());

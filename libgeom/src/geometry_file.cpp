@@ -3,6 +3,7 @@
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/core/json_access.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -94,6 +95,7 @@ nlohmann::json geometry_to_json(const Geometry& g) {
     views.push_back(std::move(jv));
   }
   return {{"format", kFormat},
+          {"provenance", provenance()},
           {"detector",
            {{"cols", g.detector.cols},
             {"rows", g.detector.rows},

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "ctk/core/atomic_write.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -182,7 +183,7 @@ ScanDescription scan_from_json(const nlohmann::json& root, const fs::path& file)
   scan.folder = file.has_parent_path() ? file.parent_path() : fs::path(".");
   const JsonNode top(root, file.string(), "", &scan.warnings);
   if (!root.is_object()) top.fail("expected a JSON object");
-  top.warn_unknown_keys({"format", "detector", "source_to_detector_mm", "projections", "pose_source", "holder",
+  top.warn_unknown_keys({"format", "provenance", "detector", "source_to_detector_mm", "projections", "pose_source", "holder",
                          "source_drift_mm_per_100_views", "written_by"});
   const std::string format = top.at("format").string();
   if (format != kFormat) top.at("format").fail("expected \"" + std::string(kFormat) + "\", got \"" + format + "\"");
@@ -242,6 +243,7 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
   using nlohmann::json;
   json j;
   j["format"] = kFormat;
+  j["provenance"] = provenance();
   if (!scan.written_by_run.empty()) j["written_by"] = {{"run", scan.written_by_run}};
   j["detector"] = {{"cols", scan.detector.cols},
                    {"rows", scan.detector.rows},

@@ -8,6 +8,7 @@
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/core/json_access.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -35,6 +36,7 @@ AcquisitionAnswer FileExchangeAcquisition::acquire(const AcquisitionRequest& r) 
   nlohmann::json rows = nlohmann::json::array();
   for (int i = 0; i < 3; ++i) rows.push_back(json3(r.R_camera_holder.row(i).transpose()));
   const nlohmann::json request = {{"format", "ctk-plan-request/1"},
+                                  {"provenance", provenance()},
                                   {"view", r.view},
                                   {"direction_holder", json3(r.direction)},
                                   {"R_camera_holder", rows},
@@ -87,7 +89,8 @@ AcquisitionAnswer FileExchangeAcquisition::acquire(const AcquisitionRequest& r) 
 }
 
 void FileExchangeAcquisition::finish() {
-  write_text_atomically(folder_ / "done.json", nlohmann::json{{"format", "ctk-plan-done/1"}}.dump() + "\n");
+  write_text_atomically(folder_ / "done.json",
+                        nlohmann::json{{"format", "ctk-plan-done/1"}, {"provenance", provenance()}}.dump() + "\n");
 }
 
 AcquisitionRequest read_request(const std::filesystem::path& file) {

@@ -2,6 +2,7 @@
 
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/geom/scan.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -28,6 +29,7 @@ nlohmann::json trajectory_to_json(const PlanningResult& r) {
     sum += s;
   }
   return {{"format", "ctk-plan/1"},
+          {"provenance", provenance()},
           {"acquired", r.acquired()},
           {"calibrated", r.calibrated()},
           {"requests", r.views.size()},

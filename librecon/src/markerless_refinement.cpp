@@ -12,6 +12,7 @@
 #include "ctk/core/error.hpp"
 #include "ctk/core/statistics.hpp"
 #include "ctk/recon/detector_pattern.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -457,6 +458,7 @@ nlohmann::json refinement_to_json(const RefinementResult& r) {
   json not_observable = json::array();
   for (const auto& [what, why] : r.not_observable) not_observable.push_back({{"parameter", what}, {"reason", why}});
   return {{"format", "ctk-diagnosis/1"},
+          {"provenance", provenance()},
           {"mode", "markerless"},
           {"baseline",
            {{"views_ok", r.views}, {"heldout_projection_rms", r.heldout_rms_before}, {"sharpness_per_mm", r.sharpness_before}}},

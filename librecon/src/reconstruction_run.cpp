@@ -15,6 +15,7 @@
 #include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/wls_cg.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -95,6 +96,7 @@ nlohmann::json ReconstructionRun::report() const {
   const VolumeLayout& l = plan.layout;
   nlohmann::json r = {
       {"format", "ctk-reconstruction-log/1"},
+      {"provenance", provenance()},
       {"method", to_string(plan.method)},
       {"weights", plan.weighted ? "poisson" : "unit"},
       {"lambda", options.lambda},

@@ -9,6 +9,7 @@
 #include "ctk/core/error.hpp"
 #include "ctk/core/json_access.hpp"
 #include "ctk/core/output_set.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -40,6 +41,7 @@ void write_solver_state(const SolverSnapshot& s, const nlohmann::json& run, cons
   for (const FloatBuffer* v : s.vectors) lengths.push_back(v->size());
   const auto& l = s.x.layout;
   const nlohmann::json head = {{"format", kFormat},
+                               {"provenance", provenance()},
                                {"solver", s.solver},
                                {"iteration", s.iteration},
                                {"log", log},

@@ -5,6 +5,7 @@
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/json_access.hpp"
 #include "ctk/phantoms/material_attenuation.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -117,7 +118,7 @@ Phantom read_phantom(const std::filesystem::path& file, std::vector<std::string>
   const nlohmann::json json = read_json_file(file);
   const JsonNode root(json, file.string(), "", warnings);
   if (root.at("format").string() != "ctk-phantom/1") root.at("format").fail("expected \"ctk-phantom/1\"");
-  root.warn_unknown_keys({"format", "name", "units", "primitives"});
+  root.warn_unknown_keys({"format", "provenance", "name", "units", "primitives"});
   Phantom phantom;
   phantom.name = root.find("name") ? root.at("name").string() : file.stem().string();
   const JsonNode list = root.at("primitives");
@@ -129,6 +130,7 @@ Phantom read_phantom(const std::filesystem::path& file, std::vector<std::string>
 nlohmann::json phantom_to_json(const Phantom& phantom) {
   nlohmann::json j;
   j["format"] = "ctk-phantom/1";
+  j["provenance"] = provenance();
   j["name"] = phantom.name;
   j["units"] = "lengths in mm (holder frame), attenuation in 1/mm, rotation vectors in degrees";
   j["primitives"] = nlohmann::json::array();

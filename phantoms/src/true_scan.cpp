@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "ctk/phantoms/builtin_phantoms.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 
@@ -264,6 +265,7 @@ nlohmann::json truth_to_json(const ScanSimulation& sim, const TrueScan& truth, c
 
   return {
       {"format", "ctk-truth/1"},
+      {"provenance", provenance()},
       {"geometry", geometry_file},
       {"effects", effects},
       {"conventions",

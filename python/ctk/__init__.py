@@ -34,15 +34,17 @@ from ._ctk import (  # noqa: F401  (re-exported)
     read_cone_vec,
     read_geometry,
     read_scan,
+    read_volume,
     write_geometry,
     write_scan,
+    write_volume,
 )
 from . import _ctk
 
 _log = logging.getLogger("ctk")
 
 __all__ = [
-    "BinnedProjection", "CalibrationResult", "DiagnosisResult", "InputError", "ReconstructionResult", "RefineResult", "SimulationResult", "calibrate", "diagnose", "reconstruct", "simulate", "circular_matrices", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection",
+    "BinnedProjection", "CalibrationResult", "DiagnosisResult", "InputError", "ReconstructionResult", "RefineResult", "SimulationResult", "calibrate", "diagnose", "reconstruct", "simulate", "circular_matrices", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection", "read_volume", "write_volume",
     "Measurements", "__version__", "as_linear_operator", "load_measurements", "read_image", "cone_vec_from_matrices", "fdk", "geometry_matrices",
     "matrices_from_cone_vec", "read_cone_vec", "read_diagnosis", "read_geometry", "read_scan",
     "os_sqs", "sirt", "wls_cg", "write_geometry", "write_scan",

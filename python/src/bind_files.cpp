@@ -1,6 +1,6 @@
 // The files of the toolkit as Python objects: scan and geometry documents as dicts (checked as the
 // command line checks them, written atomically), matrices as (views, 3, 4) arrays, ASTRA cone_vec
-// rows as (views, 12) arrays.
+// rows as (views, 12) arrays, volume files as (z, y, x) float32 arrays with their voxel size and origin.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "ctk/core/volume_file.hpp"
 #include "ctk/geom/astra.hpp"
 #include "ctk/geom/geometry_file.hpp"
 #include "ctk/geom/scan.hpp"
@@ -59,6 +60,37 @@ py::array_t<double> cone_vec_from_matrices(const DoubleArray& matrices, const st
 }  // namespace
 
 void bind_files(py::module_& m) {
+  m.def(
+      "read_volume",
+      [](const fs::path& file) {
+        Volume v = read_volume(file);
+        const VolumeLayout l = v.layout;
+        py::dict layout;
+        layout["voxel_mm"] = std::array<double, 3>{l.voxel_mm.x(), l.voxel_mm.y(), l.voxel_mm.z()};
+        layout["origin_mm"] = std::array<double, 3>{l.origin_mm.x(), l.origin_mm.y(), l.origin_mm.z()};
+        return py::make_tuple(to_numpy(std::move(v)), layout);
+      },
+      py::arg("file"),
+      "A volume file (.nrrd, .mha, .mhd, .tif, .h5) as (array (z, y, x) float32, {'voxel_mm': (x, y, z), 'origin_mm': "
+      "(x, y, z)}); origin_mm is the centre of voxel 0 in the holder frame.");
+  m.def(
+      "write_volume",
+      [](const FloatArray& volume, const fs::path& file, const std::array<double, 3>& voxel_mm, const py::object& origin_mm) {
+        if (volume.ndim() != 3) throw py::value_error("the volume has shape " + shape_text(volume) + ", expected (z, y, x)");
+        VolumeLayout l;
+        l.size = {static_cast<int>(volume.shape(2)), static_cast<int>(volume.shape(1)), static_cast<int>(volume.shape(0))};
+        l.voxel_mm = {voxel_mm[0], voxel_mm[1], voxel_mm[2]};
+        l.origin_mm = origin_mm.is_none() ? VolumeLayout::centred(l.size, l.voxel_mm).origin_mm : [&] {
+          const auto o = origin_mm.cast<std::array<double, 3>>();
+          return Eigen::Vector3d(o[0], o[1], o[2]);
+        }();
+        Volume v(l);
+        std::copy(volume.data(), volume.data() + v.data.size(), v.data.data());
+        write_volume(v, file);
+      },
+      py::arg("volume"), py::arg("file"), py::arg("voxel_mm") = std::array<double, 3>{1, 1, 1}, py::arg("origin_mm") = py::none(),
+      "Writes a (z, y, x) float32 array in the format the extension names (.nrrd, .mha, .mhd + .raw, .tif, .h5), "
+      "atomically; voxel_mm and origin_mm (centre of voxel 0; default: centred on the holder origin) as (x, y, z).");
   m.def(
       "read_scan", [](const fs::path& file) { return to_python(scan_to_json(read_scan(file))); }, py::arg("file"),
       "A ctk-scan/1 file, checked (InputError naming file and key), as a dict.");

@@ -6,12 +6,17 @@
 
 #include "bindings.hpp"
 #include "ctk/core/error.hpp"
+#include "ctk/core/provenance.hpp"
 
 namespace py = pybind11;
 
 PYBIND11_MODULE(_ctk, m) {
   m.doc() = "ctk: calibration and reconstruction of cone-beam CT along arbitrary trajectories";
   m.attr("__version__") = CTK_VERSION;
+  // Files written from Python record the script that wrote them.
+  std::string invocation = "python";
+  for (const py::handle& word : py::module_::import("sys").attr("argv")) invocation += " " + py::str(word).cast<std::string>();
+  ctk::set_invocation(invocation);
 
   // InputError: a file the toolkit read is not what it must be; .file and .key say where.
   static py::exception<ctk::InputError> input_error(m, "InputError", PyExc_ValueError);

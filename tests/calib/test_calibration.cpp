@@ -8,6 +8,7 @@
 
 #include "../test_support.hpp"
 #include "pose_errors.hpp"
+#include "ctk/calib/calibration_run.hpp"
 #include "ctk/calib/holder_wall.hpp"
 #include "ctk/calib/scan_calibration.hpp"
 #include "ctk/calib/sphere_matching.hpp"
@@ -191,8 +192,35 @@ TEST(Calibration, MeasuresAnUndeclaredHolderWallFromTheImages) {
   std::cout << "wall measured in " << m->views << " views: inner " << m->wall.inner_radius_mm << " +- " << m->inner_sigma_mm
             << ", outer " << m->wall.outer_radius_mm << " +- " << m->outer_sigma_mm << " mm\n";
   EXPECT_GE(m->views, 10);
-  EXPECT_NEAR(m->wall.inner_radius_mm, truth.inner_radius_mm, std::min(0.1, 4 * m->inner_sigma_mm + 0.01));
-  EXPECT_NEAR(m->wall.outer_radius_mm, truth.outer_radius_mm, std::min(0.1, 4 * m->outer_sigma_mm + 0.01));
+  // Within two of their stated standard deviations, and those a small part of the 0.1 mm asked.
+  EXPECT_NEAR(m->wall.inner_radius_mm, truth.inner_radius_mm, 2 * m->inner_sigma_mm);
+  EXPECT_NEAR(m->wall.outer_radius_mm, truth.outer_radius_mm, 2 * m->outer_sigma_mm);
+  EXPECT_LE(std::max(m->inner_sigma_mm, m->outer_sigma_mm), 0.01);
+}
+
+// The calibration workflow on a scan that does not declare its wall: measured first in a sample of
+// side views, then every view calibrated with it as if declared, so the spheres on the wall's
+// silhouette are used again and the poses are as good as with the wall declared.
+TEST(Calibration, WorkflowModelsAnUndeclaredWallAsIfDeclared) {
+  const auto dir = testing::scratch_dir();
+  simulate_scan(reference_scan(24), dir);
+  const ScanDescription scan = read_scan(dir / "scan.json");
+  ScanDescription wall_unknown = scan;
+  wall_unknown.holder->wall.reset();
+  CalibrationRunOptions options;
+  options.image_only = true;
+  const CalibrationRun declared = run_calibration(scan, options);
+  const CalibrationRun measured = run_calibration(wall_unknown, options);
+  ASSERT_TRUE(measured.wall.has_value());
+  EXPECT_FALSE(declared.wall.has_value());
+  const double used_declared = mean_spheres_used(declared.calibration), used_measured = mean_spheres_used(measured.calibration);
+  const PoseErrors e_declared = compare_with_truth(declared.calibration, dir),
+                   e_measured = compare_with_truth(measured.calibration, dir);
+  std::cout << "spheres per view " << used_declared << " (declared) and " << used_measured << " (measured); across "
+            << e_declared.across_rms_mm * 1000 << " and " << e_measured.across_rms_mm * 1000 << " um RMS\n";
+  EXPECT_NEAR(used_measured, used_declared, 0.5);
+  EXPECT_LE(e_measured.across_rms_mm, 1.1 * e_declared.across_rms_mm + 0.0005);
+  EXPECT_NE(measured.report().at("holder_wall").at("measured"), nullptr);
 }
 
 TEST(Calibration, CalibratesViewsAlongTheHolderAxisWallDeclaredOrNot) {

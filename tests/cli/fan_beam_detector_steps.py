@@ -14,6 +14,8 @@ import shutil
 import subprocess
 import sys
 
+from failures import report
+
 
 def main():
     parser = argparse.ArgumentParser()
@@ -57,10 +59,7 @@ def main():
             failures.append(f"step {s:+.3f} px is not 3.342 +- 0.2")
     if steps[0] * steps[1] <= 0:
         failures.append("the steps do not go the same way")
-    for f in failures:
-        print("FAIL", f)
-    print(f"{0 if failures else 1} passed, {1 if failures else 0} failed")
-    return 1 if failures else 0
+    return report(failures)
 
 
 if __name__ == "__main__":

@@ -36,8 +36,11 @@ expect "geometry --out through a hard link" "the same file under another name" \
   "$ctk" geometry --scan s/scan.json --out hard-joints.csv
 expect "geometry --astra onto its own --out" "would overwrite the output --out" \
   "$ctk" geometry --scan s/scan.json --out both.json --astra both.json
+# A geometry file under a volume's extension (readers go by content): --out passes the extension
+# check and must still be refused.
+cp s/truth-geometry.json s/geometry.mha
 expect "reconstruct --out onto --geometry" "would overwrite the input --geometry" \
-  "$ctk" reconstruct --scan s/scan.json --geometry s/truth-geometry.json --out s/truth-geometry.json
+  "$ctk" reconstruct --scan s/scan.json --geometry s/geometry.mha --out s/geometry.mha
 expect "diagnose --corrected-scan onto the scan" "would overwrite the input --scan" \
   "$ctk" diagnose --scan s/scan.json --geometry s/truth-geometry.json --out d.json --corrected-scan s/scan.json
 expect "refine --out onto --geometry" "would overwrite the input --geometry" \

@@ -1,6 +1,7 @@
 // Image and volume files: round trips, integer counts kept as counts, real TIFFs from the
 // measured data, and clear errors for missing, truncated or wrongly sized images.
 #include "ctk/core/image_io.hpp"
+#include "ctk/core/volume_file.hpp"
 
 #include <gtest/gtest.h>
 
@@ -166,7 +167,7 @@ TEST(ImageIo, VolumeOutputs) {
   const auto dir = testing::scratch_dir();
   Volume v(VolumeLayout::centred({5, 4, 3}, {0.5, 0.5, 0.75}));
   for (std::size_t i = 0; i < v.data.size(); ++i) v.data[i] = static_cast<float>(i);
-  write_volume_nrrd(v, dir / "vol.nrrd");
+  write_volume(v, dir / "vol.nrrd");
   EXPECT_FALSE(std::filesystem::exists(dir / "vol.raw"));  // one file: header and data
   std::ifstream file(dir / "vol.nrrd", std::ios::binary);
   const std::string text((std::istreambuf_iterator<char>(file)), {});
@@ -180,7 +181,7 @@ TEST(ImageIo, VolumeOutputs) {
   std::memcpy(&last, text.data() + text.size() - sizeof(float), sizeof(float));
   EXPECT_EQ(last, 59.0f);
 
-  write_volume_tiff(v, dir / "vol.tif");
+  write_volume(v, dir / "vol.tif");
   auto in = OIIO::ImageInput::open((dir / "vol.tif").string());
   ASSERT_TRUE(in);
   int pages = 0;

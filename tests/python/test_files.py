@@ -2,6 +2,7 @@
 reconstruction reproduced bit for bit, and every kind of bad input raising the named exception."""
 import json
 import pathlib
+import subprocess
 
 import numpy as np
 import pytest
@@ -76,6 +77,29 @@ def test_python_reconstructs_the_command_lines_volume_bit_for_bit(simulated, tmp
     assert w.report["views_used"] == log["views_used"] and w.report["memory_plan"] == log["memory_plan"]
     with pytest.raises(ValueError, match="os-sqs"):
         ctk.reconstruct(simulated / "scan.json", method="art")
+
+
+def test_volumes_in_every_format_read_back_bitwise_and_as_other_tools_read_them(simulated, tmp_path, ctk_command):
+    rng = np.random.default_rng(7)
+    x = rng.standard_normal((3, 4, 5)).astype(np.float32)
+    for name in ("v.nrrd", "v.mha", "v.mhd", "v.tif", "v.h5"):
+        ctk.write_volume(x, tmp_path / name, voxel_mm=(0.5, 0.25, 2.0), origin_mm=(1.0, -2.0, 3.5))
+        y, layout = ctk.read_volume(tmp_path / name)
+        assert y.dtype == np.float32 and y.shape == (3, 4, 5)
+        np.testing.assert_array_equal(y, x)
+        assert layout == {"voxel_mm": [0.5, 0.25, 2.0], "origin_mm": [1.0, -2.0, 3.5]}
+    # MetaImage's detached voxels are the raw float32 array numpy writes, x fastest.
+    np.testing.assert_array_equal(np.fromfile(tmp_path / "v.raw", dtype="<f4").reshape(3, 4, 5), x)
+    # The command line writes what the reader reads, and refuses an unknown extension before any work.
+    run([ctk_command, "reconstruct", "--scan", str(simulated / "scan.json"), "--out", str(tmp_path / "r.h5"), "--size", "8",
+         "--iterations", "1"])
+    r, layout = ctk.read_volume(tmp_path / "r.h5")
+    assert r.shape == (8, 8, 8) and np.all(np.isfinite(r))
+    refused = subprocess.run([ctk_command, "reconstruct", "--scan", str(simulated / "scan.json"), "--out",
+                              str(tmp_path / "r.vol")], capture_output=True, text=True)
+    assert refused.returncode == 2 and ".nrrd" in refused.stderr and not list(tmp_path.glob("r.vol*"))
+    with pytest.raises(ctk.InputError):
+        ctk.read_volume(tmp_path / "v.png")
 
 
 def test_bad_inputs_raise_the_named_exception(simulated, tmp_path):

@@ -1,7 +1,8 @@
 #pragma once
 // The diagnosis workflow on a calibrated scan, as `ctk diagnose` and Python's `ctk.diagnose` run
 // it: the detections behind the calibration found again from its poses, the robot's repeatability
-// measured on the scan unless stated, the bundle adjustment with held-out acceptance; returns the
+// measured on the scan unless stated, a holder wall the scan does not declare measured in the
+// images and modelled as if declared, the bundle adjustment with held-out acceptance; returns the
 // diagnosis, its report and the corrected scan. Files and pictures are the caller's.
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -9,6 +10,7 @@
 #include <string>
 
 #include "ctk/calib/diagnosis.hpp"
+#include "ctk/calib/holder_wall.hpp"
 #include "ctk/calib/scan_calibration.hpp"
 
 namespace ctk {
@@ -23,8 +25,9 @@ struct DiagnosisRunOptions {
 struct DiagnosisRun {
   ScanObservations observations;
   Diagnosis diagnosis;
-  ScanDescription corrected;  // the scan with the accepted effects declared
-  std::string repeatability;  // how the robot's repeatability was set, one line
+  ScanDescription corrected;            // the scan with the accepted effects (and a measured wall) declared
+  std::string repeatability;            // how the robot's repeatability was set, one line
+  std::optional<WallMeasurement> wall;  // measured, when the scan does not declare it
   /// ctk-diagnosis/1 (the caller adds file names and pictures).
   nlohmann::json report() const;
   /// The baseline and each accepted effect, a line each.

@@ -2,10 +2,13 @@
 // The holder's wall measured from the images, for scans that do not declare it: a calibrated
 // view knows where the holder's axis is, so every pixel's ray has a distance d to the axis and an
 // angle theta to it, and a tube of radii r < R adds mu (2 sqrt(R^2 - d^2) - 2 sqrt(r^2 - d^2)) /
-// sin(theta) to its line integral (the second term only inside r). Fitted per view over the band
-// of the spheres (pixels on a sphere's disc left out), the radii of several views give the
-// estimate and their spread its uncertainty.
+// sin(theta) to its line integral (the second term only inside r); a pixel averages the
+// transmission of rays across its area. Fitted per view over the band of the spheres (pixels on
+// a sphere's disc left out), the radii of several views give the estimate; their spread and the
+// views' depth uncertainty (the scale of every length in them) give its uncertainty.
+#include <nlohmann/json.hpp>
 #include <optional>
+#include <vector>
 
 #include "ctk/calib/scan_calibration.hpp"
 #include "ctk/geom/helix.hpp"
@@ -15,14 +18,21 @@ namespace ctk {
 
 struct WallMeasurement {
   HolderWall wall;
-  double inner_sigma_mm = 0, outer_sigma_mm = 0;  // standard errors of the medians over the views
+  double inner_sigma_mm = 0, outer_sigma_mm = 0;  // the medians' standard errors and the views' scale
   int views = 0;                                  // views whose fit converged
 };
+
+/// Up to `count` views spread over the scan whose first-guess pose sees the holder from the side
+/// (axis at least 60 deg from the beam): the sample to calibrate and measure the wall in.
+std::vector<int> wall_sample_views(const ScanDescription& scan, int count = 12);
 
 /// Measures the wall in up to `max_views` calibrated views that see the holder from the side
 /// (axis at least 60 deg from the beam); empty when fewer than 3 such views fit. A sample that
 /// reaches the inside of the wall biases the inner radius.
 std::optional<WallMeasurement> measure_holder_wall(const ScanDescription& scan, const ScanCalibration& calibration,
                                                    int max_views = 12);
+
+/// {"inner_radius_mm", "outer_radius_mm", "inner_sigma_mm", "outer_sigma_mm", "views"}.
+nlohmann::json to_json(const WallMeasurement& m);
 
 }  // namespace ctk

@@ -41,6 +41,11 @@ ViewCamera view_camera(const ScanDescription& scan, int view);
 ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
                                const std::function<void(int, int)>& progress = {}, const BatchControl* control = nullptr);
 
+/// Only the listed views, the others "skipped": a sample calibrated before the batch (to measure
+/// an undeclared holder wall, for instance).
+ScanCalibration calibrate_scan_views(const ScanDescription& scan, const std::vector<int>& views,
+                                     const CalibrationOptions& options);
+
 /// Same, starting each view from a calibrated geometry's pose instead of the robot's (views not
 /// ok there are skipped): the detections and matches behind an existing calibration.
 ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& calibrated, const CalibrationOptions& options,

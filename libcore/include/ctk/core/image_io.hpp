@@ -1,7 +1,6 @@
 #pragma once
-// Image and volume files through OpenImageIO: projections in (TIFF uint16/uint32/float, EXR),
-// volumes out as NRRD (detached header + raw, opens in 3D Slicer), multi-page float TIFF
-// (ImageJ/Fiji) and single slices as PNG. Every output is written atomically.
+// Image files through OpenImageIO: projections in (TIFF uint16/uint32/float, EXR) and out, a
+// volume's slices as PNG previews (volume files: volume_file.hpp). Every output is written atomically.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -28,10 +27,6 @@ void write_image_float(const Image& image, const std::filesystem::path& file);  
 /// Detector counts as a 16-bit TIFF: values rounded and clamped to 0 .. 65535.
 void write_image_uint16(const Image& counts, const std::filesystem::path& file);
 
-/// One `.nrrd` file, header and data (little-endian float32, x fastest) together; spacing and origin in mm.
-void write_volume_nrrd(const Volume& volume, const std::filesystem::path& nrrd_file);
-/// One float32 page per z slice.
-void write_volume_tiff(const Volume& volume, const std::filesystem::path& file);
 /// The grey level previews map to white: the 99.9th percentile of the voxels (a few hot voxels
 /// must not darken the picture), at least 1e-6.
 float preview_ceiling(const Volume& volume);
