@@ -142,10 +142,18 @@ double JsonNode::number() const {
 void require_same_run(const nlohmann::json& saved, const nlohmann::json& now, const std::string& file, const std::string& prefix,
                       const std::string& advice) {
   for (const auto& [key, value] : now.items())
-    if (!saved.is_object() || !saved.contains(key) || saved.at(key) != value)
-      throw InputError(file, json_key(prefix + "." + key),
-                       "was " + (saved.is_object() && saved.contains(key) ? saved.at(key).dump() : std::string("absent")) +
-                           " in the saved run; this run has " + value.dump() + ": " + advice);
+    if (!saved.is_object() || !saved.contains(key) || saved.at(key) != value) {
+      std::string what = "was ";
+      what += saved.is_object() && saved.contains(key) ? saved.at(key).dump() : std::string("absent");
+      what += " in the saved run; this run has ";
+      what += value.dump();
+      what += ": ";
+      what += advice;
+      std::string where = prefix;
+      where += '.';
+      where += key;
+      throw InputError(file, json_key(where), what);
+    }
 }
 
 double JsonNode::positive_number() const {
@@ -203,7 +211,7 @@ Eigen::Vector3d JsonNode::vector3() const {
 }
 
 Eigen::Vector3d JsonNode::position_mm() const {
-  const Eigen::Vector3d p = vector3();
+  Eigen::Vector3d p = vector3();
   if (p.cwiseAbs().maxCoeff() > kLongestLengthMm)
     fail("expected coordinates within " + shortest(kLongestLengthMm) + " mm of the origin, got " +
          shortest(p.cwiseAbs().maxCoeff()));

@@ -42,7 +42,7 @@ Volume read_metaimage(const fs::path& file) {
   std::map<std::string, std::string> fields;
   std::string line;
   int number = 0;
-  auto trim = [](std::string s) {
+  auto trim = [](const std::string& s) {
     const auto first = s.find_first_not_of(" \t\r"), last = s.find_last_not_of(" \t\r");
     return first == std::string::npos ? std::string() : s.substr(first, last - first + 1);
   };

@@ -69,9 +69,9 @@ Volume read_nrrd(const fs::path& file) {
   for (int a = 0; a < 3; ++a) l.size[static_cast<std::size_t>(a)] = static_cast<int>(sizes[static_cast<std::size_t>(a)]);
   if (fields.count("space directions")) {
     const auto d = parse_numbers(field("space directions"), 9, file, "field 'space directions'");
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b)
-        if (a != b && d[static_cast<std::size_t>(3 * a + b)] != 0)
+    for (std::size_t a = 0; a < 3; ++a)
+      for (std::size_t b = 0; b < 3; ++b)
+        if (a != b && d[3 * a + b] != 0)
           throw InputError(file.string(), "field 'space directions'",
                            "ctk reads axis-aligned voxels, got '" + field("space directions") + "'");
     l.voxel_mm = {d[0], d[4], d[8]};

@@ -287,8 +287,14 @@ HWY_INLINE void add_band(DF df, const QuadBand& band, std::ptrdiff_t sa, std::pt
         if (bb + N <= b_hi) {
           hn::StoreU(hn::Add(hn::LoadU(df, row + bb), sum), df, row + bb);
         } else {
-          const auto m = hn::FirstN(df, static_cast<std::size_t>(b_hi - bb));
-          hn::BlendedStore(hn::Add(hn::MaskedLoad(m, df, row + bb), sum), m, df, row + bb);
+          // The row's last, partial vector through an aligned buffer: Highway 1.0's MaskedLoad is an
+          // aligned load on SSE4, and row + bb is not aligned (UBSan in the sanitizer build).
+          constexpr std::size_t lanes = hn::MaxLanes(decltype(df)());
+          const std::size_t count = static_cast<std::size_t>(b_hi - bb);
+          HWY_ALIGN float tail[lanes] = {};
+          std::copy_n(row + bb, count, tail);
+          hn::Store(hn::Add(hn::Load(df, tail), sum), df, tail);
+          std::copy_n(tail, count, row + bb);
         }
       }
     }
