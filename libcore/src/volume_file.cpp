@@ -137,6 +137,11 @@ std::vector<double> parse_numbers(const std::string& text, std::size_t count, co
   return values;
 }
 
+Eigen::Vector3d parse_vector3(const std::string& text, const fs::path& file, const std::string& key) {
+  const auto v = parse_numbers(text, 3, file, key);
+  return {v[0], v[1], v[2]};
+}
+
 }  // namespace volume_formats
 
 }  // namespace ctk

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "ctk/core/volume.hpp"
 
@@ -33,5 +34,8 @@ void read_raw_voxels(const std::filesystem::path& data_file, std::uintmax_t offs
 /// there are `count` of them.
 std::vector<double> parse_numbers(const std::string& text, std::size_t count, const std::filesystem::path& file,
                                   const std::string& key);
+
+/// Three numbers (x, y, z) as parse_numbers reads them.
+Eigen::Vector3d parse_vector3(const std::string& text, const std::filesystem::path& file, const std::string& key);
 
 }  // namespace ctk::volume_formats

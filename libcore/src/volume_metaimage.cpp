@@ -83,13 +83,11 @@ Volume read_metaimage(const fs::path& file) {
   for (int a = 0; a < 3; ++a) l.size[static_cast<std::size_t>(a)] = static_cast<int>(sizes[static_cast<std::size_t>(a)]);
   const std::string spacing = either("ElementSpacing", "ElementSize");
   if (fields.count(spacing)) {
-    const auto s = parse_numbers(fields[spacing], 3, file, "key '" + spacing + "'");
-    l.voxel_mm = {s[0], s[1], s[2]};
+    l.voxel_mm = parse_vector3(fields[spacing], file, "key '" + spacing + "'");
   }
   const std::string origin = fields.count("Offset") ? "Offset" : either("Origin", "Position");
   if (fields.count(origin)) {
-    const auto o = parse_numbers(fields[origin], 3, file, "key '" + origin + "'");
-    l.origin_mm = {o[0], o[1], o[2]};
+    l.origin_mm = parse_vector3(fields[origin], file, "key '" + origin + "'");
   } else {
     l.origin_mm = VolumeLayout::centred(l.size, l.voxel_mm).origin_mm;
   }

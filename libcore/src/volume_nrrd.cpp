@@ -76,12 +76,10 @@ Volume read_nrrd(const fs::path& file) {
                            "ctk reads axis-aligned voxels, got '" + field("space directions") + "'");
     l.voxel_mm = {d[0], d[4], d[8]};
   } else if (fields.count("spacings")) {
-    const auto s = parse_numbers(field("spacings"), 3, file, "field 'spacings'");
-    l.voxel_mm = {s[0], s[1], s[2]};
+    l.voxel_mm = parse_vector3(field("spacings"), file, "field 'spacings'");
   }
   if (fields.count("space origin")) {
-    const auto o = parse_numbers(field("space origin"), 3, file, "field 'space origin'");
-    l.origin_mm = {o[0], o[1], o[2]};
+    l.origin_mm = parse_vector3(field("space origin"), file, "field 'space origin'");
   } else {
     l.origin_mm = VolumeLayout::centred(l.size, l.voxel_mm).origin_mm;
   }

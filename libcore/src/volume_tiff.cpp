@@ -70,11 +70,9 @@ Volume read_tiff(const fs::path& file) {
   bool have_origin = false;
   while (std::getline(lines, line)) {
     if (line.rfind("ctk_voxel_mm=", 0) == 0) {
-      const auto s = parse_numbers(line.substr(13), 3, file, "ImageDescription ctk_voxel_mm");
-      l.voxel_mm = {s[0], s[1], s[2]};
+      l.voxel_mm = parse_vector3(line.substr(13), file, "ImageDescription ctk_voxel_mm");
     } else if (line.rfind("ctk_origin_mm=", 0) == 0) {
-      const auto o = parse_numbers(line.substr(14), 3, file, "ImageDescription ctk_origin_mm");
-      l.origin_mm = {o[0], o[1], o[2]};
+      l.origin_mm = parse_vector3(line.substr(14), file, "ImageDescription ctk_origin_mm");
       have_origin = true;
     }
   }
