@@ -59,13 +59,7 @@ DiagnosisRun run_diagnosis(const ScanDescription& scan, const Geometry& geometry
   // the given poses) and then modelled as if declared, as ctk calibrate does.
   ScanDescription modelled = scan;
   if (!scan.holder->wall) {
-    Geometry sample = geometry;
-    std::vector<char> in_sample(sample.views.size(), 0);
-    for (int v : wall_sample_views(scan))
-      if (v < static_cast<int>(in_sample.size())) in_sample[static_cast<std::size_t>(v)] = 1;
-    for (std::size_t v = 0; v < sample.views.size(); ++v)
-      if (!in_sample[v]) sample.views[v].status = ViewStatus::skipped;
-    run.wall = measure_holder_wall(scan, recalibrate_scan(scan, sample, o.calibration));
+    run.wall = measure_holder_wall(scan, recalibrate_scan_views(scan, geometry, wall_sample_views(scan), o.calibration));
     if (run.wall) {
       modelled.holder->wall = run.wall->wall;
       std::ostringstream wall;

@@ -127,26 +127,7 @@ std::vector<FirstGuess> nominal_guesses(const ScanDescription& scan) {
   return guesses;
 }
 
-}  // namespace
-
-ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
-                               const std::function<void(int, int)>& progress, const BatchControl* control) {
-  return calibrate_views(scan, nominal_guesses(scan), options, progress, control);
-}
-
-ScanCalibration calibrate_scan_views(const ScanDescription& scan, const std::vector<int>& views,
-                                     const CalibrationOptions& options) {
-  std::vector<FirstGuess> guesses = nominal_guesses(scan);
-  std::vector<char> wanted(guesses.size(), 0);
-  for (int v : views)
-    if (v >= 0 && v < static_cast<int>(guesses.size())) wanted[static_cast<std::size_t>(v)] = 1;
-  for (std::size_t v = 0; v < guesses.size(); ++v)
-    if (!wanted[v]) guesses[v] = FirstGuess{std::nullopt, "not in the sample"};
-  return calibrate_views(scan, guesses, options, {}, nullptr);
-}
-
-ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& calibrated, const CalibrationOptions& options,
-                                 const std::function<void(int, int)>& progress) {
+std::vector<FirstGuess> calibrated_guesses(const ScanDescription& scan, const Geometry& calibrated) {
   if (static_cast<int>(calibrated.views.size()) != scan.projections.count)
     throw InputError(calibrated.source(), json_key("views"),
                      "has " + std::to_string(calibrated.views.size()) + " views; the scan has " +
@@ -160,7 +141,39 @@ ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& ca
       g.reason = "not calibrated in the given geometry" + (v.reason.empty() ? std::string() : ": " + v.reason);
     guesses.push_back(g);
   }
-  return calibrate_views(scan, guesses, options, progress, nullptr);
+  return guesses;
+}
+
+// The guesses of the listed views; the others have none, so their views are skipped.
+std::vector<FirstGuess> only(std::vector<FirstGuess> guesses, const std::vector<int>& views) {
+  std::vector<char> wanted(guesses.size(), 0);
+  for (int v : views)
+    if (v >= 0 && v < static_cast<int>(guesses.size())) wanted[static_cast<std::size_t>(v)] = 1;
+  for (std::size_t v = 0; v < guesses.size(); ++v)
+    if (!wanted[v]) guesses[v] = FirstGuess{std::nullopt, "not in the sample"};
+  return guesses;
+}
+
+}  // namespace
+
+ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
+                               const std::function<void(int, int)>& progress, const BatchControl* control) {
+  return calibrate_views(scan, nominal_guesses(scan), options, progress, control);
+}
+
+ScanCalibration calibrate_scan_views(const ScanDescription& scan, const std::vector<int>& views,
+                                     const CalibrationOptions& options) {
+  return calibrate_views(scan, only(nominal_guesses(scan), views), options, {}, nullptr);
+}
+
+ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& calibrated, const CalibrationOptions& options,
+                                 const std::function<void(int, int)>& progress) {
+  return calibrate_views(scan, calibrated_guesses(scan, calibrated), options, progress, nullptr);
+}
+
+ScanCalibration recalibrate_scan_views(const ScanDescription& scan, const Geometry& calibrated, const std::vector<int>& views,
+                                       const CalibrationOptions& options) {
+  return calibrate_views(scan, only(calibrated_guesses(scan, calibrated), views), options, {}, nullptr);
 }
 
 }  // namespace ctk

@@ -51,4 +51,8 @@ ScanCalibration calibrate_scan_views(const ScanDescription& scan, const std::vec
 ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& calibrated, const CalibrationOptions& options,
                                  const std::function<void(int, int)>& progress = {});
 
+/// Only the listed views, each from the calibrated geometry's pose, the others "skipped".
+ScanCalibration recalibrate_scan_views(const ScanDescription& scan, const Geometry& calibrated, const std::vector<int>& views,
+                                       const CalibrationOptions& options);
+
 }  // namespace ctk
