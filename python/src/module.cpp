@@ -16,7 +16,8 @@ PYBIND11_MODULE(_ctk, m) {
   // Files written from Python record the script that wrote them.
   std::string invocation = "python";
   // Appended piecewise: `" " + std::string` trips GCC 12's -Wrestrict false positive (GCC PR 105329).
-  for (const py::handle& word : py::module_::import("sys").attr("argv")) invocation.append(" ").append(py::str(word).cast<std::string>());
+  for (const py::handle& word : py::module_::import("sys").attr("argv"))
+    invocation.append(" ").append(py::str(word).cast<std::string>());
   ctk::set_invocation(invocation);
 
   // InputError: a file the toolkit read is not what it must be; .file and .key say where.
