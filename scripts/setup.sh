@@ -16,6 +16,7 @@ packages=(
   libgeographiclib-dev   # equal-area map projection
   libhealpix-cxx-dev     # sphere pixelisation
   libcli11-dev           # command line
+  libpugixml-dev         # XML (RTK geometry files)
   nlohmann-json3-dev     # JSON
   libgtest-dev libgmock-dev   # tests
   libbenchmark-dev       # benchmarks

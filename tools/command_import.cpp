@@ -2,6 +2,7 @@
 // (and its ctk-geometry/1 file beside it), so no one writes JSON by hand.
 //   ctk import circular  — a circular orbit by its numbers (SOD, SDD, pitch, angles, principal point, sense)
 //   ctk import cone-vec  — per-view ASTRA cone_vec rows (e.g. a CWI ".geom" file)
+//   ctk import rtk       — RTK's geometry XML (RTKThreeDCircularGeometry)
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -13,6 +14,7 @@
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/core/error.hpp"
+#include "ctk/geom/rtk_geometry.hpp"
 #include "ctk/geom/scan_import.hpp"
 #include "ctk/core/image_io.hpp"
 
@@ -45,6 +47,11 @@ struct ConeVecOptions : ProjectionOptions {
   std::string orientation = "as-described";
 };
 
+struct RtkOptions : ProjectionOptions {
+  fs::path geometry;
+  std::string rows;  // empty: what the file's ctk comment names, else as-stored
+};
+
 void add_projection_options(CLI::App* cmd, ProjectionOptions& o, bool pitch_required) {
   cmd->add_option("--out", o.out, "scan.json to write (the matrices go beside it as <stem>.matrices.json)")->required();
   cmd->add_option("--files", o.files, "Projection files: a printf pattern (with --count) or the names in view order")->required();
@@ -54,9 +61,9 @@ void add_projection_options(CLI::App* cmd, ProjectionOptions& o, bool pitch_requ
       ->capture_default_str();
   cmd->add_option("--flat", o.flat, "Flat (open-beam) frame(s); several are averaged");
   cmd->add_option("--dark", o.dark, "Dark (offset) frame(s); several are averaged");
-  cmd->add_option("--detector", o.detector, "Columns and rows of the image the geometry describes")
+  cmd->add_option("--detector", o.detector,
+                  "Columns and rows of the image the geometry describes (default: the first projection file's size)")
       ->expected(2)
-      ->required()
       ->check(positive_number);
   auto* pitch =
       cmd->add_option("--pitch", o.pitch, "Pixel pitch in mm: one value or u v")->expected(1, 2)->check(positive_number);
@@ -85,8 +92,22 @@ ProjectionSet projection_set(const ProjectionOptions& o) {
   return p;
 }
 
-Detector described_detector(const ProjectionOptions& o, double pitch_u, double pitch_v) {
-  return Detector{o.detector[0], o.detector[1], pitch_u, pitch_v};
+// --detector, or the size of the first projection file there is (columns and rows swapped where
+// the described image is the stored one transposed).
+Detector described_detector(const ProjectionOptions& o, const ProjectionSet& p, double pitch_u, double pitch_v,
+                            bool transposed = false) {
+  if (!o.detector.empty()) return Detector{o.detector[0], o.detector[1], pitch_u, pitch_v};
+  for (int v = 0; v < p.count; ++v) {
+    std::error_code ec;
+    const fs::path file = p.file_name(v);
+    if (!fs::is_regular_file(file, ec)) continue;
+    const Image first = read_image(file);
+    std::cout << "detector " << first.cols << " x " << first.rows << " px, from " << file.string() << "\n";
+    return transposed ? Detector{first.rows, first.cols, pitch_u, pitch_v} : Detector{first.cols, first.rows, pitch_u, pitch_v};
+  }
+  throw InputError("--files", "",
+                   "none of the " + std::to_string(p.count) + " projection files exists (the first is " + p.file_name(0) +
+                       "), so --detector must be given");
 }
 
 // The images the scan names, checked before anything is written: a wrong pattern or a wrong
@@ -101,8 +122,9 @@ void check_images(const ScanDescription& scan) {
   read_image(census.first_present, scan.detector.cols, scan.detector.rows);  // names the file and both sizes where they differ
 }
 
-// `vectors`: the geometry file read, if any.
-void finish(const ImportedScan& imported, const fs::path& out, const fs::path& vectors = {}) {
+// `geometry_file`: the geometry file read, if any, and the option that named it.
+void finish(const ImportedScan& imported, const fs::path& out, const std::string& geometry_option = {},
+            const fs::path& geometry_file = {}) {
   const ScanDescription& scan = imported.scan;
   check_images(scan);
   RunFiles files;
@@ -110,7 +132,7 @@ void finish(const ImportedScan& imported, const fs::path& out, const fs::path& v
     files.input("--files: projection " + std::to_string(v), scan.projection_path(v));
   for (const std::string& f : scan.projections.flat) files.input("--flat", scan.resolve(f));
   for (const std::string& d : scan.projections.dark) files.input("--dark", scan.resolve(d));
-  files.input("--vectors", vectors);
+  files.input(geometry_option, geometry_file);
   files.output("--out", out);
   files.output("the matrices beside --out", scan.resolve(scan.matrices->file));
   files.check();
@@ -134,7 +156,7 @@ void run_circular(const CircularOptions& o) {
                          .str());
   const double pu = o.pitch.front(), pv = o.pitch.back();
   CircularOrbit orbit;
-  orbit.detector = described_detector(o, pu, pv);
+  orbit.detector = described_detector(o, projections, pu, pv);
   orbit.principal_point_px =
       o.principal_point.empty() ? orbit.detector.centre_px() : Eigen::Vector2d(o.principal_point[0], o.principal_point[1]);
   orbit.source_to_axis_mm = o.sod;
@@ -155,9 +177,10 @@ void run_cone_vec(const ConeVecOptions& o) {
     throw InputError("--vector-rows", "",
                      std::to_string(rows.size()) + " rows for " + std::to_string(projections.count) + " projections");
   const Eigen::Vector3d u0(all.at(0)[6], all.at(0)[7], all.at(0)[8]), v0(all.at(0)[9], all.at(0)[10], all.at(0)[11]);
-  const Detector described =
-      described_detector(o, o.pitch.empty() ? u0.norm() : o.pitch.front(), o.pitch.empty() ? v0.norm() : o.pitch.back());
   const StoredOrientation orientation = stored_orientation_from_string(o.orientation);
+  const Detector described =
+      described_detector(o, projections, o.pitch.empty() ? u0.norm() : o.pitch.front(),
+                         o.pitch.empty() ? v0.norm() : o.pitch.back(), orientation == StoredOrientation::transposed_flipped);
   const Eigen::Matrix3d to_stored = described_to_stored(orientation, described);
   std::vector<ProjectionMatrix> matrices;
   for (int r : rows) {
@@ -173,7 +196,22 @@ void run_cone_vec(const ConeVecOptions& o) {
                        "or numbers too large to multiply)");
     }
   }
-  finish(import_matrices(stored_detector(orientation, described), matrices, projections, o.out), o.out, o.vectors);
+  finish(import_matrices(stored_detector(orientation, described), matrices, projections, o.out), o.out, "--vectors", o.vectors);
+}
+
+void run_rtk(const RtkOptions& o) {
+  const ProjectionSet projections = projection_set(o);
+  const RtkGeometry g = read_rtk_geometry(o.geometry);
+  if (static_cast<int>(g.views.size()) != projections.count)
+    throw InputError(o.geometry.string(), "",
+                     std::to_string(g.views.size()) + " projections for " + std::to_string(projections.count) + " files");
+  const RtkRows rows = !o.rows.empty() ? rtk_rows_from_string(o.rows) : g.rows.value_or(RtkRows::as_stored);
+  const Detector detector = described_detector(o, projections, o.pitch.front(), o.pitch.back());
+  std::vector<ProjectionMatrix> matrices;
+  for (const RtkProjection& v : g.views)
+    matrices.push_back(from_rtk(v, detector, rows));  // the reader refused what this cannot take
+  std::cout << "pixel map " << to_string(rows) << (o.rows.empty() && g.rows ? " (named by the file)" : "") << "\n";
+  finish(import_matrices(detector, matrices, projections, o.out), o.out, "--geometry", o.geometry);
 }
 
 }  // namespace
@@ -214,6 +252,21 @@ void register_import(CLI::App& app) {
       ->check(CLI::IsMember({"as-described", "transpose-flipud"}))
       ->capture_default_str();
   cone_vec->callback([v] { run_cone_vec(*v); });
+
+  auto r = std::make_shared<RtkOptions>();
+  CLI::App* rtk =
+      cmd->add_subcommand("rtk",
+                          "RTK's geometry XML, one <Projection> per file; RTK's detector coordinates (mm) become pixels by "
+                          "u = (cols - 1) / 2 + x / pitch_u, v = (rows - 1) / 2 - y / pitch_v (RTK's y runs up the stored rows)");
+  add_projection_options(rtk, *r, true);
+  rtk->add_option("--geometry", r->geometry, "RTK geometry XML (RTKThreeDCircularGeometry, version 2 or 3)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  rtk->add_option("--rows", r->rows,
+                  "as-stored: RTK indexed the images as stored (y = (v - (rows - 1) / 2) pitch); flipped: flipped vertically "
+                  "(y = ((rows - 1) / 2 - v) pitch); default: what a file written by ctk names, else as-stored")
+      ->check(CLI::IsMember({"as-stored", "flipped"}));
+  rtk->callback([r] { run_rtk(*r); });
 }
 
 }  // namespace ctk::tools

@@ -7,12 +7,14 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "bindings.hpp"
 #include "ctk/core/volume_file.hpp"
 #include "ctk/geom/astra.hpp"
+#include "ctk/geom/rtk_geometry.hpp"
 #include "ctk/geom/geometry_file.hpp"
 #include "ctk/geom/scan.hpp"
 #include "conversions.hpp"
@@ -55,6 +57,41 @@ py::array_t<double> cone_vec_from_matrices(const DoubleArray& matrices, const st
     for (int i = 0; i < 12; ++i) w(v, i) = c[static_cast<std::size_t>(i)];
   }
   return out;
+}
+
+RtkRows rows_from(const std::string& rows) {
+  try {
+    return rtk_rows_from_string(rows);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(std::string("rows: ") + e.what());
+  }
+}
+
+py::array_t<double> read_rtk(const fs::path& file, const std::array<int, 2>& detector_shape,
+                             const std::array<double, 2>& pixel_mm, const std::string& rows) {
+  const Detector d = detector_from(detector_shape, pixel_mm);
+  const RtkGeometry g = read_rtk_geometry(file);
+  const RtkRows sense = rows.empty() ? g.rows.value_or(RtkRows::as_stored) : rows_from(rows);
+  std::vector<ProjectionMatrix> out;
+  for (const RtkProjection& v : g.views) out.push_back(from_rtk(v, d, sense));
+  return matrices_to_numpy(out);
+}
+
+void write_rtk(const DoubleArray& matrices, const fs::path& file, const std::array<int, 2>& detector_shape,
+               const std::array<double, 2>& pixel_mm, const std::string& rows) {
+  const Detector d = detector_from(detector_shape, pixel_mm);
+  const std::vector<ProjectionMatrix> P = matrices_from_numpy(matrices);
+  if (P.empty()) throw py::value_error("matrices: no view");
+  const RtkRows sense = rows.empty() ? rtk_rows_for(P.front()) : rows_from(rows);
+  std::vector<RtkProjection> views;
+  for (std::size_t v = 0; v < P.size(); ++v) {
+    try {
+      views.push_back(to_rtk(P[v], d, sense));
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error("matrices[" + std::to_string(v) + "]: " + e.what());
+    }
+  }
+  write_rtk_geometry(views, sense, file);
 }
 
 }  // namespace
@@ -126,6 +163,15 @@ void bind_files(py::module_& m) {
   m.def("cone_vec_from_matrices", &cone_vec_from_matrices, py::arg("matrices"), py::arg("detector_shape"),
         py::arg("pixel_mm") = std::array<double, 2>{1.0, 1.0}, py::arg("mm_per_unit") = 1.0,
         "(views, 3, 4) matrices as ASTRA cone_vec rows (views, 12), the detector placed so a column step is pixel_mm[0] long.");
+  m.def("read_rtk_geometry", &read_rtk, py::arg("file"), py::arg("detector_shape"), py::arg("pixel_mm"), py::arg("rows") = "",
+        "RTK's geometry XML as (views, 3, 4) matrices for a detector of detector_shape (rows, cols) and pixel_mm (u, v). "
+        "rows: 'as-stored' (RTK indexed the images as stored) or 'flipped' (vertically); default: what a file written by ctk "
+        "names, else 'as-stored' (docs/geometry.md). InputError names the file and the element.");
+  m.def("write_rtk_geometry", &write_rtk, py::arg("matrices"), py::arg("file"), py::arg("detector_shape"), py::arg("pixel_mm"),
+        py::arg("rows") = "",
+        "(views, 3, 4) matrices as RTK's geometry XML (version 3), atomically, under the pixel map rows ('as-stored', "
+        "'flipped'; default: the one that holds the first view, named in the file). ValueError names a matrix RTK's "
+        "parameters cannot hold (skewed or non-square pixels, a detector mirrored under rows).");
 }
 
 }  // namespace ctk::python

@@ -33,10 +33,10 @@ def main():
                         "--flat", str(src / "io000000.tif"), str(src / "io000001.tif"), "--dark", str(src / "di000000.tif"),
                         "--detector", "1944", "1", "--pitch", "0.0748", "--sod", "423.562012", "--sdd", "527.99707", "--step", "0.1"],
                        check=True, stdout=subprocess.DEVNULL)
-        report = work / which / "refine.json"
-        subprocess.run([a.ctk, "refine", "--scan", str(scan), "--out", str(report), "--effects", "detector_offset"], check=True,
+        report_file = work / which / "refine.json"
+        subprocess.run([a.ctk, "refine", "--scan", str(scan), "--out", str(report_file), "--effects", "detector_offset"], check=True,
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        r = json.loads(report.read_text())
+        r = json.loads(report_file.read_text())
         effect = next(e for e in r["effects"] if e["name"] == "detector_offset")
         cross = r["cross_check"]
         loop_u0, sigma = effect["parameters"]["u0_px"], effect["uncertainty"]["u0_px"]

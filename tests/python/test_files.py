@@ -37,6 +37,27 @@ def test_scan_and_geometry_round_trip(simulated, tmp_path):
     assert indices == list(range(12)) and P.shape == (12, 3, 4)
 
 
+def test_rtk_geometry_round_trip_and_refusals(tmp_path, real_data):
+    # The walnut's calibrated views (tilted, offset detectors, images stored as a mirror of what
+    # the source sees) out to RTK's XML and back; the file names the pixel map that holds them.
+    rows = ctk.read_cone_vec(real_data / "walnut4-tubeV1-10views" / "scan_geom_corrected.geom")
+    P = ctk.matrices_from_cone_vec(rows[:12], (972, 768), (0.1496, 0.1496))
+    ctk.write_rtk_geometry(P, tmp_path / "g.xml", (972, 768), (0.1496, 0.1496))
+    assert "ctk pixel map: as-stored" in (tmp_path / "g.xml").read_text()
+    back = ctk.read_rtk_geometry(tmp_path / "g.xml", (972, 768), (0.1496, 0.1496))
+    points = np.array([[x, y, z, 1.0] for x in (-10, 10) for y in (-10, 10) for z in (-10, 10)])
+    for a, b in zip(P, back):
+        pa, pb = points @ a.T, points @ b.T
+        np.testing.assert_allclose(pb[:, :2] / pb[:, 2:], pa[:, :2] / pa[:, 2:], rtol=0, atol=1e-9)
+    with pytest.raises(ValueError, match=r"matrices\[0\]: the detector is mirrored under the pixel map flipped"):
+        ctk.write_rtk_geometry(P, tmp_path / "m.xml", (972, 768), (0.1496, 0.1496), rows="flipped")
+    assert not (tmp_path / "m.xml").exists()
+    (tmp_path / "bad.xml").write_text("<RTKThreeDCircularGeometry version='3'><Projection/></RTKThreeDCircularGeometry>")
+    with pytest.raises(ctk.InputError, match="SourceToIsocenterDistance") as e:
+        ctk.read_rtk_geometry(tmp_path / "bad.xml", (972, 768), (0.1496, 0.1496))
+    assert e.value.file == str(tmp_path / "bad.xml")
+
+
 def test_cone_vec_rows_and_matrices_convert_both_ways(real_data):
     rows = ctk.read_cone_vec(real_data / "walnut4-tubeV1-10views" / "scan_geom_corrected.geom")
     assert rows.shape == (1201, 12)
