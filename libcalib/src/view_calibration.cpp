@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <string>
 
 #include "ctk/core/error.hpp"
 #include "ctk/calib/pose_fit.hpp"
@@ -23,6 +24,20 @@ bool grazes_wall(const Eigen::Vector3d& sphere, const Eigen::Vector3d& source) {
   const Eigen::Vector2d radial = sphere.head<2>(), across = (sphere - source).head<2>();
   if (radial.norm() == 0 || across.norm() < 1e-9 * (sphere - source).norm()) return false;  // down the bore
   return std::abs(radial.normalized().dot(across.normalized())) < kGrazingCosine;
+}
+
+// Looking within a few degrees of the holder's axis, the spheres sit in the wall's end-on shadow
+// (rays running tens of mm inside the tube), where no detector tells them from it: the reason
+// then says how close to the axis the first guess looks.
+std::string along_the_axis_note(const Rigid& T_camera_holder) {
+  constexpr double kNearAxisDeg = 10;
+  const double angle = std::acos(std::min(1.0, std::abs(T_camera_holder.linear().col(2).z()))) * 180 / M_PI;
+  if (angle >= kNearAxisDeg) return {};
+  std::ostringstream note;
+  note.precision(2);
+  note << std::fixed << "; the first guess looks " << angle
+       << " deg from the holder axis, where the tube carrying the spheres, seen end on, hides them in its shadow";
+  return note.str();
 }
 
 struct Prediction {
@@ -246,7 +261,8 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
                    " stand apart from the others (the projected helix overlaps itself, as when looking along the holder axis)";
     else
       out.reason = "too few spheres: no consistent match of the " + std::to_string(out.detections) +
-                   " detections near the first-guess pose (at least " + std::to_string(o.min_spheres) + " spheres needed)";
+                   " detections near the first-guess pose (at least " + std::to_string(o.min_spheres) + " spheres needed)" +
+                   along_the_axis_note(initial);
     return out;
   }
   // The matched spheres' centres from their whole profiles, then the spheres missed so far, then

@@ -47,19 +47,35 @@ Holder Holder::on_helix(const Helix& helix, double sphere_diameter_mm, int count
 Holder reference_helix_holder() {
   const Helix helix{28.0, 4 * M_PI / 80.0, 0.0};
   Holder holder = Holder::on_helix(helix, 2.0, 50, -40.0, 40.0);
-  holder.wall = HolderWall{25.0, 28.0};
+  holder.wall = HolderWall{25.0, 28.0, Eigen::Vector2d(-59.0, 59.0)};
   return holder;
 }
 
 double HolderWall::chord_mm(const Eigen::Vector3d& point, const Eigen::Vector3d& direction) const {
-  // Across the axis the line is a 2D line at distance d from the centre; a circle of radius r
-  // cuts 2 sqrt(r^2 - d^2) of it, and the 3D path is longer by 1 / |direction across the axis|.
-  const Eigen::Vector2d across = direction.head<2>() / direction.norm();
-  const double s = across.norm();
-  if (s < 1e-12) return 0;  // along the axis: never through the wall's cross-section twice
-  const double d = std::abs(point.x() * across.y() - point.y() * across.x()) / s;
-  auto chord = [d](double r) { return d < r ? 2 * std::sqrt(r * r - d * d) : 0.0; };
-  return (chord(outer_radius_mm) - chord(inner_radius_mm)) / s;
+  // Across the axis the line x(t) = point + t d (d of unit length) enters and leaves a circle of
+  // radius r at the roots of |x_xy(t)|^2 = r^2; along the axis the ends cut the same line at
+  // t = (end - point_w) / d_w. The wall is the outer circle's interval less the inner one's, each
+  // clipped to the ends' interval.
+  const Eigen::Vector3d d = direction.normalized();
+  const double a = d.head<2>().squaredNorm();
+  if (a < 1e-24) return 0;  // along the axis: never through the wall's cross-section twice
+  const double b = point.head<2>().dot(d.head<2>()), c = point.head<2>().squaredNorm();
+  double t_low = -std::numeric_limits<double>::infinity(), t_high = std::numeric_limits<double>::infinity();
+  if (ends_mm && d.z() != 0) {
+    const double t0 = (ends_mm->x() - point.z()) / d.z(), t1 = (ends_mm->y() - point.z()) / d.z();
+    t_low = std::min(t0, t1);
+    t_high = std::max(t0, t1);
+  } else if (ends_mm && (point.z() < ends_mm->x() || point.z() > ends_mm->y())) {
+    return 0;  // across the axis, beyond an end
+  }
+  auto inside = [&](double r) {
+    const double discriminant = b * b - a * (c - r * r);
+    if (discriminant <= 0) return 0.0;
+    const double root = std::sqrt(discriminant);
+    const double enter = std::max((-b - root) / a, t_low), leave = std::min((-b + root) / a, t_high);
+    return std::max(0.0, leave - enter);
+  };
+  return inside(outer_radius_mm) - inside(inner_radius_mm);
 }
 
 double Holder::tau_min() const {

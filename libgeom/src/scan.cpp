@@ -125,10 +125,19 @@ Holder read_holder(const JsonNode& node) {
   if (h.spheres_mm.empty()) spheres.fail("expected at least one sphere centre");
   if (node.has("wall")) {
     const JsonNode wall = node.at("wall");
-    wall.warn_unknown_keys({"inner_radius_mm", "outer_radius_mm"});
-    h.wall = HolderWall{wall.at("inner_radius_mm").length_mm(), wall.at("outer_radius_mm").length_mm()};
+    wall.warn_unknown_keys({"inner_radius_mm", "outer_radius_mm", "ends_mm"});
+    h.wall = HolderWall{wall.at("inner_radius_mm").length_mm(), wall.at("outer_radius_mm").length_mm(), std::nullopt};
     if (!(h.wall->outer_radius_mm > h.wall->inner_radius_mm))
       wall.at("outer_radius_mm").fail("expected more than inner_radius_mm");
+    if (wall.has("ends_mm")) {
+      const JsonNode ends = wall.at("ends_mm");
+      if (ends.size() != 2) ends.fail("expected the tube's two ends along the holder axis, [lower, upper] in mm");
+      h.wall->ends_mm = Eigen::Vector2d(ends.at(0).number(), ends.at(1).number());
+      if (!(h.wall->ends_mm->x() < h.wall->ends_mm->y())) ends.fail("expected the lower end first");
+      if (h.wall->ends_mm->x() > h.tau_min() || h.wall->ends_mm->y() < h.tau_max())
+        ends.fail("expected ends beyond the spheres the tube carries (" + std::to_string(h.tau_min()) + " to " +
+                  std::to_string(h.tau_max()) + " mm)");
+    }
   }
   return h;
 }
@@ -286,8 +295,10 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
          {{"radius_mm", h.helix.radius_mm}, {"rho_rad_per_mm", h.helix.rho_rad_per_mm}, {"phase_rad", h.helix.phase_rad}}},
         {"sphere_diameter_mm", h.sphere_diameter_mm},
         {"spheres_mm", spheres}};
-    if (h.wall)
+    if (h.wall) {
       j["holder"]["wall"] = {{"inner_radius_mm", h.wall->inner_radius_mm}, {"outer_radius_mm", h.wall->outer_radius_mm}};
+      if (h.wall->ends_mm) j["holder"]["wall"]["ends_mm"] = {h.wall->ends_mm->x(), h.wall->ends_mm->y()};
+    }
   }
   return j;
 }

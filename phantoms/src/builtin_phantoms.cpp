@@ -34,13 +34,15 @@ void made_of(Phantom& p, std::size_t first, const char* material) {
 
 Phantom helix_holder_phantom(const Holder& holder) {
   Phantom p{"helix-holder", {}};
-  const double height = 118.0;
-  // A holder declared without its wall is simulated on the reference holder's tube.
-  const HolderWall wall = holder.wall.value_or(*reference_helix_holder().wall);
-  p.primitives.push_back(
-      Primitive::cylinder(Vector3d::Zero(), wall.outer_radius_mm, height, kIdentity, material::pom, "POM tube"));
-  p.primitives.push_back(
-      Primitive::cylinder(Vector3d::Zero(), wall.inner_radius_mm, height, kIdentity, -material::pom, "POM tube bore"));
+  // A holder declared without its wall, or without the wall's ends, is simulated on the
+  // reference holder's tube, or between its ends.
+  const HolderWall reference = *reference_helix_holder().wall;
+  const HolderWall wall = holder.wall.value_or(reference);
+  const Eigen::Vector2d ends = wall.ends_mm.value_or(*reference.ends_mm);
+  const Vector3d centre(0, 0, 0.5 * (ends.x() + ends.y()));
+  const double height = ends.y() - ends.x();
+  p.primitives.push_back(Primitive::cylinder(centre, wall.outer_radius_mm, height, kIdentity, material::pom, "POM tube"));
+  p.primitives.push_back(Primitive::cylinder(centre, wall.inner_radius_mm, height, kIdentity, -material::pom, "POM tube bore"));
   made_of(p, 0, "pom");
   const std::size_t spheres = p.primitives.size();
   for (std::size_t k = 0; k < holder.spheres_mm.size(); ++k)

@@ -106,17 +106,20 @@ Outcome spherical_scan(double sag_deg) {
   std::cout << "spherical, sag " << sag_deg << " deg: measured repeatability " << o.prior.sigma_mm << " mm, " << o.prior.sigma_deg
             << " deg; rotation " << o.before.rotation_rms_deg << " -> " << o.after.rotation_rms_deg << " deg RMS, across "
             << o.before.across_rms_mm * 1000 << " -> " << o.after.across_rms_mm * 1000 << " um; "
-            << o.prior.inconsistent_views.size() << " views inconsistent with the robot\n";
+            << o.prior.inconsistent_views.size() << " views inconsistent with the robot; median rotation sigma "
+            << o.prior.image_rotation_sigma_deg << " -> " << o.prior.combined_rotation_sigma_deg << " deg\n";
   return o;
 }
 
-TEST(RobotPrior, RescuesViewsAlongTheHolderAxis) {
+TEST(RobotPrior, HelpsViewsAlongTheHolderAxis) {
   // Views with the holder's axis near the beam see the helix end on: few spheres, often
-  // overlapping, and poses off by tenths of a degree and millimetres in depth (0.08 deg RMS over
-  // this trajectory, from two such views). The robot's prior pulls them back.
+  // overlapping, in the wall's long shadow. With the tube's ends modelled their image poses hold
+  // (0.017 deg RMS over this trajectory; 0.08 deg with an infinitely long tube, from two such
+  // views); the robot's prior still adds to them.
   const Outcome o = spherical_scan(0);
-  EXPECT_LE(o.after.rotation_rms_deg, 0.3 * o.before.rotation_rms_deg);
-  EXPECT_LE(o.after.across_rms_mm, 0.7 * o.before.across_rms_mm);
+  EXPECT_LE(o.before.rotation_rms_deg, 0.025);
+  EXPECT_LE(o.after.rotation_rms_deg, 0.8 * o.before.rotation_rms_deg);
+  EXPECT_LE(o.after.across_rms_mm, 1.05 * o.before.across_rms_mm);
   EXPECT_NEAR(o.prior.sigma_mm, 0.1, 0.035);
   EXPECT_NEAR(o.prior.sigma_deg, 0.02, 0.006);
 }

@@ -54,7 +54,7 @@ TEST(Helix, ClosestPointOnProjectedHelixIsContinuousAndExact) {
 }
 
 TEST(HolderWall, ChordIsThePathInsideTheShell) {
-  const HolderWall wall{25.0, 28.0};
+  const HolderWall wall{25.0, 28.0, std::nullopt};
   // Across the axis: twice the wall; between the radii: the outer circle's chord; outside: none.
   EXPECT_NEAR(wall.chord_mm({-100, 0, 5}, {1, 0, 0}), 6.0, 1e-12);
   EXPECT_NEAR(wall.chord_mm({-100, 26, 0}, {3, 0, 0}), 2 * std::sqrt(28.0 * 28 - 26 * 26), 1e-12);
@@ -76,6 +76,35 @@ TEST(HolderWall, ChordIsThePathInsideTheShell) {
       if (r >= 25.0 && r < 28.0) inside += step;
     }
     EXPECT_NEAR(wall.chord_mm(point, 2.5 * direction), inside, 0.01) << i;
+  }
+}
+
+TEST(HolderWall, ATubeWithEndsIsCutByThem) {
+  const HolderWall tube{25.0, 28.0, Eigen::Vector2d(-59, 59)};
+  // Along a line 3 deg off the axis, tangent to the wall's middle: an infinite tube's chord is
+  // the 2D chord (18 mm) over sin 3 deg; the tube's is at most its length over cos 3 deg.
+  const Eigen::Vector3d direction(0, std::sin(3 * M_PI / 180), std::cos(3 * M_PI / 180));
+  const HolderWall infinite{25.0, 28.0, std::nullopt};
+  EXPECT_NEAR(infinite.chord_mm({26.5, 0, 0}, direction), 2 * std::sqrt(28.0 * 28 - 26.5 * 26.5) / std::sin(3 * M_PI / 180),
+              1e-9);
+  EXPECT_LE(tube.chord_mm({26.5, 0, 0}, direction), 118 / std::cos(3 * M_PI / 180) + 1e-9);
+  // Across the axis beyond an end: nothing; inside the ends: as if infinite.
+  EXPECT_EQ(tube.chord_mm({-100, 0, 60}, {1, 0, 0}), 0.0);
+  EXPECT_NEAR(tube.chord_mm({-100, 0, 58}, {1, 0, 0}), 6.0, 1e-12);
+  // Random lines, steep ones among them, against marching in 1 um steps.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < 12; ++i) {
+    const Eigen::Vector3d point(30 * u(rng), 30 * u(rng), 60 * u(rng));
+    const Eigen::Vector3d line = Eigen::Vector3d(0.3 * u(rng), 0.3 * u(rng), 1.0).normalized();
+    double inside = 0;
+    const double step = 1e-3;
+    for (double s = -400; s < 400; s += step) {
+      const Eigen::Vector3d x = point + (s + 0.5 * step) * line;
+      const double r = std::hypot(x.x(), x.y());
+      if (r >= 25.0 && r < 28.0 && std::abs(x.z()) <= 59) inside += step;
+    }
+    EXPECT_NEAR(tube.chord_mm(point, 2.5 * line), inside, 0.01) << i;
   }
 }
 

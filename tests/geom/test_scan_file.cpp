@@ -296,14 +296,34 @@ TEST(ScanFile, HolderWallExtension) {
   ASSERT_TRUE(scan.holder->wall);  // the reference holder declares its tube
   EXPECT_EQ(scan.holder->wall->inner_radius_mm, 25.0);
   EXPECT_EQ(scan.holder->wall->outer_radius_mm, 28.0);
+  ASSERT_TRUE(scan.holder->wall->ends_mm);  // and its ends
+  EXPECT_EQ(*scan.holder->wall->ends_mm, Eigen::Vector2d(-59, 59));
+  expect_error_naming(
+      file,
+      [](nlohmann::json& j) {
+        j["holder"]["wall"]["ends_mm"] = {10.0, 59.0};
+      },
+      "holder.wall.ends_mm");
+  write_scan(scan, file);
+  expect_error_naming(
+      file,
+      [](nlohmann::json& j) {
+        j["holder"]["wall"]["ends_mm"] = {59.0, -59.0};
+      },
+      "holder.wall.ends_mm");
+  write_scan(scan, file);
   expect_error_naming(
       file, [](nlohmann::json& j) { j["holder"]["wall"]["outer_radius_mm"] = 20.0; }, "holder.wall.outer_radius_mm");
   write_scan(scan, file);
   expect_error_naming(
       file, [](nlohmann::json& j) { j["holder"]["wall"].erase("inner_radius_mm"); }, "holder.wall.inner_radius_mm");
   write_scan(scan, file);
-  // Without the key the holder has no wall, as before the extension.
+  // Without the ends the tube is infinitely long; without the key the holder has no wall, as
+  // before the extension.
   nlohmann::json j = read_json_file(file);
+  j["holder"]["wall"].erase("ends_mm");
+  testing::write_text(file, j.dump(2));
+  EXPECT_FALSE(read_scan(file).holder->wall->ends_mm);
   j["holder"].erase("wall");
   testing::write_text(file, j.dump(2));
   EXPECT_FALSE(read_scan(file).holder->wall);

@@ -20,11 +20,14 @@ struct Helix {
   double nearest_tau(const Eigen::Vector3d& p) const;
 };
 
-/// The tube that carries the spheres, coaxial with the helix (the holder's w axis). Its ends lie
-/// far beyond the spheres, so it is treated as infinitely long.
+/// The tube that carries the spheres, coaxial with the helix (the holder's w axis), between its
+/// ends along the axis when they are known; otherwise treated as infinitely long. Seen from the
+/// side the two agree wherever the ends lie beyond the rays, but within about 10 deg of the axis a
+/// ray runs tens of millimetres inside the wall and the ends decide its path.
 struct HolderWall {
   double inner_radius_mm = 0;
   double outer_radius_mm = 0;
+  std::optional<Eigen::Vector2d> ends_mm;  // the tube's ends (w, holder frame), lower first
 
   /// Path length (mm) inside the wall along the line through `point` with direction `direction`.
   double chord_mm(const Eigen::Vector3d& point, const Eigen::Vector3d& direction) const;
@@ -46,7 +49,7 @@ struct Holder {
 
 /// The toolkit's reference holder: 50 spheres of 2 mm on a helix of radius 28 mm making two
 /// turns over 80 mm (rho = 4 pi / 80 rad/mm), centred on the holder origin, on the outside of a
-/// tube of inner radius 25 mm and outer radius 28 mm.
+/// tube of inner radius 25 mm and outer radius 28 mm, 118 mm long and centred on it.
 Holder reference_helix_holder();
 
 struct HelixPoint {
