@@ -12,6 +12,7 @@
 #include "ctk/core/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "ctk/geom/astra.hpp"
+#include "ctk/geom/geometry_summary.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/rtk_geometry.hpp"
 
@@ -48,9 +49,7 @@ void report(const ScanDescription& scan, const Geometry& g) {
   std::cout << "views: " << g.views.size() << " (" << g.views.size() - static_cast<std::size_t>(skipped) << " with a pose, "
             << skipped << " skipped)\n";
   if (sod.empty()) return;
-  std::cout << "source to holder origin (mm), min / median / max: " << range(sod) << "\n";
-  std::cout << "magnification at the holder origin, median: " << std::fixed << std::setprecision(4)
-            << scan.source_to_detector_mm / sod[sod.size() / 2] << "\n";
+  std::cout << "source to holder origin (mm), min / median / max: " << range(sod) << "\n" << to_text(summarize_geometry(g));
   if (!spheres_visible.empty())
     std::cout << "holder spheres projecting onto the detector, min / median / max: " << range(spheres_visible) << " of "
               << scan.holder->spheres_mm.size() << "\n";

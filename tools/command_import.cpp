@@ -14,6 +14,7 @@
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
 #include "ctk/core/error.hpp"
+#include "ctk/geom/geometry_summary.hpp"
 #include "ctk/geom/rtk_geometry.hpp"
 #include "ctk/geom/scan_import.hpp"
 #include "ctk/core/image_io.hpp"
@@ -144,7 +145,8 @@ void finish(const ImportedScan& imported, const fs::path& out, const std::string
   const ScanDescription check = read_scan(out);  // what every other command will read
   for (const auto& w : check.warnings) std::cerr << "warning: " << w << "\n";
   std::cout << "wrote " << out.string() << " (" << check.projections.count << " views, detector " << check.detector.cols << " x "
-            << check.detector.rows << ") and " << check.resolve(check.matrices->file).string() << "\n";
+            << check.detector.rows << ") and " << check.resolve(check.matrices->file).string() << "\n"
+            << to_text(summarize_geometry(imported.geometry));
 }
 
 void run_circular(const CircularOptions& o) {

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "../test_support.hpp"
+#include "ctk/geom/geometry_summary.hpp"
 #include "ctk/geom/scan_import.hpp"
 
 namespace ctk {
@@ -150,6 +151,32 @@ TEST(ConeVecImport, ScanFileRoundTripsWithAveragedFlats) {
   ASSERT_TRUE(scan.matrices);
   EXPECT_NEAR(scan.source_to_detector_mm, 900, 1e-9);
   EXPECT_LT(max_abs_difference(*scan.matrices->geometry.views[1].P, matrices[1]), 1e-12);
+}
+
+TEST(GeometrySummary, ACircularOrbitByItsNumbers) {
+  // The pepper's setup: SOD 1001.3, SDD 1098 mm, 239 x 190 px of 0.5984 mm.
+  CircularOrbit orbit;
+  orbit.detector = {239, 190, 0.5984, 0.5984};
+  orbit.principal_point_px = orbit.detector.centre_px();
+  orbit.source_to_axis_mm = 1001.3;
+  orbit.source_to_detector_mm = 1098.0;
+  for (int k = 0; k < 9; ++k) orbit.angles_rad.push_back(0.7 * k);
+  Geometry g;
+  g.detector = orbit.detector;
+  for (const ProjectionMatrix& P : circular_matrices(orbit))
+    g.views.push_back({static_cast<int>(g.views.size()), "", ViewStatus::ok, "", P, {}, {}});
+  g.views.push_back({9, "", ViewStatus::skipped, "no pose", std::nullopt, {}, {}});
+  const GeometrySummary s = summarize_geometry(g);
+  EXPECT_EQ(s.views, 9);
+  EXPECT_NEAR(s.source_to_origin_mm, 1001.3, 1e-9);
+  EXPECT_NEAR(s.source_to_detector_mm, 1098.0, 1e-9);
+  EXPECT_NEAR(s.magnification, 1098.0 / 1001.3, 1e-12);
+  EXPECT_NEAR(s.cone_angle_u_deg, 2 * std::atan(0.5 * 239 * 0.5984 / 1098.0) * 180 / M_PI, 1e-9);
+  EXPECT_NEAR(s.cone_angle_v_deg, 2 * std::atan(0.5 * 190 * 0.5984 / 1098.0) * 180 / M_PI, 1e-9);
+  EXPECT_NEAR(s.field_of_view_u_mm, 239 * 0.5984 * 1001.3 / 1098.0, 1e-9);
+  EXPECT_NEAR(s.voxel_mm, 0.5984 * 1001.3 / 1098.0, 1e-12);
+  EXPECT_NE(to_text(s).find("--voxel 0.5457"), std::string::npos) << to_text(s);
+  EXPECT_EQ(summarize_geometry(Geometry{}).views, 0);
 }
 
 }  // namespace
