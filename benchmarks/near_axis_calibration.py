@@ -1,7 +1,8 @@
 """Calibration looking along the holder's axis: spinning caps from 0 to 12 deg of the axis, each
-calibrated three ways, with the holder's wall declared with its ends, declared as an infinitely
-long tube (the ends removed), and not declared (none of the views sees the holder from the side,
-so the wall cannot be measured and no shadow is modelled). For each: views with >= 10 spheres on
+calibrated five ways, with the holder's wall declared with its true ends, with ends 9 mm too
+short or too long at each side, declared as an infinitely long tube (the ends removed), and not
+declared (none of the views sees the holder from the side, so the wall cannot be measured and no
+shadow is modelled). For each: views with >= 10 spheres on
 the detector kept, the median difference from the true matrices, and the views lost with the
 angle between the true beam and the holder axis and the reason.
 
@@ -22,7 +23,13 @@ from diagnosis_population import calibration_figures, cpu_name
 SCAN = ["--phantom", "helix-holder", "--cols", "720", "--rows", "720", "--pitch", "0.6", "--trajectory", "cap", "--views", "60",
         "--cap-deg", "0", "12", "--robot-noise-mm", "0.2", "--robot-noise-deg", "0.1", "--base-translation-mm", "1.5", "-2.0", "0.8",
         "--base-rotation-deg", "0.5", "-0.3", "1.0"]
-WALLS = {"ends": lambda w: w, "infinite": lambda w: {k: v for k, v in w.items() if k != "ends_mm"}, "none": lambda w: None}
+def ends_moved(mm):
+    return lambda w: dict(w, ends_mm=[w["ends_mm"][0] - mm, w["ends_mm"][1] + mm])
+
+
+# The wall as declared, its ends 9 mm too close together or too far apart, no ends, no wall.
+WALLS = {"ends": lambda w: w, "ends_9mm_short": ends_moved(-9), "ends_9mm_long": ends_moved(9),
+         "infinite": lambda w: {k: v for k, v in w.items() if k != "ends_mm"}, "none": lambda w: None}
 
 
 def axis_angle_deg(P):
@@ -58,7 +65,7 @@ def main():
                 lost = [{"view": x["view"], "axis_deg": round(axis_angle_deg(truth[x["view"]]), 2), "reason": x["reason"]} for x in f["lost"]]
                 rows.append({"seed": seed, "wall": name, "eligible": f["eligible"], "calibrated": f["calibrated"],
                              "median_difference_px": f["median_difference_px"], "lost": lost})
-                print(f"seed {seed} wall {name:8s}: {f['calibrated']} of {f['eligible']} calibrated, median "
+                print(f"seed {seed} wall {name:14s}: {f['calibrated']} of {f['eligible']} calibrated, median "
                       f"{f['median_difference_px']:.4f} px from the truth; lost at "
                       + ", ".join(f"{x['axis_deg']:.1f}" for x in lost) + " deg", flush=True)
     summary = {}
