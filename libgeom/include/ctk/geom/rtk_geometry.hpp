@@ -17,7 +17,6 @@
 // vertically) and along them for one whose stored images are mirrored (RTK reads them as stored).
 #include <filesystem>
 #include <optional>
-#include <filesystem>
 #include <string>
 #include <vector>
 
