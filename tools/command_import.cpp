@@ -207,7 +207,7 @@ void run_rtk(const RtkOptions& o) {
   if (static_cast<int>(g.views.size()) != projections.count)
     throw InputError(o.geometry.string(), "",
                      std::to_string(g.views.size()) + " projections for " + std::to_string(projections.count) + " files");
-  const RtkRows rows = !o.rows.empty() ? rtk_rows_from_string(o.rows) : g.rows.value_or(RtkRows::as_stored);
+  const RtkRows rows = !o.rows.empty() ? rtk_rows_from_string(o.rows) : g.pixel_map();
   const Detector detector = described_detector(o, projections, o.pitch.front(), o.pitch.back());
   std::vector<ProjectionMatrix> matrices;
   for (const RtkProjection& v : g.views)

@@ -71,7 +71,7 @@ py::array_t<double> read_rtk(const fs::path& file, const std::array<int, 2>& det
                              const std::array<double, 2>& pixel_mm, const std::string& rows) {
   const Detector d = detector_from(detector_shape, pixel_mm);
   const RtkGeometry g = read_rtk_geometry(file);
-  const RtkRows sense = rows.empty() ? g.rows.value_or(RtkRows::as_stored) : rows_from(rows);
+  const RtkRows sense = rows.empty() ? g.pixel_map() : rows_from(rows);
   std::vector<ProjectionMatrix> out;
   for (const RtkProjection& v : g.views) out.push_back(from_rtk(v, d, sense));
   return matrices_to_numpy(out);

@@ -58,6 +58,10 @@ RtkProjection to_rtk(const ProjectionMatrix& P, const Detector& detector, RtkRow
 struct RtkGeometry {
   std::vector<RtkProjection> views;
   std::optional<RtkRows> rows;  // the sense a file written by ctk names in its comment
+
+  /// The sense to read the views under: the one the file names, else as_stored (RTK indexing
+  /// the images as stored, as its own tools write them).
+  RtkRows pixel_map() const { return rows.value_or(RtkRows::as_stored); }
 };
 
 /// Reads the views in order; a parameter outside a <Projection> holds for every projection after
