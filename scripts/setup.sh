@@ -21,6 +21,7 @@ packages=(
   libgtest-dev libgmock-dev   # tests
   libbenchmark-dev       # benchmarks
   libhwy-dev             # SIMD with runtime dispatch (Highway)
+  libopenmpi-dev openmpi-bin   # runs spread over ranks (mpirun -np N ctk reconstruct|calibrate)
   clang-format           # tests/format: the sources as .clang-format says
   python3                # benchmarks/yardstick.py: the benchmark checked from outside (standard library only)
   python3-dev pybind11-dev python3-numpy   # the Python module (import ctk)

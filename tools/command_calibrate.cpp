@@ -1,6 +1,8 @@
 // ctk calibrate: every view's projection matrix from the helix spheres in its image, the robot's
 // forward kinematics (or given matrices) as the first guess; writes ctk-geometry/1 and a report.
 // Each finished view is journaled as it completes, so an interrupted run continues (--resume).
+// Under mpirun the views are dealt to the ranks (no journal: Ctrl-C ends the run) and the first
+// rank writes.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,8 +11,10 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 
 #include "commands.hpp"
+#include "ctk/core/communicator.hpp"
 #include "ctk/core/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "option_checks.hpp"
@@ -113,34 +117,47 @@ void run_calibrate(const CalibrateOptions& o) {
   files.check();
   OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
+  const Communicator& ranks = world();
+  const bool spread = ranks.size() > 1;
+  if (o.resume && spread)
+    throw InputError("--resume", "", "a run spread over MPI ranks keeps no journal to continue: run it again");
   // Every finished view is journaled at once: Ctrl-C or a kill loses none, and --resume goes on.
   const nlohmann::json run = calibration_run(o, scan);
   std::unique_ptr<CalibrationJournal> journal;
-  if (o.resume) {
-    if (!fs::exists(journal_file))
-      throw InputError("--resume", "", "no calibration journal at " + journal_file.string() + " to continue");
-    journal = CalibrationJournal::resume(journal_file, run);
-    std::cout << "continuing: " << journal->done().size() << " views were calibrated by the interrupted run ("
-              << journal_file.string() << ")\n";
-  } else {
-    if (fs::exists(journal_file))
-      std::cout << "note: " << journal_file.string()
-                << " holds an interrupted run's views; this run starts afresh (--resume continues it)\n";
-    journal = std::make_unique<CalibrationJournal>(journal_file, run);
-  }
-  const std::map<int, ViewCalibration> earlier = journal->done();
-  const InterruptionWatch watch;
+  std::map<int, ViewCalibration> earlier;
+  std::optional<InterruptionWatch> watch;
   BatchControl control;
-  control.done = &earlier;
-  control.on_view = [&](int view, const ViewCalibration& result) { journal->record(view, result); };
-  control.stop_requested = [] { return InterruptionWatch::requested(); };
+  if (!spread) {
+    if (o.resume) {
+      if (!fs::exists(journal_file))
+        throw InputError("--resume", "", "no calibration journal at " + journal_file.string() + " to continue");
+      journal = CalibrationJournal::resume(journal_file, run);
+      std::cout << "continuing: " << journal->done().size() << " views were calibrated by the interrupted run ("
+                << journal_file.string() << ")\n";
+    } else {
+      if (fs::exists(journal_file))
+        std::cout << "note: " << journal_file.string()
+                  << " holds an interrupted run's views; this run starts afresh (--resume continues it)\n";
+      journal = std::make_unique<CalibrationJournal>(journal_file, run);
+    }
+    earlier = journal->done();
+    watch.emplace();
+    control.done = &earlier;
+    control.on_view = [&](int view, const ViewCalibration& result) { journal->record(view, result); };
+    control.stop_requested = [] { return InterruptionWatch::requested(); };
+  } else {
+    std::cout << "spread over " << ranks.size() << " ranks: each calibrates every " << ranks.size()
+              << "th view; progress counts the first rank's\n";
+  }
   Progress progress("calibrate", "views");
-  const CalibrationRun run_result = run_calibration(scan, {o.calibration, o.image_only}, std::ref(progress), &control);
+  const CalibrationRun run_result =
+      run_calibration(scan, {o.calibration, o.image_only}, std::ref(progress), spread ? nullptr : &control, ranks);
   const ScanCalibration& c = run_result.calibration;
   if (c.left_undone > 0)
     throw Interrupted("stopped with " + std::to_string(c.left_undone) + " of " + std::to_string(scan.projections.count) +
                       " views to go; the finished ones are in " + journal_file.string() +
                       ": run the same command with --resume to continue");
+  if (ranks.rank() != 0) return;  // every rank holds the whole calibration: the first writes it
   write_geometry(c.geometry, o.out);
   const fs::path report = report_file(o);
   nlohmann::json j = run_result.report();
@@ -149,7 +166,7 @@ void run_calibrate(const CalibrateOptions& o) {
   j["pictures"] = write_pictures(scan, c, o);
   write_text_atomically(report, j.dump(2) + "\n");
   outputs.publish();
-  journal->remove();
+  if (journal) journal->remove();
   if (c.taken_over > 0) std::cout << c.taken_over << " views taken from the interrupted run, the others calibrated now\n";
   std::cout << run_result.brief() << "\n" << run_result.wall_and_prior() << "\n";
   int listed = 0;

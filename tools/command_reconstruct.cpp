@@ -2,6 +2,7 @@
 // (librecon's run_reconstruction): checks the files, prints the memory plan, saves the solver's
 // state every few iterations and on Ctrl-C (--resume continues it), and writes the volume (one
 // NRRD file), PNG previews of the three central slices and a JSON log, published together.
+// Under mpirun the views are spread over the ranks and the first rank writes.
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -9,6 +10,7 @@
 
 #include "commands.hpp"
 #include "ctk/core/atomic_write.hpp"
+#include "ctk/core/communicator.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/core/image_io.hpp"
 #include "ctk/core/volume_file.hpp"
@@ -70,6 +72,8 @@ void write_previews(const Volume& x, const fs::path& out) {
 }
 
 void run_reconstruct(const ReconstructOptions& o) {
+  const Communicator& ranks = world();
+  const bool spread = ranks.size() > 1;
   const ScanDescription scan = read_scan(o.scan);
   RunFiles files;
   require_projection_files(scan, o.scan.string(), "projections.count");
@@ -100,6 +104,8 @@ void run_reconstruct(const ReconstructOptions& o) {
     throw InputError("--resume", "", "fdk is not iterative: there is nothing to continue");
   if (o.resume && options.method == ReconstructionMethod::os_sqs)
     throw InputError("--resume", "", "os-sqs keeps no state to continue (its momentum restarts): run it again");
+  if (o.resume && spread)
+    throw InputError("--resume", "", "a run spread over MPI ranks keeps no state to continue: run it again");
   if (o.resume && !fs::exists(state_file))
     throw InputError("--resume", "", "no saved state at " + state_file.string() + " to continue");
 
@@ -113,14 +119,20 @@ void run_reconstruct(const ReconstructOptions& o) {
   };
   Progress reading("reading projections", "views");
   std::optional<Progress> solving;
-  const InterruptionWatch watch;
+  // Spread over ranks, Ctrl-C ends the run at once (mpirun passes it to every rank): nothing is saved.
+  std::optional<InterruptionWatch> watch;
+  if (!spread) watch.emplace();
   ReconstructionHooks hooks;
   hooks.planned = [&](const ReconstructionPlan& plan) {
     const VolumeLayout& l = plan.layout;
     std::cout << "volume " << l.size[0] << " x " << l.size[1] << " x " << l.size[2] << " voxels of " << l.voxel_mm.x()
               << " mm (holder frame, centred on the holder origin)\n"
-              << "memory plan (" << to_string(plan.method) << "): " << plan.memory.describe() << "; available "
-              << static_cast<double>(plan.available_bytes) / 1e9 << " GB\n";
+              << "memory plan (" << to_string(plan.method) << (spread ? ", per rank" : "") << "): " << plan.memory.describe()
+              << "; available " << static_cast<double>(plan.available_bytes) / 1e9 << " GB\n";
+    if (spread)
+      std::cout << "spread over " << plan.ranks << " ranks by views: at most " << plan.views_per_rank
+                << " views and the whole volume on each; " << static_cast<double>(plan.summed_bytes_per_iteration) / 1e6
+                << " MB summed over the ranks per iteration\n";
     solving.emplace(to_string(plan.method), "iterations");
   };
   hooks.reading = std::ref(reading);
@@ -152,7 +164,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   };
   hooks.stop_requested = [] { return InterruptionWatch::requested(); };
 
-  const ReconstructionRun run = run_reconstruction(scan, geometry, options, hooks);
+  const ReconstructionRun run = run_reconstruction(scan, geometry, options, hooks, ranks);
   if (run.stopped() && options.method == ReconstructionMethod::os_sqs)
     throw Interrupted("stopped after epoch " + std::to_string(run.solver.iterations.back().iteration) +
                       "; OS-SQS keeps no state: nothing was written");
@@ -163,6 +175,7 @@ void run_reconstruct(const ReconstructOptions& o) {
     std::cout << "circular trajectory: radius " << run.circle->radius_mm << " mm, arc " << run.circle->arc_rad * 180 / M_PI
               << " deg" << (run.circle->arc_rad < 2 * M_PI - 1e-9 ? " (short scan: Parker weights)" : "") << "\n";
   std::cout << run.brief() << "\n";
+  if (ranks.rank() != 0) return;  // every rank holds the same volume: the first writes it
 
   write_volume(run.volume, o.out);
   write_previews(run.volume, o.out);

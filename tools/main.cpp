@@ -6,10 +6,12 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "ctk/core/communicator.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/core/provenance.hpp"
 #include "ctk/proj/joseph_projector.hpp"
 #include "interruption.hpp"
+#include "progress.hpp"
 
 namespace {
 
@@ -20,6 +22,20 @@ std::string version_text() {
   for (const std::string& t : ctk::JosephProjector::simd_targets()) targets += (targets.empty() ? "" : " ") + t;
   return "ctk " + ctk::build_version() + "\ncompiler: " + __VERSION__ + "\nSIMD targets compiled: " + targets +
          "; chosen at run time: " + ctk::JosephProjector::simd_target();
+}
+
+// The commands a run spread over MPI ranks divides between them; any other would do the same
+// work on every rank and write the same files at once.
+bool spreads_over_ranks(const std::string& command) { return command == "reconstruct" || command == "calibrate"; }
+
+// A failure ends every rank of an MPI run (no rank waits for a dead one); one process just exits.
+int fail(int exit_code) {
+  const ctk::Communicator& ranks = ctk::world();
+  if (ranks.size() > 1) {
+    std::cerr.flush();
+    ranks.abort(exit_code);
+  }
+  return exit_code;
 }
 
 }  // namespace
@@ -62,21 +78,38 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  // Under mpirun, the first rank speaks for the run; the others report only their errors.
+  const ctk::Communicator& ranks = ctk::world();
+  const std::string rank_prefix =
+      ranks.size() > 1 ? " (rank " + std::to_string(ranks.rank()) + " of " + std::to_string(ranks.size()) + ")" : "";
+  if (ranks.size() > 1) {
+    const std::string command = argc > 1 ? argv[1] : "";
+    if (!spreads_over_ranks(command)) {
+      if (ranks.rank() == 0)
+        std::cerr << "ctk " << command << ": does not spread over MPI ranks (reconstruct and calibrate do): run it without "
+                  << "mpirun\n";
+      return fail(2);
+    }
+    if (ranks.rank() != 0) {
+      std::cout.rdbuf(nullptr);
+      ctk::tools::Progress::silenced() = true;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     // CLI11 prints the message (or the help); a malformed command line is bad input like any
     // other, so it exits 2 rather than with CLI11's own codes (105 for a missing file, ...).
-    return app.exit(e) == 0 ? 0 : 2;
+    return app.exit(e) == 0 ? 0 : fail(2);
   } catch (const ctk::tools::Interrupted& e) {
-    std::cerr << "ctk: " << e.what() << "\n";
-    return 130;
+    std::cerr << "ctk" << rank_prefix << ": " << e.what() << "\n";
+    return fail(130);
   } catch (const ctk::InputError& e) {
-    std::cerr << "ctk: input error: " << e.what() << "\n";
-    return 2;
+    std::cerr << "ctk" << rank_prefix << ": input error: " << e.what() << "\n";
+    return fail(2);
   } catch (const std::exception& e) {
-    std::cerr << "ctk: error: " << e.what() << "\n";
-    return 1;
+    std::cerr << "ctk" << rank_prefix << ": error: " << e.what() << "\n";
+    return fail(1);
   }
   return 0;
 }

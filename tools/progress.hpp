@@ -13,6 +13,7 @@ class Progress {
   Progress(std::string what, std::string unit) : what_(std::move(what)), unit_(std::move(unit)) {}
 
   void operator()(int done, int total) {
+    if (silenced()) return;
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     const int decile = total > 0 ? 10 * done / total : 10;
     const bool tty = isatty(fileno(stderr));
@@ -22,6 +23,12 @@ class Progress {
     std::fprintf(stderr, "%s%s: %d / %d %s, %.1f s elapsed, ~%.1f s left%s", tty ? "\r" : "", what_.c_str(), done, total,
                  unit_.c_str(), elapsed, left, tty && done != total ? "" : "\n");
     std::fflush(stderr);
+  }
+
+  /// Every progress line of the process off (the ranks of a run other than the first).
+  static bool& silenced() {
+    static bool off = false;
+    return off;
   }
 
  private:

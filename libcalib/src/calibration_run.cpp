@@ -40,7 +40,8 @@ nlohmann::json robot_prior_json(const RobotPriorFit& p) {
 }  // namespace
 
 CalibrationRun run_calibration(const ScanDescription& scan, const CalibrationRunOptions& o,
-                               const std::function<void(int, int)>& progress, const BatchControl* control) {
+                               const std::function<void(int, int)>& progress, const BatchControl* control,
+                               const Communicator& ranks) {
   o.validate();
   CalibrationRun run;
   run.options = o.calibration;
@@ -54,11 +55,11 @@ CalibrationRun run_calibration(const ScanDescription& scan, const CalibrationRun
   ScanDescription with_wall = scan;
   if (scan.holder && !scan.holder->wall) {
     const auto start = std::chrono::steady_clock::now();
-    run.wall = measure_holder_wall(scan, calibrate_scan_views(scan, wall_sample_views(scan), o.calibration));
+    run.wall = measure_holder_wall(scan, calibrate_scan_views(scan, wall_sample_views(scan), o.calibration, ranks));
     if (run.wall) with_wall.holder->wall = run.wall->wall;
     wall_seconds = seconds_since(start);
   }
-  c = calibrate_scan(with_wall, o.calibration, progress, control);
+  c = calibrate_scan(with_wall, o.calibration, progress, control, ranks);
   c.seconds += wall_seconds;
   if (c.left_undone > 0) return run;
   run.prior.reason = "switched off (--image-only)";

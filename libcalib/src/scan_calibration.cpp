@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 
+#include "ctk/calib/calibration_journal.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/core/parallel.hpp"
@@ -19,11 +20,26 @@ struct FirstGuess {
   std::string reason;
 };
 
+// Spread over ranks, every rank receives the views the others calibrated (as the journal stores
+// them: every field, numbers to the last bit).
+void share_views(const std::vector<int>& mine, const Communicator& ranks, std::vector<ViewCalibration>& views) {
+  nlohmann::json done = nlohmann::json::array();
+  for (int v : mine) done.push_back({{"view", v}, {"calibration", view_calibration_to_json(views[static_cast<std::size_t>(v)])}});
+  for (const std::string& part : ranks.gather(done.dump()))
+    for (const nlohmann::json& entry : nlohmann::json::parse(part)) {
+      const int v = entry.at("view").get<int>();
+      views[static_cast<std::size_t>(v)] = view_calibration_from_json(entry.at("calibration"), "another rank", "view");
+    }
+}
+
 ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<FirstGuess>& guesses,
                                 const CalibrationOptions& options, const std::function<void(int, int)>& progress,
-                                const BatchControl* control) {
+                                const BatchControl* control, const Communicator& ranks) {
   const auto start = std::chrono::steady_clock::now();
   options.validate();
+  if (control && ranks.size() > 1)
+    throw std::invalid_argument(
+        "calibrate_views: an earlier run's views and stop requests are one process's, not a spread run's");
   if (!scan.holder) throw InputError("scan", "holder", "calibration needs the holder's spheres (missing)");
   if (static_cast<int>(scan.holder->spheres_mm.size()) < options.min_spheres)
     throw InputError("scan", "holder.spheres_mm",
@@ -31,13 +47,18 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
                          std::to_string(options.min_spheres));
   const std::optional<FlatDark> flat_dark = read_flat_dark(scan);
   const int n = scan.projections.count;
+  // This rank's views, dealt in turn so that each rank's share spans the trajectory.
+  std::vector<int> mine;
+  for (int v = ranks.rank(); v < n; v += ranks.size()) mine.push_back(v);
+  const int share = static_cast<int>(mine.size());
 
   ScanCalibration result;
   result.views.resize(static_cast<std::size_t>(n));
   int done = 0;
   std::atomic<int> left_undone{0};
   std::vector<char> finished(static_cast<std::size_t>(n), 0);
-  parallel_for_dynamic(n, [&](int v) {
+  parallel_for_dynamic(share, [&](int k) {
+    const int v = mine[static_cast<std::size_t>(k)];
     ViewCalibration& out = result.views[static_cast<std::size_t>(v)];
     const FirstGuess& guess = guesses[static_cast<std::size_t>(v)];
     if (control && control->done) {
@@ -45,7 +66,7 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
         out = earlier->second;
         finished[static_cast<std::size_t>(v)] = 2;
 #pragma omp critical(ctk_calibration_progress)
-        if (progress) progress(++done, n);
+        if (progress) progress(++done, share);
         return;
       }
     }
@@ -78,9 +99,10 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
 #pragma omp critical(ctk_calibration_progress)
     {
       if (control && control->on_view) control->on_view(v, out);
-      if (progress) progress(++done, n);
+      if (progress) progress(++done, share);
     }
   });
+  if (ranks.size() > 1) share_views(mine, ranks, result.views);
   result.left_undone = left_undone;
   result.taken_over = static_cast<int>(std::count(finished.begin(), finished.end(), 2));
 
@@ -157,23 +179,24 @@ std::vector<FirstGuess> only(std::vector<FirstGuess> guesses, const std::vector<
 }  // namespace
 
 ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
-                               const std::function<void(int, int)>& progress, const BatchControl* control) {
-  return calibrate_views(scan, nominal_guesses(scan), options, progress, control);
+                               const std::function<void(int, int)>& progress, const BatchControl* control,
+                               const Communicator& ranks) {
+  return calibrate_views(scan, nominal_guesses(scan), options, progress, control, ranks);
 }
 
 ScanCalibration calibrate_scan_views(const ScanDescription& scan, const std::vector<int>& views,
-                                     const CalibrationOptions& options) {
-  return calibrate_views(scan, only(nominal_guesses(scan), views), options, {}, nullptr);
+                                     const CalibrationOptions& options, const Communicator& ranks) {
+  return calibrate_views(scan, only(nominal_guesses(scan), views), options, {}, nullptr, ranks);
 }
 
 ScanCalibration recalibrate_scan(const ScanDescription& scan, const Geometry& calibrated, const CalibrationOptions& options,
                                  const std::function<void(int, int)>& progress) {
-  return calibrate_views(scan, calibrated_guesses(scan, calibrated), options, progress, nullptr);
+  return calibrate_views(scan, calibrated_guesses(scan, calibrated), options, progress, nullptr, single_process());
 }
 
 ScanCalibration recalibrate_scan_views(const ScanDescription& scan, const Geometry& calibrated, const std::vector<int>& views,
                                        const CalibrationOptions& options) {
-  return calibrate_views(scan, only(calibrated_guesses(scan, calibrated), views), options, {}, nullptr);
+  return calibrate_views(scan, only(calibrated_guesses(scan, calibrated), views), options, {}, nullptr, single_process());
 }
 
 }  // namespace ctk

@@ -36,6 +36,11 @@ void keep_views(Measurements& m, const std::vector<int>& kept) {
 
 }  // namespace
 
+void MeasurementOptions::validate() const {
+  require_option(shares >= 1, "MeasurementOptions.shares", "at least 1", shares);
+  require_option(share >= 0 && share < shares, "MeasurementOptions.share", "a number in 0 .. shares - 1", share);
+}
+
 Measurements load_measurements(const ScanDescription& scan, const Geometry& geometry, const MeasurementOptions& options,
                                const std::function<void(int, int)>& progress) {
   const Detector& d = scan.detector;
@@ -43,15 +48,19 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
     throw InputError(geometry.source(), json_key("detector"),
                      std::to_string(geometry.detector.cols) + " x " + std::to_string(geometry.detector.rows) +
                          " pixels, but the scan's detector is " + std::to_string(d.cols) + " x " + std::to_string(d.rows));
+  options.validate();
   Measurements m;
+  int position = -1;           // among the ok views
+  std::vector<int> described;  // the scan views of the ok views so far
   for (int i : geometry.ok_views()) {
+    ++position;
     const GeometryView& v = geometry.views[static_cast<std::size_t>(i)];
     if (v.index < 0 || v.index >= scan.projections.count)
       throw InputError(
           geometry.source(), json_key("views[" + std::to_string(i) + "].index"),
           "view " + std::to_string(v.index) + " is not in the scan (0 .. " + std::to_string(scan.projections.count - 1) + ")");
     const std::string key = "views[" + std::to_string(i) + "]";
-    if (std::find(m.view_indices.begin(), m.view_indices.end(), v.index) != m.view_indices.end())
+    if (std::find(described.begin(), described.end(), v.index) != described.end())
       throw InputError(geometry.source(), json_key(key + ".index"), "view " + std::to_string(v.index) + " is described twice");
     // p2 is the depth in mm (the matrices are normalised): the holder origin, where the volume is
     // centred, must lie in front of the source.
@@ -60,6 +69,8 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
                        "puts the holder origin " + std::to_string(v.P->matrix()(2, 3)) +
                            " mm from the source along the beam (behind it): "
                            "a matrix of the wrong sign?");
+    described.push_back(v.index);
+    if (position % options.shares != options.share) continue;
     m.view_indices.push_back(v.index);
     m.matrices.push_back(*v.P);
   }

@@ -28,12 +28,13 @@ void gather_views(const ProjectionStack& all, const std::vector<int>& views, Pro
                 out.data.data() + static_cast<std::size_t>(k) * pixels);
 }
 
-// Throws unless `subsets` hold every view of 0 .. views-1 exactly once.
-void require_partition(const std::vector<std::vector<int>>& subsets, int views) {
+// Throws unless `subsets` hold every view of 0 .. views-1 exactly once, and each subset holds a
+// view on some rank (on an operator spread over ranks, a rank's part of a subset may be empty).
+void require_partition(const ProjectionOperator& A, const std::vector<std::vector<int>>& subsets, int views) {
   if (subsets.empty()) throw std::invalid_argument("solve_os_sqs: no subsets");
   std::vector<int> seen(static_cast<std::size_t>(views), 0);
   for (const auto& s : subsets) {
-    if (s.empty()) throw std::invalid_argument("solve_os_sqs: an empty subset");
+    if (A.sum_over_range(static_cast<double>(s.size())) == 0) throw std::invalid_argument("solve_os_sqs: an empty subset");
     for (int v : s) {
       if (v < 0 || v >= views)
         throw std::invalid_argument("solve_os_sqs: view " + std::to_string(v) + " is not one of the " + std::to_string(views) +
@@ -73,7 +74,7 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
   detail::require_problem_shapes("solve_os_sqs", A, b, x);
   if (weights && weights->data.size() != b.data.size())
     throw std::invalid_argument("solve_os_sqs: weights and line integrals differ in size");
-  require_partition(subsets, b.views);
+  require_partition(A, subsets, b.views);
   const int M = static_cast<int>(subsets.size());
   static const FloatBuffer unit;
   auto start = std::chrono::steady_clock::now();
@@ -125,14 +126,14 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
       load_part(s);
       sum += weighted_residual(*parts[static_cast<std::size_t>(s)], x, b_part, weights ? w_part.data : unit, r_part);
     }
-    return sum;
+    return A.sum_over_range(sum);
   };
 
   SolverReport report;
   // A cold start's residual is -b: no projection needed for its cost.
   const bool cold = std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; });
-  report.iterations.push_back(
-      cost_now(cold ? 0.5 * detail::weighted_square_sum(b.data, weights ? weights->data : unit) : exact_data_term(), 0));
+  report.iterations.push_back(cost_now(
+      cold ? 0.5 * A.sum_over_range(detail::weighted_square_sum(b.data, weights ? weights->data : unit)) : exact_data_term(), 0));
   double t = 1;  // Nesterov's sequence
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(x.data.size());
   for (int epoch = 1; epoch <= o.epochs; ++epoch) {
@@ -163,7 +164,7 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
       }
       t = t_next;
     }
-    report.iterations.push_back(cost_now(o.exact_cost ? exact_data_term() : seen, epoch));
+    report.iterations.push_back(cost_now(o.exact_cost ? exact_data_term() : A.sum_over_range(seen), epoch));
     if (epoch < o.epochs && stop_requested && stop_requested()) {
       report.stop_reason = kStoppedWithoutState;
       return report;

@@ -10,12 +10,14 @@
 
 #include "ctk/core/error.hpp"
 #include "ctk/proj/joseph_operator.hpp"
+#include "ctk/proj/view_split_operator.hpp"
 #include "ctk/recon/default_volume.hpp"
 #include "ctk/recon/ordered_subsets.hpp"
 #include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/wls_cg.hpp"
 #include "ctk/core/provenance.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 
@@ -55,6 +57,50 @@ nlohmann::json run_identity(const ReconstructionPlan& plan, const Reconstruction
           {"volume", {{"size", plan.layout.size}, {"voxel_mm", plan.layout.voxel_mm.x()}}},
           {"views_used", m.view_indices},
           {"data_fingerprint", data}};
+}
+
+// The whole run's views when each rank read its share: scan indices and matrices in the
+// geometry's order, and where this rank holds each (-1: another rank).
+struct SpreadViews {
+  std::vector<int> indices;
+  std::vector<ProjectionMatrix> matrices;
+  std::vector<int> local;  // per position in `indices`: this rank's stack view, or -1
+  /// This rank's stack views among `positions` (positions in `indices`), in their order.
+  std::vector<int> local_positions(const std::vector<int>& positions) const {
+    std::vector<int> out;
+    for (int p : positions)
+      if (const int k = local[static_cast<std::size_t>(p)]; k >= 0) out.push_back(k);
+    return out;
+  }
+};
+
+SpreadViews gather_views(const Geometry& geometry, const Measurements& m, const Communicator& ranks) {
+  std::vector<int> used;
+  for (const std::string& part : ranks.gather(nlohmann::json(m.view_indices).dump()))
+    for (int v : nlohmann::json::parse(part)) used.push_back(v);
+  SpreadViews out;
+  for (int i : geometry.ok_views()) {
+    const GeometryView& g = geometry.views[static_cast<std::size_t>(i)];
+    if (std::find(used.begin(), used.end(), g.index) == used.end()) continue;
+    out.indices.push_back(g.index);
+    out.matrices.push_back(*g.P);
+    const auto here = std::find(m.view_indices.begin(), m.view_indices.end(), g.index);
+    out.local.push_back(here == m.view_indices.end() ? -1 : static_cast<int>(here - m.view_indices.begin()));
+  }
+  return out;
+}
+
+// Every rank's counts, views left out and notes, in rank order.
+void combine_findings(const Measurements& m, const Communicator& ranks, Measurements& whole) {
+  const nlohmann::json mine = {
+      {"clamped", m.clamped_pixels}, {"masked", m.masked_pixels}, {"left_out", m.left_out}, {"notes", m.notes}};
+  for (const std::string& part : ranks.gather(mine.dump())) {
+    const nlohmann::json r = nlohmann::json::parse(part);
+    whole.clamped_pixels += r["clamped"].get<std::size_t>();
+    whole.masked_pixels += r["masked"].get<std::size_t>();
+    for (const auto& s : r["left_out"]) whole.left_out.push_back(s.get<std::string>());
+    for (const auto& s : r["notes"]) whole.notes.push_back(s.get<std::string>());
+  }
 }
 
 }  // namespace
@@ -113,6 +159,12 @@ nlohmann::json ReconstructionRun::report() const {
       {"memory_plan", plan.memory.describe()},
       {"solver", to_json(solver)},
       {"seconds", seconds}};
+  if (plan.ranks > 1)
+    r["distribution"] = {{"ranks", plan.ranks},
+                         {"decomposition", "views (each rank its share of the views and the whole volume)"},
+                         {"views_per_rank", plan.views_per_rank},
+                         {"summed_bytes_per_iteration", counted_summed_bytes_per_iteration},
+                         {"model_summed_bytes_per_iteration", plan.summed_bytes_per_iteration}};
   if (circle) r["circular_trajectory"] = {{"radius_mm", circle->radius_mm}, {"arc_deg", circle->arc_rad * 180 / M_PI}};
   return r;
 }
@@ -127,8 +179,12 @@ std::string ReconstructionRun::brief() const {
   return s.str();
 }
 
-ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geometry& geometry, const ReconstructionOptions& o) {
+ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geometry& geometry, const ReconstructionOptions& o,
+                                       int ranks) {
   o.validate();
+  if (ranks < 1) throw std::invalid_argument("plan_reconstruction: ranks must be at least 1");
+  if (ranks > 1 && o.method == ReconstructionMethod::fdk)
+    throw std::invalid_argument("fdk runs on one process (it reads and filters each view once): start it without mpirun");
   ReconstructionPlan plan;
   plan.method = o.method;
   plan.weighted = (o.method == ReconstructionMethod::wls_cg || o.method == ReconstructionMethod::os_sqs) &&
@@ -145,40 +201,75 @@ ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geomet
       if (o.size[a] > 0) size[a] = o.size[a];
     plan.layout = VolumeLayout::centred(size, plan.layout.voxel_mm);
   }
-  plan.memory = plan_memory(o.method, plan.layout, plan.views, scan.detector.rows, scan.detector.cols, plan.weighted);
+  plan.ranks = ranks;
+  plan.views_per_rank = (plan.views + ranks - 1) / ranks;
+  plan.memory = plan_memory(o.method, plan.layout, plan.views_per_rank, scan.detector.rows, scan.detector.cols, plan.weighted);
+  if (ranks > 1) {
+    const std::size_t volume = plan.layout.voxel_count() * sizeof(float);
+    const int subsets = o.subsets > 0 ? o.subsets : default_subset_count(plan.views);
+    switch (o.method) {
+      case ReconstructionMethod::wls_cg:  // A'W A d; d'A'W A d and the data term
+        plan.summed_bytes_per_iteration = volume + 2 * sizeof(double);
+        break;
+      case ReconstructionMethod::sirt:  // A' of the weighted residual; the data term
+        plan.summed_bytes_per_iteration = volume + sizeof(double);
+        break;
+      case ReconstructionMethod::os_sqs:  // one gradient per subset; the epoch's data term
+        plan.summed_bytes_per_iteration = static_cast<std::size_t>(subsets) * volume + sizeof(double);
+        break;
+      case ReconstructionMethod::fdk:
+        break;
+    }
+  }
   plan.available_bytes = available_memory_bytes();
   return plan;
 }
 
 ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry& geometry, const ReconstructionOptions& o,
-                                     const ReconstructionHooks& hooks) {
+                                     const ReconstructionHooks& hooks, const Communicator& ranks) {
   const auto start = std::chrono::steady_clock::now();
+  const bool spread = ranks.size() > 1;
   ReconstructionRun run;
   run.options = o;
-  run.plan = plan_reconstruction(scan, geometry, o);
+  run.plan = plan_reconstruction(scan, geometry, o, ranks.size());
   const ReconstructionPlan& plan = run.plan;
   if (hooks.planned) hooks.planned(plan);
   if (plan.memory.total_bytes() > plan.available_bytes)
-    throw std::runtime_error("the run needs " + plan.memory.describe() + " but only " +
+    throw std::runtime_error("the run needs " + plan.memory.describe() + (spread ? " per rank" : "") + " but only " +
                              std::to_string(static_cast<double>(plan.available_bytes) / 1e9) +
-                             " GB are available: use a coarser voxel, a smaller volume or fewer views");
+                             " GB are available: use a coarser voxel, a smaller volume or fewer views" +
+                             (spread ? "" : ", or spread the views over more processes (mpirun)"));
 
   MeasurementOptions reading;
   reading.statistical_weights = plan.weighted;
   reading.undistort = o.undistort;
+  reading.share = ranks.rank();
+  reading.shares = ranks.size();
   Measurements m = load_measurements(scan, geometry, reading, hooks.reading);
-  if (hooks.measured) hooks.measured(m);
-  require_views_left(m, geometry.source());
-  run.views_used = m.view_indices;
-  run.clamped_pixels = m.clamped_pixels;
-  run.masked_pixels = m.masked_pixels;
-  run.views_left_out = m.left_out;
-  run.notes = m.notes;
+  // Spread over ranks, the run's views are every rank's, in the geometry's order.
+  const SpreadViews views = spread ? gather_views(geometry, m, ranks) : SpreadViews{m.view_indices, m.matrices, {}};
+  Measurements whole;  // spread over ranks, what the hooks and the report see: the whole run's numbers, no images
+  if (spread) {
+    whole.view_indices = views.indices;
+    whole.matrices = views.matrices;
+    combine_findings(m, ranks, whole);
+    whole.distortion_note = m.distortion_note;
+  }
+  const Measurements& found = spread ? whole : m;
+  if (hooks.measured) hooks.measured(found);
+  require_views_left(found, geometry.source());
+  run.clamped_pixels = found.clamped_pixels;
+  run.masked_pixels = found.masked_pixels;
+  run.views_left_out = found.left_out;
+  run.notes = found.notes;
+  run.views_used = views.indices;
   run.distortion_note = m.distortion_note;
 
   run.volume = Volume(plan.layout);
   const int iterations = o.iteration_count();
+  std::vector<std::size_t> bytes_at;  // what this rank had summed over ranks at each iteration
   const auto on_iteration = [&](const IterationLog& l) {
+    bytes_at.push_back(ranks.bytes_sent());
     if (l.iteration > 0 && hooks.iterating) hooks.iterating(l.iteration, iterations);
   };
   if (plan.method == ReconstructionMethod::fdk) {
@@ -188,17 +279,24 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
     run.solver.stop_reason = "FDK (Hann-windowed ramp)";
     run.solver.iterations.push_back({});
   } else {
-    const nlohmann::json identity = run_identity(plan, o, m);
+    // A state spread over ranks is not saved: checkpoints, continuing and stops are one process's.
     std::optional<SolverState> saved;  // OS-SQS keeps no state to continue
-    if (hooks.resume && plan.method != ReconstructionMethod::os_sqs) saved = hooks.resume(identity);
     Checkpointing checkpointing;
+    if (!spread) {
+      const nlohmann::json identity = run_identity(plan, o, m);
+      if (hooks.resume && plan.method != ReconstructionMethod::os_sqs) saved = hooks.resume(identity);
+      checkpointing.save = [&hooks, identity](const SolverSnapshot& state) {
+        if (hooks.save) hooks.save(state, identity);
+      };
+      checkpointing.every = hooks.checkpoint_every;
+      checkpointing.stop_requested = hooks.stop_requested;
+    }
     checkpointing.resume = saved ? &*saved : nullptr;
-    checkpointing.every = hooks.checkpoint_every;
-    checkpointing.save = [&](const SolverSnapshot& state) {
-      if (hooks.save) hooks.save(state, identity);
-    };
-    checkpointing.stop_requested = hooks.stop_requested;
-    const JosephOperator A(m.matrices, plan.layout, m.line_integrals.rows, m.line_integrals.cols);
+    const std::function<bool()> stop_requested = spread ? std::function<bool()>() : hooks.stop_requested;
+    const auto local = std::make_shared<JosephOperator>(m.matrices, plan.layout, m.line_integrals.rows, m.line_integrals.cols);
+    const std::shared_ptr<const ProjectionOperator> split =
+        spread ? std::make_shared<ViewSplitOperator>(local, ranks) : std::shared_ptr<const ProjectionOperator>(local);
+    const ProjectionOperator& A = *split;
     if (plan.method == ReconstructionMethod::os_sqs) {
       OsSqsOptions os;
       os.epochs = iterations;
@@ -208,20 +306,30 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
       const auto& n = plan.layout.size;
       const Eigen::Vector3d volume_centre =
           0.5 * (plan.layout.centre_of(0, 0, 0) + plan.layout.centre_of(n[0] - 1, n[1] - 1, n[2] - 1));
-      const int count = o.subsets > 0 ? o.subsets : default_subset_count(static_cast<int>(m.matrices.size()));
-      run.solver = solve_os_sqs(A, m.line_integrals, plan.weighted ? &m.weights : nullptr, run.volume,
-                                ordered_subsets(m.matrices, count, volume_centre), os, on_iteration, hooks.stop_requested);
+      const int count = o.subsets > 0 ? o.subsets : default_subset_count(static_cast<int>(views.matrices.size()));
+      // The subsets of the whole run's views, each rank taking its views of every subset.
+      std::vector<std::vector<int>> subsets = ordered_subsets(views.matrices, count, volume_centre);
+      if (spread)
+        for (auto& subset : subsets) subset = views.local_positions(subset);
+      run.solver = solve_os_sqs(A, m.line_integrals, plan.weighted ? &m.weights : nullptr, run.volume, subsets, os, on_iteration,
+                                stop_requested);
     } else if (plan.method == ReconstructionMethod::sirt) {
-      run.solver = solve_sirt(A, m.line_integrals, run.volume, {iterations, 1.0, true}, on_iteration, &checkpointing);
+      run.solver =
+          solve_sirt(A, m.line_integrals, run.volume, {iterations, 1.0, true}, on_iteration, spread ? nullptr : &checkpointing);
     } else {
       WlsOptions w;
       w.iterations = iterations;
       w.tolerance = o.tolerance;
       w.lambda = o.lambda;
       w.regulariser = o.regulariser;
-      run.solver =
-          solve_wls_cg(A, m.line_integrals, plan.weighted ? &m.weights : nullptr, run.volume, w, on_iteration, &checkpointing);
+      run.solver = solve_wls_cg(A, m.line_integrals, plan.weighted ? &m.weights : nullptr, run.volume, w, on_iteration,
+                                spread ? nullptr : &checkpointing);
     }
+  }
+  if (spread && bytes_at.size() > 1) {
+    std::vector<double> per_iteration;
+    for (std::size_t i = 1; i < bytes_at.size(); ++i) per_iteration.push_back(static_cast<double>(bytes_at[i] - bytes_at[i - 1]));
+    run.counted_summed_bytes_per_iteration = static_cast<std::size_t>(median_in_place(per_iteration));
   }
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return run;

@@ -58,7 +58,7 @@ SolverReport solve_sirt(const ProjectionOperator& A, const ProjectionStack& b, V
     }
     IterationLog log;
     log.iteration = it;
-    log.data_term = 0.5 * detail::weighted_square_sum(residual.data, {});
+    log.data_term = 0.5 * A.sum_over_range(detail::weighted_square_sum(residual.data, {}));
     log.cost = log.data_term;
     log.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     start = std::chrono::steady_clock::now();

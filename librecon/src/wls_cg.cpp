@@ -65,7 +65,7 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
   auto log_point = [&](int iteration, double g_norm, double g0_norm) {
     IterationLog log;
     log.iteration = iteration;
-    log.data_term = 0.5 * detail::weighted_square_sum(residual.data, w);
+    log.data_term = 0.5 * A.sum_over_range(detail::weighted_square_sum(residual.data, w));
     log.regulariser_term = o.lambda > 0 ? o.lambda * regulariser_value(o.regulariser, x) : 0.0;
     log.cost = log.data_term + log.regulariser_term;
     log.relative_gradient = g0_norm > 0 ? g_norm / g0_norm : 0.0;
@@ -102,7 +102,7 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
   for (int it = first; it <= o.iterations; ++it) {
     // Scratch holds A d for the residual update; H d = A' W A d + lambda G'G d.
     A.apply(direction, scratch);
-    const double dHd_data = detail::weighted_square_sum(scratch.data, w);
+    const double dHd_data = A.sum_over_range(detail::weighted_square_sum(scratch.data, w));
     ProjectionStack& Ad = scratch;
     // d'G'Gd = ||G d||^2 = 2 * (1/2 ||G d||^2): no extra volume needed.
     const double alpha_denominator =

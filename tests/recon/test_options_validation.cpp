@@ -8,6 +8,7 @@
 #include "../test_support.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/markerless_refinement.hpp"
+#include "ctk/recon/measurements.hpp"
 #include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/reconstruction_run.hpp"
 #include "ctk/recon/refine_scan.hpp"
@@ -58,6 +59,18 @@ TEST(OptionsValidation, ReconstructionOptions) {
   EXPECT_NO_THROW(huber.validate());
   EXPECT_THROW(reconstruction_method("art"), std::invalid_argument);
   EXPECT_EQ(reconstruction_method("os-sqs"), ReconstructionMethod::os_sqs);
+}
+
+TEST(OptionsValidation, MeasurementOptions) {
+  EXPECT_NO_THROW(MeasurementOptions{}.validate());
+  testing::expect_option_refused(
+      MeasurementOptions{}, [](auto& o) { o.shares = 0; }, "MeasurementOptions.shares");
+  testing::expect_option_refused(
+      MeasurementOptions{}, [](auto& o) { o.share = 1; }, "MeasurementOptions.share");  // of 1 share
+  // The reader checks before it reads a file.
+  MeasurementOptions bad;
+  bad.share = -1;
+  EXPECT_THROW(load_measurements(ScanDescription{}, Geometry{}, bad), std::invalid_argument);
 }
 
 TEST(OptionsValidation, OsSqsOptions) {

@@ -42,8 +42,11 @@ struct CalibrationRun {
 };
 
 /// `progress(done, total)` after each view; `control` takes over an earlier run's views, journals
-/// each finished one and may stop the batch.
+/// each finished one and may stop the batch. Over several `ranks` (every rank calling with the
+/// same arguments, `control` null) the views are dealt to the ranks and every rank returns the
+/// whole run (the holder's wall and the robot's prior are fitted on each, to the same numbers).
 CalibrationRun run_calibration(const ScanDescription& scan, const CalibrationRunOptions& options,
-                               const std::function<void(int, int)>& progress = {}, const BatchControl* control = nullptr);
+                               const std::function<void(int, int)>& progress = {}, const BatchControl* control = nullptr,
+                               const Communicator& ranks = single_process());
 
 }  // namespace ctk

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "ctk/calib/view_calibration.hpp"
+#include "ctk/core/communicator.hpp"
 #include "ctk/geom/scan.hpp"
 
 namespace ctk {
@@ -37,14 +38,18 @@ ViewCamera view_camera(const ScanDescription& scan, int view);
 
 /// Poses from the images alone; robot_prior.hpp's combine_with_robot then adds the robot's prior
 /// (`ctk calibrate` does, unless --image-only). Throws InputError for problems of the scan as a whole (no holder, fewer than 6
-/// spheres, unreadable flat or dark); per-view problems end up in the views.
+/// spheres, unreadable flat or dark); per-view problems end up in the views. Over several `ranks`
+/// (every rank calling with the same arguments), each calibrates the views dealt to it and every
+/// rank receives all of them; `control` is then one process's and must be null, and `progress`
+/// counts this rank's views.
 ScanCalibration calibrate_scan(const ScanDescription& scan, const CalibrationOptions& options,
-                               const std::function<void(int, int)>& progress = {}, const BatchControl* control = nullptr);
+                               const std::function<void(int, int)>& progress = {}, const BatchControl* control = nullptr,
+                               const Communicator& ranks = single_process());
 
 /// Only the listed views, the others "skipped": a sample calibrated before the batch (to measure
 /// an undeclared holder wall, for instance).
 ScanCalibration calibrate_scan_views(const ScanDescription& scan, const std::vector<int>& views,
-                                     const CalibrationOptions& options);
+                                     const CalibrationOptions& options, const Communicator& ranks = single_process());
 
 /// Same, starting each view from a calibrated geometry's pose instead of the robot's (views not
 /// ok there are skipped): the detections and matches behind an existing calibration.

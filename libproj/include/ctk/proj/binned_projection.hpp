@@ -17,6 +17,7 @@ class BinnedProjection final : public ProjectionOperator {
   const VolumeLayout& domain() const override { return inner_->domain(); }
   StackShape range() const override;
   std::shared_ptr<const ProjectionOperator> subset(const std::vector<int>& views) const override;
+  double sum_over_range(double part) const override { return inner_->sum_over_range(part); }
   int factor() const { return factor_; }
 
  private:

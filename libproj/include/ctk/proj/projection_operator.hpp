@@ -4,7 +4,8 @@
 // views implements it (joseph_operator.hpp), and variants compose with any operator: detector
 // binning (binned_projection.hpp), per-pixel weights (weighted_projection.hpp), the mean over an
 // arc of sub-views (arc_averaged_projection.hpp). Every operator can restrict itself to a subset
-// of its views, which ordered-subset methods and distributed runs need.
+// of its views, which ordered-subset methods and distributed runs need; a range spread over
+// ranks says so through sum_over_range.
 #include <memory>
 #include <vector>
 
@@ -42,6 +43,11 @@ class ProjectionOperator {
   /// The operator on `views` only (indices into this operator's views, in the order given), so
   /// that its range has views.size() views. Throws std::out_of_range for an index out of range.
   virtual std::shared_ptr<const ProjectionOperator> subset(const std::vector<int>& views) const = 0;
+
+  /// A sum over the range from this process's part of it: the part itself, unless the range is
+  /// spread over ranks (view_split_operator.hpp), when it is every rank's part summed. Solvers
+  /// pass every reduction over projections (a residual's norm, a curvature) through it.
+  virtual double sum_over_range(double part) const { return part; }
 
   /// A zero stack of the range's shape, a zero volume of the domain's layout.
   ProjectionStack range_zeros() const;

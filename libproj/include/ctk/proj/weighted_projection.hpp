@@ -16,6 +16,7 @@ class WeightedProjection final : public ProjectionOperator {
   const VolumeLayout& domain() const override { return inner_->domain(); }
   StackShape range() const override { return inner_->range(); }
   std::shared_ptr<const ProjectionOperator> subset(const std::vector<int>& views) const override;
+  double sum_over_range(double part) const override { return inner_->sum_over_range(part); }
   const ProjectionStack& factors() const { return factors_; }
 
  private:

@@ -32,6 +32,10 @@ struct MeasurementOptions {
   /// A declared detector.radial_distortion resamples every image onto the matrices' pinhole grid
   /// (DetectorUndistortion); false uses the images as measured.
   bool undistort = true;
+  /// A run spread over ranks reads only its share of the ok views: those whose position among
+  /// them is `share` modulo `shares` (every other ok view is still checked, not read).
+  int share = 0, shares = 1;
+  void validate() const;  // std::invalid_argument naming the field
 };
 
 /// Share of a view's pixels that may be masked (not finite) before the view is left out: beyond

@@ -3,6 +3,8 @@
 // matrices, by weighted least squares (CG), SIRT, or FDK for circular scans. The layout and the
 // memory plan are decided from the matrices before any image is read, and a run that cannot fit
 // is refused then; an iterative run hands its state over for checkpoints and continues from one.
+// Spread over the ranks of an MPI run, each rank reads and projects its share of the views and
+// holds the whole volume (docs/distributed.md); the result is the same volume on every rank.
 // `ctk reconstruct` and `ctk.reconstruct` wrap it with files.
 #include <array>
 #include <cstddef>
@@ -12,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "ctk/core/communicator.hpp"
 #include "ctk/core/volume.hpp"
 #include "ctk/geom/geometry_file.hpp"
 #include "ctk/geom/scan.hpp"
@@ -49,8 +52,13 @@ struct ReconstructionPlan {
   ReconstructionMethod method = ReconstructionMethod::wls_cg;
   bool weighted = false;
   VolumeLayout layout;
-  int views = 0;  // ok views of the geometry
-  MemoryPlan memory;
+  int views = 0;           // ok views of the geometry
+  int ranks = 1;           // processes the views are spread over
+  int views_per_rank = 0;  // the largest rank's share, what `memory` is planned for
+  MemoryPlan memory;       // per rank
+  /// Bytes each rank hands to the sums over ranks per iteration (epoch for OS-SQS): the back
+  /// projected volume (one per subset for OS-SQS) and the scalars of the step; 0 on one process.
+  std::size_t summed_bytes_per_iteration = 0;
   std::size_t available_bytes = 0;
 };
 
@@ -78,6 +86,9 @@ struct ReconstructionRun {
   std::string distortion_note;
   std::optional<CircularTrajectory> circle;  // FDK: the orbit fitted to the matrices
   SolverReport solver;
+  /// Spread over ranks: the bytes this rank handed to the sums over ranks per iteration, counted
+  /// (the median over the iterations), against the plan's model.
+  std::size_t counted_summed_bytes_per_iteration = 0;
   double seconds = 0;
   /// Stopped on request (WLS-CG and SIRT with their state saved; OS-SQS after an epoch): the
   /// volume is the last iterate.
@@ -88,14 +99,17 @@ struct ReconstructionRun {
   std::string brief() const;
 };
 
-/// Throws InputError naming the geometry when no view is ok; the options' own errors as validate().
+/// Throws InputError naming the geometry when no view is ok; the options' own errors as validate();
+/// std::invalid_argument for FDK over several ranks.
 ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geometry& geometry,
-                                       const ReconstructionOptions& options);
+                                       const ReconstructionOptions& options, int ranks = 1);
 
 /// Plans (refusing a run whose memory plan exceeds what is available, with the plan in the
 /// message), reads the ok views, solves. Throws InputError for unreadable images, std::invalid_argument
-/// for FDK on a scan that is not circular, with the deviation found.
+/// for FDK on a scan that is not circular, with the deviation found. Over several `ranks`, every
+/// rank calls it with the same arguments; checkpoints, continuing and stop requests are then not
+/// offered (a state would be spread over the ranks), and the hooks see the whole run's numbers.
 ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry& geometry, const ReconstructionOptions& options,
-                                     const ReconstructionHooks& hooks = {});
+                                     const ReconstructionHooks& hooks = {}, const Communicator& ranks = single_process());
 
 }  // namespace ctk

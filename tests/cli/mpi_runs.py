@@ -1,0 +1,177 @@
+#!/usr/bin/env python3
+"""Runs spread over MPI ranks on one machine, as a user starts them with mpirun: on a circular and
+a spherical scan, WLS-CG over 2 and 3 ranks gives the single-process volume to 1e-5 of its largest
+value and its cost to 1e-6, SIRT and OS-SQS over 3 ranks too (the ranks add their back projections
+in another order than one process does: float rounding, which CG carries on); a spread run repeated gives the same bits; the bytes summed over the
+ranks per iteration, as counted, are the plan's model to 10 %; calibration over 2 and 3 ranks
+writes the single-process geometry; a rank that fails (an unreadable projection only it reads) or
+is killed ends the whole job, named, with nothing written; a command that does not spread is
+refused.  Usage: mpi_runs.py CTK MPIRUN"""
+import argparse
+import array
+import json
+import math
+import os
+import pathlib
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+from failures import report
+
+
+def read_nrrd(path):
+    data = path.read_bytes()
+    values = array.array("f")
+    values.frombytes(data[data.index(b"\n\n") + 2:])
+    return values
+
+
+def relative_difference(a, b):
+    """Largest difference relative to the largest value, and the relative L2 difference."""
+    top = max(abs(x) for x in a)
+    norm = math.sqrt(sum(x * x for x in a))
+    return max(abs(x - y) for x, y in zip(a, b)) / top, math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b))) / norm
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("ctk")
+    parser.add_argument("mpirun")
+    a = parser.parse_args()
+    work = pathlib.Path("mpi-runs")
+    shutil.rmtree(work, ignore_errors=True)
+    work.mkdir()
+    # One thread per rank (the ranks share the machine); OpenMPI refuses root unless told (CI is root).
+    env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    ctk = lambda *args: subprocess.run([a.ctk, *map(str, args)], capture_output=True, text=True, env=env)
+    spread = lambda n, *args: subprocess.run([a.mpirun, "--oversubscribe", "-np", str(n), a.ctk, *map(str, args)],
+                                             capture_output=True, text=True, env=env)
+    failures = []
+
+    scans = {}
+    for name, trajectory in {"circular": ["--trajectory", "circular", "--views", "40"],
+                             "spherical": ["--trajectory", "spherical", "--nside", "2"]}.items():
+        folder = work / name
+        r = ctk("simulate", "--out", folder, "--phantom", "shepp-logan", "--cols", "96", "--rows", "80", "--pitch", "4.5",
+                *trajectory)
+        if r.returncode:
+            return report([f"simulate {name}: {r.stderr}"])
+        scans[name] = folder
+
+    def reconstruct(runner, scan, out, method, iterations):
+        return runner("reconstruct", "--scan", scan / "scan.json", "--geometry", scan / "truth-geometry.json", "--out", out,
+                      "--size", "40", "--method", method, "--iterations", iterations)
+
+    cases = [("circular", "wls-cg", 10, (2, 3)), ("spherical", "wls-cg", 10, (2, 3)), ("spherical", "sirt", 10, (3,)),
+             ("spherical", "os-sqs", 4, (3,))]
+    for name, method, iterations, rank_counts in cases:
+        one = work / f"{name}-{method}-1.nrrd"
+        r = reconstruct(ctk, scans[name], one, method, iterations)
+        if r.returncode:
+            failures.append(f"{name} {method} on one process: {r.stderr}")
+            continue
+        for n in rank_counts:
+            out = work / f"{name}-{method}-{n}.nrrd"
+            r = spread(n, *["reconstruct", "--scan", scans[name] / "scan.json", "--geometry", scans[name] / "truth-geometry.json",
+                            "--out", out, "--size", "40", "--method", method, "--iterations", iterations])
+            if r.returncode or f"spread over {n} ranks by views" not in r.stdout:
+                failures.append(f"{name} {method} over {n} ranks: exit {r.returncode}, {r.stdout[-400:]} {r.stderr[-800:]}")
+                continue
+            largest, l2 = relative_difference(read_nrrd(one), read_nrrd(out))
+            cost = lambda f: json.loads(f.with_suffix(".log.json").read_text())["solver"]["iterations"][-1]["cost"]
+            cost_difference = abs(cost(out) - cost(one)) / cost(one)
+            log = json.loads(out.with_suffix(".log.json").read_text())["distribution"]
+            counted, model = log["summed_bytes_per_iteration"], log["model_summed_bytes_per_iteration"]
+            print(f"{name} {method} over {n} ranks: largest difference {largest:.2e} of the largest value (L2 {l2:.2e} "
+                  f"relative), cost {cost_difference:.1e} relative; summed per iteration {counted} bytes counted, {model} "
+                  f"modelled")
+            if not (largest <= 1e-5 and cost_difference <= 1e-6):
+                failures.append(f"{name} {method} over {n} ranks differs from one process: {largest:.3g} of the largest "
+                                f"value, cost {cost_difference:.3g}")
+            if not (log["ranks"] == n and model > 0 and abs(counted - model) <= 0.1 * model):
+                failures.append(f"{name} {method} over {n} ranks: counted {counted} bytes per iteration, model {model}")
+
+    # The same spread run twice: the same bits (the sums' order does not depend on timing).
+    again = work / "spherical-wls-cg-2-again.nrrd"
+    r = spread(2, "reconstruct", "--scan", scans["spherical"] / "scan.json", "--geometry",
+               scans["spherical"] / "truth-geometry.json", "--out", again, "--size", "40", "--iterations", "10")
+    if r.returncode or read_nrrd(again) != read_nrrd(work / "spherical-wls-cg-2.nrrd"):
+        failures.append(f"a spread run repeated gave other bits (exit {r.returncode})")
+
+    # Calibration over ranks writes the single-process geometry.
+    cal = work / "calibration"
+    r = ctk("simulate", "--out", cal, "--trajectory", "random", "--views", "18", "--cols", "240", "--rows", "240", "--pitch",
+            "1.8", "--seed", "3")
+    if r.returncode:
+        return report(failures + [f"simulate for calibration: {r.stderr}"])
+    r = ctk("calibrate", "--scan", cal / "scan.json", "--out", work / "g-1.json")
+    if r.returncode:
+        failures.append(f"calibrate on one process: {r.stderr}")
+    else:
+        single = json.loads((work / "g-1.json").read_text())["views"]
+        for n in (2, 3):
+            r = spread(n, "calibrate", "--scan", cal / "scan.json", "--out", work / f"g-{n}.json")
+            if r.returncode:
+                failures.append(f"calibrate over {n} ranks: exit {r.returncode}, {r.stderr[-800:]}")
+                continue
+            views = json.loads((work / f"g-{n}.json").read_text())["views"]
+            ok = sum(v["status"] == "ok" for v in views)
+            same = len(views) == len(single) and all(
+                v["status"] == w["status"] and v.get("P") == w.get("P") and v.get("rms_px") == w.get("rms_px")
+                for v, w in zip(views, single))
+            print(f"calibration over {n} ranks: {ok} of {len(views)} views ok, {'the same' if same else 'NOT the same'} "
+                  f"geometry as one process")
+            if not same or ok < len(views) // 2:
+                failures.append(f"calibration over {n} ranks differs from one process ({ok} ok)")
+
+    # A rank that cannot read its projection ends the job: the file named, exit 2, nothing written.
+    bad = work / "damaged"
+    shutil.copytree(scans["circular"], bad)
+    (bad / "projections" / "proj_0005.tif").write_bytes(b"not a TIFF")
+    out = work / "damaged.nrrd"
+    r = spread(3, "reconstruct", "--scan", bad / "scan.json", "--out", out, "--size", "24", "--iterations", "3")
+    written = sorted(p.name for p in work.glob("damaged.*"))
+    if r.returncode != 2 or "rank 2 of 3" not in r.stderr or "proj_0005.tif" not in r.stderr or written:
+        failures.append(f"a rank's unreadable image: exit {r.returncode}, wrote {written}, {r.stderr[-600:]}")
+
+    # A rank killed mid-run ends the job, with nothing written.
+    out = work / "killed.nrrd"
+    job = subprocess.Popen([a.mpirun, "--oversubscribe", "-np", "2", a.ctk, "reconstruct", "--scan",
+                            scans["spherical"] / "scan.json", "--out", out, "--size", "64", "--iterations", "100000",
+                            "--tolerance", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    ranks = []
+    for _ in range(200):  # wait until both ranks run
+        time.sleep(0.1)
+        found = subprocess.run(["pgrep", "-f", f"reconstruct --scan {scans['spherical']}/scan.json --out {out}"],
+                               capture_output=True, text=True).stdout.split()
+        ranks = [int(p) for p in found if int(p) != job.pid]
+        if len(ranks) >= 2:
+            break
+    if len(ranks) < 2:
+        job.kill()
+        failures.append(f"the ranks to kill were not found: {ranks}")
+    else:
+        time.sleep(1.0)
+        os.kill(max(ranks), signal.SIGKILL)
+        try:
+            _, stderr = job.communicate(timeout=60)
+            written = sorted(p.name for p in work.glob("killed.*"))
+            print(f"a rank killed: mpirun exit {job.returncode}")
+            if job.returncode == 0 or written:
+                failures.append(f"a killed rank: exit {job.returncode}, wrote {written}, {stderr[-400:]}")
+        except subprocess.TimeoutExpired:
+            job.kill()
+            failures.append("a killed rank left the job running")
+
+    # A command that does not spread over ranks is refused.
+    r = spread(2, "simulate", "--out", work / "not-spread")
+    if r.returncode != 2 or "does not spread over MPI ranks" not in r.stderr or (work / "not-spread").exists():
+        failures.append(f"simulate under mpirun: exit {r.returncode}, {r.stderr[-400:]}")
+    return report(failures)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
