@@ -2,7 +2,8 @@
 // (librecon's run_reconstruction): checks the files, prints the memory plan, saves the solver's
 // state every few iterations and on Ctrl-C (--resume continues it), and writes the volume (one
 // NRRD file), PNG previews of the three central slices and a JSON log, published together.
-// Under mpirun the views are spread over the ranks and the first rank writes.
+// Under mpirun the views (or slabs of the volume) are spread over the ranks and the first rank
+// writes.
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -18,6 +19,7 @@
 #include "ctk/core/output_set.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/run_files.hpp"
+#include "ctk/proj/slab_split_operator.hpp"
 #include "ctk/recon/reconstruction_run.hpp"
 #include "interruption.hpp"
 #include "measurement_report.hpp"
@@ -43,6 +45,7 @@ struct ReconstructOptions {
   double voxel_mm = 0;
   bool resume = false;
   int checkpoint_every = 10;
+  std::string decomposition = "auto";
 };
 
 ReconstructionOptions library_options(const ReconstructOptions& o) {
@@ -58,6 +61,7 @@ ReconstructionOptions library_options(const ReconstructOptions& o) {
   r.undistort = !o.as_measured;
   for (std::size_t a = 0; a < 3 && !o.size.empty(); ++a) r.size[a] = o.size[std::min(a, o.size.size() - 1)];
   r.voxel_mm = o.voxel_mm;
+  r.decomposition = decomposition_from_string(o.decomposition);
   return r;
 }
 
@@ -69,6 +73,54 @@ void write_previews(const Volume& x, const fs::path& out) {
   write_slice_png(x, 2, n[2] / 2, 0.0f, high, preview_file(out, "_axial.png"));
   write_slice_png(x, 1, n[1] / 2, 0.0f, high, preview_file(out, "_coronal.png"));
   write_slice_png(x, 0, n[0] / 2, 0.0f, high, preview_file(out, "_sagittal.png"));
+}
+
+// Split into slabs: the first rank writes its slab and takes each other rank's in turn, so no
+// rank ever holds the whole volume; the previews' three central slices are copied out on the way
+// (their grey scale from those slices).
+void write_slabs(const Volume& mine, const VolumeLayout& whole, const Communicator& ranks, const fs::path& out) {
+  const auto& n = whole.size;
+  const auto slice_of = [&](int nx, int ny, int nz) { return Volume(VolumeLayout::centred({nx, ny, nz}, whole.voxel_mm)); };
+  Volume axial = slice_of(n[0], n[1], 1), coronal = slice_of(n[0], 1, n[2]), sagittal = slice_of(1, n[1], n[2]);
+  std::vector<int> planes;
+  for (int q = 0; q < ranks.size(); ++q) planes.push_back(slab_planes(n[2], q, ranks.size()).count);
+  std::vector<float> received;
+  int first_plane = 0;
+  const VolumeSlabs slabs{
+      whole, planes, [&](int k) {
+        std::span<const float> voxels(mine.data.data(), mine.data.size());
+        if (k > 0) {
+          received.resize(static_cast<std::size_t>(planes[static_cast<std::size_t>(k)]) * static_cast<std::size_t>(n[0]) *
+                          static_cast<std::size_t>(n[1]));
+          ranks.receive(k, received);
+          voxels = received;
+        }
+        const auto at = [&](int x, int y, int p) {
+          return voxels[(static_cast<std::size_t>(p) * static_cast<std::size_t>(n[1]) + static_cast<std::size_t>(y)) *
+                            static_cast<std::size_t>(n[0]) +
+                        static_cast<std::size_t>(x)];
+        };
+        for (int p = 0; p < planes[static_cast<std::size_t>(k)]; ++p) {
+          const int z = first_plane + p;
+          for (int y = 0; y < n[1]; ++y)
+            for (int x = 0; x < n[0]; ++x) {
+              if (z == n[2] / 2) axial.at(x, y, 0) = at(x, y, p);
+              if (y == n[1] / 2) coronal.at(x, 0, z) = at(x, y, p);
+              if (x == n[0] / 2) sagittal.at(0, y, z) = at(x, y, p);
+            }
+        }
+        first_plane += planes[static_cast<std::size_t>(k)];
+        return voxels;
+      }};
+  write_volume(slabs, out);
+  Volume all_three = slice_of(static_cast<int>(axial.data.size() + coronal.data.size() + sagittal.data.size()), 1, 1);
+  std::copy(sagittal.data.begin(), sagittal.data.end(),
+            std::copy(coronal.data.begin(), coronal.data.end(),
+                      std::copy(axial.data.begin(), axial.data.end(), all_three.data.begin())));
+  const float high = preview_ceiling(all_three);
+  write_slice_png(axial, 2, 0, 0.0f, high, preview_file(out, "_axial.png"));
+  write_slice_png(coronal, 1, 0, 0.0f, high, preview_file(out, "_coronal.png"));
+  write_slice_png(sagittal, 0, 0, 0.0f, high, preview_file(out, "_sagittal.png"));
 }
 
 void run_reconstruct(const ReconstructOptions& o) {
@@ -129,10 +181,7 @@ void run_reconstruct(const ReconstructOptions& o) {
               << " mm (holder frame, centred on the holder origin)\n"
               << "memory plan (" << to_string(plan.method) << (spread ? ", per rank" : "") << "): " << plan.memory.describe()
               << "; available " << static_cast<double>(plan.available_bytes) / 1e9 << " GB\n";
-    if (spread)
-      std::cout << "spread over " << plan.ranks << " ranks by views: at most " << plan.views_per_rank
-                << " views and the whole volume on each; " << static_cast<double>(plan.summed_bytes_per_iteration) / 1e6
-                << " MB summed over the ranks per iteration\n";
+    if (spread) std::cout << "spread over " << plan.distribution.ranks << " ranks:\n" << plan.distribution.describe() << "\n";
     solving.emplace(to_string(plan.method), "iterations");
   };
   hooks.reading = std::ref(reading);
@@ -175,10 +224,17 @@ void run_reconstruct(const ReconstructOptions& o) {
     std::cout << "circular trajectory: radius " << run.circle->radius_mm << " mm, arc " << run.circle->arc_rad * 180 / M_PI
               << " deg" << (run.circle->arc_rad < 2 * M_PI - 1e-9 ? " (short scan: Parker weights)" : "") << "\n";
   std::cout << run.brief() << "\n";
-  if (ranks.rank() != 0) return;  // every rank holds the same volume: the first writes it
-
-  write_volume(run.volume, o.out);
-  write_previews(run.volume, o.out);
+  const bool slabs = spread && run.plan.distribution.decomposition == Decomposition::slabs;
+  if (ranks.rank() != 0) {  // views split: every rank holds the volume, the first writes it
+    if (slabs) ranks.send(0, std::span<const float>(run.volume.data.data(), run.volume.data.size()));
+    return;
+  }
+  if (slabs) {
+    write_slabs(run.volume, run.plan.layout, ranks, o.out);
+  } else {
+    write_volume(run.volume, o.out);
+    write_previews(run.volume, o.out);
+  }
   nlohmann::json log = run.report();
   log["scan"] = o.scan.string();
   log["geometry"] = o.geometry.empty() ? "nominal" : o.geometry.string();
@@ -232,6 +288,11 @@ void register_reconstruct(CLI::App& app) {
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--voxel", o->voxel_mm, "Voxel size in mm (default: a pixel seen at the holder origin)")
       ->check(positive_number);
+  cmd->add_option("--decomposition", o->decomposition,
+                  "Under mpirun: views (each rank its share of the views and the whole volume), slabs (each rank a slab of "
+                  "the volume and the detector rows it owns; identity penalty only), or auto (views while they fit a rank)")
+      ->check(CLI::IsMember({"auto", "views", "slabs"}))
+      ->capture_default_str();
   cmd->add_flag(
       "--resume", o->resume,
       "Continue an interrupted run (Ctrl-C or a kill) from the solver state saved beside --out (.state); same inputs and "

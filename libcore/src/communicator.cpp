@@ -1,6 +1,7 @@
 #include "ctk/core/communicator.hpp"
 
 #include <cstdlib>
+#include <stdexcept>
 
 namespace ctk {
 
@@ -19,6 +20,10 @@ class SingleProcess final : public Communicator {
   void sum(std::span<double>) const override {}
   using Communicator::sum;
   std::vector<std::string> gather(const std::string& text) const override { return {text}; }
+  std::vector<std::vector<float>> exchange(std::vector<std::vector<float>> to) const override { return to; }
+  // One rank has no one to send to.
+  void send(int, std::span<const float>) const override { throw std::logic_error("send: a single process has no other rank"); }
+  void receive(int, std::span<float>) const override { throw std::logic_error("receive: a single process has no other rank"); }
   [[noreturn]] void abort(int exit_code) const override { std::exit(exit_code); }
 };
 

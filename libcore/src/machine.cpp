@@ -23,4 +23,12 @@ nlohmann::json cpu_identity() {
   return cpu;
 }
 
+std::size_t peak_resident_bytes() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return static_cast<std::size_t>(std::strtoull(line.c_str() + 6, nullptr, 10)) * 1024;  // kB
+  return 0;
+}
+
 }  // namespace ctk

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <limits>
+#include <stdexcept>
 
 #include "ctk/core/communicator.hpp"
 
@@ -21,6 +22,13 @@ bool launched_by_mpi() {
 
 // MPI counts are ints: long arrays (a 2048^3 volume has 2^33 voxels) go in pieces.
 constexpr std::size_t kPiece = std::size_t{1} << 28;
+
+// An exchange's counts and offsets are ints in MPI: beyond them the exchange is refused by name.
+int checked_count(std::size_t n) {
+  if (n > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw std::length_error("an exchange between MPI ranks of more than 2^31 values (use more ranks)");
+  return static_cast<int>(n);
+}
 
 class MpiWorld final : public Communicator {
  public:
@@ -61,6 +69,44 @@ class MpiWorld final : public Communicator {
       out.push_back(all.substr(static_cast<std::size_t>(offsets[static_cast<std::size_t>(r)]),
                                static_cast<std::size_t>(lengths[static_cast<std::size_t>(r)])));
     return out;
+  }
+
+  std::vector<std::vector<float>> exchange(std::vector<std::vector<float>> to) const override {
+    const auto n = static_cast<std::size_t>(size_);
+    std::vector<int> send_counts(n), receive_counts(n), send_offsets(n), receive_offsets(n);
+    std::size_t send_total = 0;
+    for (std::size_t q = 0; q < n; ++q) {
+      send_counts[q] = checked_count(to[q].size());
+      send_offsets[q] = checked_count(send_total);
+      send_total += to[q].size();
+      if (static_cast<int>(q) != rank_) bytes_sent_ += to[q].size() * sizeof(float);
+    }
+    MPI_Alltoall(send_counts.data(), 1, MPI_INT, receive_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+    std::size_t receive_total = 0;
+    for (std::size_t q = 0; q < n; ++q) {
+      receive_offsets[q] = checked_count(receive_total);
+      receive_total += static_cast<std::size_t>(receive_counts[q]);
+    }
+    std::vector<float> send(send_total), receive(receive_total);
+    for (std::size_t q = 0; q < n; ++q) std::copy(to[q].begin(), to[q].end(), send.begin() + send_offsets[q]);
+    MPI_Alltoallv(send.data(), send_counts.data(), send_offsets.data(), MPI_FLOAT, receive.data(), receive_counts.data(),
+                  receive_offsets.data(), MPI_FLOAT, MPI_COMM_WORLD);
+    std::vector<std::vector<float>> from(n);
+    for (std::size_t q = 0; q < n; ++q)
+      from[q].assign(receive.begin() + receive_offsets[q], receive.begin() + receive_offsets[q] + receive_counts[q]);
+    return from;
+  }
+
+  // Point to point in pieces: a slab may have more values than an MPI count holds.
+  void send(int to, std::span<const float> values) const override {
+    for (std::size_t begin = 0; begin < values.size(); begin += kPiece)
+      MPI_Send(values.data() + begin, static_cast<int>(std::min(kPiece, values.size() - begin)), MPI_FLOAT, to, 0, MPI_COMM_WORLD);
+    bytes_sent_ += values.size_bytes();
+  }
+  void receive(int from, std::span<float> values) const override {
+    for (std::size_t begin = 0; begin < values.size(); begin += kPiece)
+      MPI_Recv(values.data() + begin, static_cast<int>(std::min(kPiece, values.size() - begin)), MPI_FLOAT, from, 0,
+               MPI_COMM_WORLD, MPI_STATUS_IGNORE);
   }
 
   [[noreturn]] void abort(int exit_code) const override {

@@ -13,6 +13,26 @@
 
 namespace ctk {
 
+namespace volume_formats {
+
+std::span<const float> checked_slab(const VolumeSlabs& v, int k) {
+  const std::size_t plane = static_cast<std::size_t>(v.layout.size[0]) * static_cast<std::size_t>(v.layout.size[1]);
+  const std::span<const float> slab = v.slab(k);
+  if (slab.size() != plane * static_cast<std::size_t>(v.planes[static_cast<std::size_t>(k)]))
+    throw std::invalid_argument("write_volume: slab " + std::to_string(k) + " has " + std::to_string(slab.size()) +
+                                " voxels, not its planes'");
+  return slab;
+}
+
+void write_raw_slabs(const VolumeSlabs& v, std::ostream& out) {
+  for (std::size_t k = 0; k < v.planes.size(); ++k) {
+    const std::span<const float> slab = checked_slab(v, static_cast<int>(k));
+    out.write(reinterpret_cast<const char*>(slab.data()), static_cast<std::streamsize>(slab.size_bytes()));
+  }
+}
+
+}  // namespace volume_formats
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -43,6 +63,15 @@ std::vector<fs::path> volume_files(const fs::path& file) {
 }
 
 void write_volume(const Volume& volume, const fs::path& file) {
+  write_volume(VolumeSlabs{volume.layout, {volume.layout.size[2]}, [&](int) { return std::span<const float>(volume.data.data(), volume.data.size()); }},
+               file);
+}
+
+void write_volume(const VolumeSlabs& volume, const fs::path& file) {
+  int planes = 0;
+  for (int p : volume.planes) planes += p;
+  if (planes != volume.layout.size[2] || std::any_of(volume.planes.begin(), volume.planes.end(), [](int p) { return p < 0; }))
+    throw std::invalid_argument("write_volume: the slabs' planes do not add up to the volume's " + std::to_string(volume.layout.size[2]));
   switch (volume_format(file)) {
     case VolumeFormat::nrrd:
       return volume_formats::write_nrrd(volume, file);

@@ -2,24 +2,32 @@
 // The volume formats behind volume_file.hpp, one file each, and what their readers share.
 #include <cstdint>
 #include <filesystem>
+#include <ostream>
 #include <string>
 #include <vector>
 
 #include "ctk/core/volume.hpp"
+#include "ctk/core/volume_file.hpp"
 
 namespace ctk::volume_formats {
 
-void write_nrrd(const Volume& volume, const std::filesystem::path& file);
+void write_nrrd(const VolumeSlabs& volume, const std::filesystem::path& file);
 Volume read_nrrd(const std::filesystem::path& file);
 
 /// `detached`: the header in `file`, the voxels in `file` with extension .raw.
-void write_metaimage(const Volume& volume, const std::filesystem::path& file, bool detached);
+void write_metaimage(const VolumeSlabs& volume, const std::filesystem::path& file, bool detached);
 Volume read_metaimage(const std::filesystem::path& file);
 
-void write_tiff(const Volume& volume, const std::filesystem::path& file);
+void write_tiff(const VolumeSlabs& volume, const std::filesystem::path& file);
 Volume read_tiff(const std::filesystem::path& file);
 
-void write_hdf5(const Volume& volume, const std::filesystem::path& file);
+void write_hdf5(const VolumeSlabs& volume, const std::filesystem::path& file);
+
+/// Slab k's voxels, checked to be its planes' (std::invalid_argument otherwise).
+std::span<const float> checked_slab(const VolumeSlabs& volume, int k);
+
+/// Every slab's voxels written to `out` in order (the raw data of NRRD and MetaImage).
+void write_raw_slabs(const VolumeSlabs& volume, std::ostream& out);
 Volume read_hdf5(const std::filesystem::path& file);
 
 /// A layout read from a header: sizes positive and their product within reason, spacings positive

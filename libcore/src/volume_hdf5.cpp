@@ -61,7 +61,7 @@ std::optional<Eigen::Vector3d> read_vector_attribute(hid_t dataset, const char* 
 
 }  // namespace
 
-void write_hdf5(const Volume& v, const fs::path& file) {
+void write_hdf5(const VolumeSlabs& v, const fs::path& file) {
   quiet_library();
   write_path_atomically(file, [&](const fs::path& tmp) {
     const Handle h5(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
@@ -71,8 +71,18 @@ void write_hdf5(const Volume& v, const fs::path& file) {
     const Handle space(H5Screate_simple(3, dims.data(), nullptr), H5Sclose);
     const Handle dataset(H5Dcreate2(h5.get(), "volume", H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
                          H5Dclose);
-    if (!dataset.valid() || H5Dwrite(dataset.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data.data()) < 0)
-      throw std::runtime_error(file.string() + ": cannot write the dataset 'volume'");
+    if (!dataset.valid()) throw std::runtime_error(file.string() + ": cannot write the dataset 'volume'");
+    hsize_t z = 0;
+    for (std::size_t k = 0; k < v.planes.size(); ++k) {
+      const std::span<const float> slab = checked_slab(v, static_cast<int>(k));
+      const std::array<hsize_t, 3> start{z, 0, 0}, count{static_cast<hsize_t>(v.planes[k]), dims[1], dims[2]};
+      z += count[0];
+      if (count[0] == 0) continue;
+      const Handle memory(H5Screate_simple(3, count.data(), nullptr), H5Sclose);
+      if (H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr) < 0 ||
+          H5Dwrite(dataset.get(), H5T_NATIVE_FLOAT, memory.get(), space.get(), H5P_DEFAULT, slab.data()) < 0)
+        throw std::runtime_error(file.string() + ": cannot write the dataset 'volume'");
+    }
     write_vector_attribute(dataset.get(), "voxel_mm", v.layout.voxel_mm);
     write_vector_attribute(dataset.get(), "origin_mm", v.layout.origin_mm);
   });

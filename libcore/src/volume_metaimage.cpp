@@ -12,7 +12,7 @@ namespace ctk::volume_formats {
 
 namespace fs = std::filesystem;
 
-void write_metaimage(const Volume& v, const fs::path& file, bool detached) {
+void write_metaimage(const VolumeSlabs& v, const fs::path& file, bool detached) {
   const auto& l = v.layout;
   const fs::path raw = fs::path(file).replace_extension(".raw");
   std::ostringstream h;
@@ -23,9 +23,7 @@ void write_metaimage(const Volume& v, const fs::path& file, bool detached) {
     << "ElementSpacing = " << l.voxel_mm.x() << " " << l.voxel_mm.y() << " " << l.voxel_mm.z() << "\n"
     << "DimSize = " << l.size[0] << " " << l.size[1] << " " << l.size[2] << "\n"
     << "ElementType = MET_FLOAT\nElementDataFile = " << (detached ? raw.filename().string() : "LOCAL") << "\n";
-  const auto voxels = [&](std::ostream& out) {
-    out.write(reinterpret_cast<const char*>(v.data.data()), static_cast<std::streamsize>(v.data.size() * sizeof(float)));
-  };
+  const auto voxels = [&](std::ostream& out) { write_raw_slabs(v, out); };
   if (detached) {
     write_file_atomically(raw, voxels);  // the data first: a header never names data not yet there
     write_text_atomically(file, h.str());

@@ -13,7 +13,7 @@ namespace ctk::volume_formats {
 
 namespace fs = std::filesystem;
 
-void write_nrrd(const Volume& v, const fs::path& file) {
+void write_nrrd(const VolumeSlabs& v, const fs::path& file) {
   // Header and data in one file (NRRD's attached form): the file is written whole or not at all,
   // never a header over another run's data.
   const auto& l = v.layout;
@@ -27,7 +27,7 @@ void write_nrrd(const Volume& v, const fs::path& file) {
     << "kinds: domain domain domain\nendian: little\nencoding: raw\n\n";
   write_file_atomically(file, [&](std::ostream& out) {
     out << h.str();
-    out.write(reinterpret_cast<const char*>(v.data.data()), static_cast<std::streamsize>(v.data.size() * sizeof(float)));
+    write_raw_slabs(v, out);
   });
 }
 

@@ -17,7 +17,7 @@ using OIIO::ImageOutput;
 using OIIO::ImageSpec;
 using OIIO::TypeDesc;
 
-void write_tiff(const Volume& v, const fs::path& file) {
+void write_tiff(const VolumeSlabs& v, const fs::path& file) {
   const auto& l = v.layout;
   std::ostringstream description;
   description.precision(17);
@@ -37,11 +37,15 @@ void write_tiff(const Volume& v, const fs::path& file) {
     specs[0].attribute("ImageDescription", description.str());
     if (!out->open(tmp.string(), nz, specs.data())) throw std::runtime_error(file.string() + ": " + out->geterror());
     const std::size_t slice = static_cast<std::size_t>(l.size[0]) * static_cast<std::size_t>(l.size[1]);
-    for (int z = 0; z < nz; ++z) {
-      if (z > 0 && !out->open(tmp.string(), specs[static_cast<std::size_t>(z)], ImageOutput::AppendSubimage))
-        throw std::runtime_error(file.string() + ": " + out->geterror());
-      if (!out->write_image(TypeDesc::FLOAT, v.data.data() + static_cast<std::size_t>(z) * slice))
-        throw std::runtime_error(file.string() + ": " + out->geterror());
+    int z = 0;
+    for (std::size_t k = 0; k < v.planes.size(); ++k) {
+      const std::span<const float> slab = checked_slab(v, static_cast<int>(k));
+      for (int p = 0; p < v.planes[k]; ++p, ++z) {
+        if (z > 0 && !out->open(tmp.string(), specs[static_cast<std::size_t>(z)], ImageOutput::AppendSubimage))
+          throw std::runtime_error(file.string() + ": " + out->geterror());
+        if (!out->write_image(TypeDesc::FLOAT, slab.data() + static_cast<std::size_t>(p) * slice))
+          throw std::runtime_error(file.string() + ": " + out->geterror());
+      }
     }
     out->close();
   });

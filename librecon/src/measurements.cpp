@@ -39,6 +39,12 @@ void keep_views(Measurements& m, const std::vector<int>& kept) {
 void MeasurementOptions::validate() const {
   require_option(shares >= 1, "MeasurementOptions.shares", "at least 1", shares);
   require_option(share >= 0 && share < shares, "MeasurementOptions.share", "a number in 0 .. shares - 1", share);
+  if (rows) {
+    require_option(rows->height >= 1, "MeasurementOptions.rows.height", "at least 1", rows->height);
+    for (std::size_t k = 0; k < rows->first.size() && k < rows->count.size(); ++k)
+      require_option(rows->first[k] >= 0 && rows->count[k] >= 0 && rows->count[k] <= rows->height, "MeasurementOptions.rows",
+                     "windows within the stacks' height, from row 0 on", rows->count[k]);
+  }
 }
 
 Measurements load_measurements(const ScanDescription& scan, const Geometry& geometry, const MeasurementOptions& options,
@@ -52,6 +58,7 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
   Measurements m;
   int position = -1;           // among the ok views
   std::vector<int> described;  // the scan views of the ok views so far
+  std::vector<int> positions;  // each view read: its position among the ok views
   for (int i : geometry.ok_views()) {
     ++position;
     const GeometryView& v = geometry.views[static_cast<std::size_t>(i)];
@@ -71,13 +78,23 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
                            "a matrix of the wrong sign?");
     described.push_back(v.index);
     if (position % options.shares != options.share) continue;
+    positions.push_back(position);
     m.view_indices.push_back(v.index);
     m.matrices.push_back(*v.P);
   }
   const int n = static_cast<int>(m.view_indices.size());
   const bool counts = scan.projections.kind == ProjectionKind::counts;
-  m.line_integrals = ProjectionStack(n, d.rows, d.cols);
-  if (counts && options.statistical_weights) m.weights = ProjectionStack(n, d.rows, d.cols);
+  const std::optional<MeasurementOptions::RowWindow>& window = options.rows;
+  if (window && (static_cast<int>(window->first.size()) != position + 1 || window->count.size() != window->first.size()))
+    throw std::invalid_argument("load_measurements: the row window does not have one entry per ok view");
+  if (window)
+    for (std::size_t k = 0; k < window->first.size(); ++k)
+      if (window->first[k] + window->count[k] > d.rows)
+        throw std::invalid_argument("load_measurements: a row window reaches beyond the detector's " + std::to_string(d.rows) +
+                                    " rows");
+  const int height = window ? window->height : d.rows;
+  m.line_integrals = ProjectionStack(n, height, d.cols);
+  if (counts && options.statistical_weights) m.weights = ProjectionStack(n, height, d.cols);
   std::optional<DetectorUndistortion> undistortion;
   if (scan.distortion) {
     std::ostringstream note;
@@ -100,24 +117,32 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
   std::vector<std::size_t> clamped(static_cast<std::size_t>(n), 0), masked(static_cast<std::size_t>(n), 0);
   int done = 0;
   // Reading is I/O bound and OpenImageIO is thread safe: a few images at a time.
+  const std::size_t full_pixels = static_cast<std::size_t>(d.rows) * static_cast<std::size_t>(d.cols);
   parallel_for_dynamic(n, [&](int k) {
-    const Image image = read_line_integrals(scan, m.view_indices[static_cast<std::size_t>(k)], flat_dark,
-                                            m.weights.views ? m.weights.view(k) : nullptr, &clamped[static_cast<std::size_t>(k)],
-                                            &masked[static_cast<std::size_t>(k)]);
-    if (!undistortion) {
-      std::copy(image.pixels.begin(), image.pixels.end(), m.line_integrals.view(k));
-    } else {
-      undistortion->apply(image.pixels.data(), m.line_integrals.view(k), DetectorUndistortion::Outside::nearest_edge);
+    std::vector<float> weights(m.weights.views ? full_pixels : 0);
+    Image image = read_line_integrals(scan, m.view_indices[static_cast<std::size_t>(k)], flat_dark,
+                                      m.weights.views ? weights.data() : nullptr, &clamped[static_cast<std::size_t>(k)],
+                                      &masked[static_cast<std::size_t>(k)]);
+    if (undistortion) {
+      const std::vector<float> measured = image.pixels;
+      undistortion->apply(measured.data(), image.pixels.data(), DetectorUndistortion::Outside::nearest_edge);
       if (m.weights.views) {
-        const std::vector<float> measured(m.weights.view(k), m.weights.view(k) + image.pixels.size());
-        undistortion->apply(measured.data(), m.weights.view(k), DetectorUndistortion::Outside::zero);
+        const std::vector<float> measured_weights = weights;
+        undistortion->apply(measured_weights.data(), weights.data(), DetectorUndistortion::Outside::zero);
       }
     }
+    // The whole image, or the window's rows of it.
+    const int first = window ? window->first[static_cast<std::size_t>(positions[static_cast<std::size_t>(k)])] : 0;
+    const int count = window ? window->count[static_cast<std::size_t>(positions[static_cast<std::size_t>(k)])] : d.rows;
+    const std::size_t begin = static_cast<std::size_t>(first) * static_cast<std::size_t>(d.cols),
+                      values = static_cast<std::size_t>(count) * static_cast<std::size_t>(d.cols);
+    std::copy_n(image.pixels.begin() + static_cast<std::ptrdiff_t>(begin), values, m.line_integrals.view(k));
+    if (m.weights.views) std::copy_n(weights.begin() + static_cast<std::ptrdiff_t>(begin), values, m.weights.view(k));
 #pragma omp critical(ctk_measurements_progress)
     if (progress) progress(++done, n);
   });
   std::vector<int> kept;
-  const std::size_t pixels = m.line_integrals.pixels_per_view();
+  const std::size_t pixels = full_pixels;
   for (int k = 0; k < n; ++k) {
     const auto i = static_cast<std::size_t>(k);
     const std::string view = "view " + std::to_string(m.view_indices[i]) + ": ";

@@ -112,8 +112,8 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
     log.iteration = epoch;
     log.data_term = data_term;
     log.regulariser_term = o.lambda == 0 ? 0.0
-                           : huber       ? huber_penalty_value(penalty, x)
-                                         : o.lambda * regulariser_value(o.regulariser, x);
+                           : huber       ? A.sum_over_domain(huber_penalty_value(penalty, x))
+                                         : o.lambda * A.sum_over_domain(regulariser_value(o.regulariser, x));
     log.cost = log.data_term + log.regulariser_term;
     log.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (on_iteration) on_iteration(log);
@@ -131,7 +131,7 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
 
   SolverReport report;
   // A cold start's residual is -b: no projection needed for its cost.
-  const bool cold = std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; });
+  const bool cold = A.sum_over_domain(detail::nonzero_count(x.data)) == 0;
   report.iterations.push_back(cost_now(
       cold ? 0.5 * A.sum_over_range(detail::weighted_square_sum(b.data, weights ? weights->data : unit)) : exact_data_term(), 0));
   double t = 1;  // Nesterov's sequence

@@ -10,12 +10,14 @@
 
 #include "ctk/core/error.hpp"
 #include "ctk/proj/joseph_operator.hpp"
+#include "ctk/proj/slab_split_operator.hpp"
 #include "ctk/proj/view_split_operator.hpp"
 #include "ctk/recon/default_volume.hpp"
 #include "ctk/recon/ordered_subsets.hpp"
 #include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/wls_cg.hpp"
+#include "ctk/core/machine.hpp"
 #include "ctk/core/provenance.hpp"
 #include "ctk/core/statistics.hpp"
 
@@ -103,6 +105,28 @@ void combine_findings(const Measurements& m, const Communicator& ranks, Measurem
   }
 }
 
+// The operator a run solves with: the Joseph projector on the views read, split over the ranks as
+// the plan says. Slabs: the split of every ok view, restricted to those read (a view left out
+// keeps the others' rows where they were).
+std::shared_ptr<const ProjectionOperator> spread_operator(const ReconstructionPlan& plan, const Geometry& geometry,
+                                                          const Measurements& m, const Communicator& ranks, const Detector& d) {
+  if (ranks.size() == 1 || plan.distribution.decomposition == Decomposition::views) {
+    const auto local = std::make_shared<JosephOperator>(m.matrices, plan.layout, m.line_integrals.rows, m.line_integrals.cols);
+    if (ranks.size() == 1) return local;
+    return std::make_shared<ViewSplitOperator>(local, ranks);
+  }
+  std::vector<ProjectionMatrix> ok;
+  std::vector<int> read;  // positions among the ok views of the views read
+  for (int i : geometry.ok_views()) {
+    const GeometryView& g = geometry.views[static_cast<std::size_t>(i)];
+    if (std::find(m.view_indices.begin(), m.view_indices.end(), g.index) != m.view_indices.end())
+      read.push_back(static_cast<int>(ok.size()));
+    ok.push_back(*g.P);
+  }
+  const SlabSplitOperator all(ok, plan.layout, d.rows, d.cols, plan.distribution.rows, ranks);
+  return all.subset(read);
+}
+
 }  // namespace
 
 void ReconstructionOptions::validate() const {
@@ -158,13 +182,20 @@ nlohmann::json ReconstructionRun::report() const {
       {"detector_distortion", distortion_note},
       {"memory_plan", plan.memory.describe()},
       {"solver", to_json(solver)},
+      {"peak_resident_bytes_per_rank", peak_resident_bytes},
       {"seconds", seconds}};
-  if (plan.ranks > 1)
-    r["distribution"] = {{"ranks", plan.ranks},
-                         {"decomposition", "views (each rank its share of the views and the whole volume)"},
-                         {"views_per_rank", plan.views_per_rank},
-                         {"summed_bytes_per_iteration", counted_summed_bytes_per_iteration},
-                         {"model_summed_bytes_per_iteration", plan.summed_bytes_per_iteration}};
+  const DistributionPlan& d = plan.distribution;
+  if (d.ranks > 1) {
+    r["distribution"] = {{"ranks", d.ranks},
+                         {"decomposition", to_string(d.decomposition)},
+                         {"plans", d.describe()},
+                         {"bytes_per_iteration", counted_bytes_per_iteration},
+                         {"model_bytes_per_iteration", d.bytes_per_iteration()}};
+    if (d.decomposition == Decomposition::slabs)
+      r["distribution"]["planes_per_rank"] = d.planes_per_rank;
+    else
+      r["distribution"]["views_per_rank"] = d.views_per_rank;
+  }
   if (circle) r["circular_trajectory"] = {{"radius_mm", circle->radius_mm}, {"arc_deg", circle->arc_rad * 180 / M_PI}};
   return r;
 }
@@ -180,11 +211,8 @@ std::string ReconstructionRun::brief() const {
 }
 
 ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geometry& geometry, const ReconstructionOptions& o,
-                                       int ranks) {
+                                       int ranks, int rank) {
   o.validate();
-  if (ranks < 1) throw std::invalid_argument("plan_reconstruction: ranks must be at least 1");
-  if (ranks > 1 && o.method == ReconstructionMethod::fdk)
-    throw std::invalid_argument("fdk runs on one process (it reads and filters each view once): start it without mpirun");
   ReconstructionPlan plan;
   plan.method = o.method;
   plan.weighted = (o.method == ReconstructionMethod::wls_cg || o.method == ReconstructionMethod::os_sqs) &&
@@ -201,27 +229,12 @@ ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geomet
       if (o.size[a] > 0) size[a] = o.size[a];
     plan.layout = VolumeLayout::centred(size, plan.layout.voxel_mm);
   }
-  plan.ranks = ranks;
-  plan.views_per_rank = (plan.views + ranks - 1) / ranks;
-  plan.memory = plan_memory(o.method, plan.layout, plan.views_per_rank, scan.detector.rows, scan.detector.cols, plan.weighted);
-  if (ranks > 1) {
-    const std::size_t volume = plan.layout.voxel_count() * sizeof(float);
-    const int subsets = o.subsets > 0 ? o.subsets : default_subset_count(plan.views);
-    switch (o.method) {
-      case ReconstructionMethod::wls_cg:  // A'W A d; d'A'W A d and the data term
-        plan.summed_bytes_per_iteration = volume + 2 * sizeof(double);
-        break;
-      case ReconstructionMethod::sirt:  // A' of the weighted residual; the data term
-        plan.summed_bytes_per_iteration = volume + sizeof(double);
-        break;
-      case ReconstructionMethod::os_sqs:  // one gradient per subset; the epoch's data term
-        plan.summed_bytes_per_iteration = static_cast<std::size_t>(subsets) * volume + sizeof(double);
-        break;
-      case ReconstructionMethod::fdk:
-        break;
-    }
-  }
   plan.available_bytes = available_memory_bytes();
+  const SolverShape solver{o.method, o.lambda, o.regulariser, o.huber_delta, plan.weighted};
+  const int subsets = o.subsets > 0 ? o.subsets : default_subset_count(plan.views);
+  plan.distribution = plan_distribution(solver, plan.layout, ok, scan.detector.rows, scan.detector.cols, subsets, ranks, rank,
+                                        plan.available_bytes, o.decomposition);
+  plan.memory = plan.distribution.memory();
   return plan;
 }
 
@@ -231,8 +244,9 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   const bool spread = ranks.size() > 1;
   ReconstructionRun run;
   run.options = o;
-  run.plan = plan_reconstruction(scan, geometry, o, ranks.size());
+  run.plan = plan_reconstruction(scan, geometry, o, ranks.size(), ranks.rank());
   const ReconstructionPlan& plan = run.plan;
+  const bool slabs = spread && plan.distribution.decomposition == Decomposition::slabs;
   if (hooks.planned) hooks.planned(plan);
   if (plan.memory.total_bytes() > plan.available_bytes)
     throw std::runtime_error("the run needs " + plan.memory.describe() + (spread ? " per rank" : "") + " but only " +
@@ -243,19 +257,32 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   MeasurementOptions reading;
   reading.statistical_weights = plan.weighted;
   reading.undistort = o.undistort;
-  reading.share = ranks.rank();
-  reading.shares = ranks.size();
+  if (slabs) {  // every view, the rows this rank owns
+    const SlabRows& rows = *plan.distribution.rows;
+    MeasurementOptions::RowWindow window;
+    window.height = std::max(1, rows.owned_height(ranks.rank()));
+    for (int k = 0; k < rows.views(); ++k) {
+      window.first.push_back(rows.owned(k, ranks.rank()).first);
+      window.count.push_back(rows.owned(k, ranks.rank()).count);
+    }
+    reading.rows = std::move(window);
+  } else {  // views split: this rank's share of the views, whole
+    reading.share = ranks.rank();
+    reading.shares = ranks.size();
+  }
   Measurements m = load_measurements(scan, geometry, reading, hooks.reading);
-  // Spread over ranks, the run's views are every rank's, in the geometry's order.
-  const SpreadViews views = spread ? gather_views(geometry, m, ranks) : SpreadViews{m.view_indices, m.matrices, {}};
-  Measurements whole;  // spread over ranks, what the hooks and the report see: the whole run's numbers, no images
-  if (spread) {
+  // Views split, the run's views are every rank's, in the geometry's order; in slabs every rank
+  // read them all (each its rows), and found the same in them.
+  const bool views_split = spread && !slabs;
+  const SpreadViews views = views_split ? gather_views(geometry, m, ranks) : SpreadViews{m.view_indices, m.matrices, {}};
+  Measurements whole;  // views split, what the hooks and the report see: the whole run's numbers, no images
+  if (views_split) {
     whole.view_indices = views.indices;
     whole.matrices = views.matrices;
     combine_findings(m, ranks, whole);
     whole.distortion_note = m.distortion_note;
   }
-  const Measurements& found = spread ? whole : m;
+  const Measurements& found = views_split ? whole : m;
   if (hooks.measured) hooks.measured(found);
   require_views_left(found, geometry.source());
   run.clamped_pixels = found.clamped_pixels;
@@ -265,9 +292,9 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   run.views_used = views.indices;
   run.distortion_note = m.distortion_note;
 
-  run.volume = Volume(plan.layout);
+  run.volume = Volume(slabs ? slab_layout(plan.layout, ranks.rank(), ranks.size()) : plan.layout);
   const int iterations = o.iteration_count();
-  std::vector<std::size_t> bytes_at;  // what this rank had summed over ranks at each iteration
+  std::vector<std::size_t> bytes_at;  // what this rank had handed to the others at each iteration
   const auto on_iteration = [&](const IterationLog& l) {
     bytes_at.push_back(ranks.bytes_sent());
     if (l.iteration > 0 && hooks.iterating) hooks.iterating(l.iteration, iterations);
@@ -293,9 +320,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
     }
     checkpointing.resume = saved ? &*saved : nullptr;
     const std::function<bool()> stop_requested = spread ? std::function<bool()>() : hooks.stop_requested;
-    const auto local = std::make_shared<JosephOperator>(m.matrices, plan.layout, m.line_integrals.rows, m.line_integrals.cols);
-    const std::shared_ptr<const ProjectionOperator> split =
-        spread ? std::make_shared<ViewSplitOperator>(local, ranks) : std::shared_ptr<const ProjectionOperator>(local);
+    const std::shared_ptr<const ProjectionOperator> split = spread_operator(plan, geometry, m, ranks, scan.detector);
     const ProjectionOperator& A = *split;
     if (plan.method == ReconstructionMethod::os_sqs) {
       OsSqsOptions os;
@@ -309,7 +334,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
       const int count = o.subsets > 0 ? o.subsets : default_subset_count(static_cast<int>(views.matrices.size()));
       // The subsets of the whole run's views, each rank taking its views of every subset.
       std::vector<std::vector<int>> subsets = ordered_subsets(views.matrices, count, volume_centre);
-      if (spread)
+      if (views_split)
         for (auto& subset : subsets) subset = views.local_positions(subset);
       run.solver = solve_os_sqs(A, m.line_integrals, plan.weighted ? &m.weights : nullptr, run.volume, subsets, os, on_iteration,
                                 stop_requested);
@@ -329,8 +354,10 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   if (spread && bytes_at.size() > 1) {
     std::vector<double> per_iteration;
     for (std::size_t i = 1; i < bytes_at.size(); ++i) per_iteration.push_back(static_cast<double>(bytes_at[i] - bytes_at[i - 1]));
-    run.counted_summed_bytes_per_iteration = static_cast<std::size_t>(median_in_place(per_iteration));
+    run.counted_bytes_per_iteration = static_cast<std::size_t>(median_in_place(per_iteration));
   }
+  for (const std::string& peak : ranks.gather(std::to_string(peak_resident_bytes())))
+    run.peak_resident_bytes.push_back(std::stoull(peak));
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return run;
 }

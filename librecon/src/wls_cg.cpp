@@ -33,7 +33,7 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
   detail::require_problem_shapes("solve_wls_cg", A, b, x);
   ProjectionStack residual(b.views, b.rows, b.cols);
   if (!(checkpointing && checkpointing->resume)) {  // a continued run takes its residual from the state
-    const bool cold = std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; });
+    const bool cold = A.sum_over_domain(detail::nonzero_count(x.data)) == 0;
     if (!cold) A.apply(x, residual);
     axpy(-1.0, b.data, residual.data);
   }
@@ -66,7 +66,7 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
     IterationLog log;
     log.iteration = iteration;
     log.data_term = 0.5 * A.sum_over_range(detail::weighted_square_sum(residual.data, w));
-    log.regulariser_term = o.lambda > 0 ? o.lambda * regulariser_value(o.regulariser, x) : 0.0;
+    log.regulariser_term = o.lambda > 0 ? o.lambda * A.sum_over_domain(regulariser_value(o.regulariser, x)) : 0.0;
     log.cost = log.data_term + log.regulariser_term;
     log.relative_gradient = g0_norm > 0 ? g_norm / g0_norm : 0.0;
     log.seconds = seconds_since(start);
@@ -89,7 +89,7 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
     report.iterations = resume->log;
     first = resume->iteration + 1;
   } else {
-    gg = dot(gradient.data, gradient.data);
+    gg = A.sum_over_domain(dot(gradient.data, gradient.data));
     g0 = std::sqrt(gg);
     report.iterations.push_back(log_point(0, g0, g0));
     if (gg == 0) {
@@ -106,7 +106,7 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
     ProjectionStack& Ad = scratch;
     // d'G'Gd = ||G d||^2 = 2 * (1/2 ||G d||^2): no extra volume needed.
     const double alpha_denominator =
-        dHd_data + (o.lambda > 0 ? 2.0 * o.lambda * regulariser_value(o.regulariser, direction) : 0.0);
+        dHd_data + (o.lambda > 0 ? 2.0 * o.lambda * A.sum_over_domain(regulariser_value(o.regulariser, direction)) : 0.0);
     if (!(alpha_denominator > 0)) {
       report.stop_reason = "the search direction has no curvature (all views miss the volume?)";
       break;
@@ -122,7 +122,7 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
     A.apply_adjoint(scratch, H_direction);
     add_regulariser_normal(o.regulariser, o.lambda, direction, H_direction);
     axpy(alpha, H_direction.data, gradient.data);
-    const double gg_new = dot(gradient.data, gradient.data);
+    const double gg_new = A.sum_over_domain(dot(gradient.data, gradient.data));
     report.iterations.push_back(log_point(it, std::sqrt(gg_new), g0));
     if (std::sqrt(gg_new) <= o.tolerance * g0) {
       report.stop_reason = "gradient fell below the tolerance after " + std::to_string(it) + " iterations";

@@ -1,7 +1,8 @@
-// Views spread over ranks (view_split_operator.hpp), with the ranks played by threads of this
-// process so the test needs no MPI: each "rank" holds its dealt share of the views and the whole
-// volume, and the solvers on the split operator give the single-process result. The same runs
-// over real MPI ranks are cli.mpi_runs.
+// Runs spread over ranks, with the ranks played by threads of this process so the test needs no
+// MPI: views dealt to the ranks with the whole volume on each (view_split_operator.hpp), and the
+// volume split into slabs with each view's rows split over the ranks (slab_split_operator.hpp).
+// Both are adjoint pairs across the ranks, and the solvers on them give the single-process
+// result. The same runs over real MPI ranks are cli.mpi_runs.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/proj/joseph_operator.hpp"
+#include "ctk/proj/slab_split_operator.hpp"
 #include "ctk/proj/view_split_operator.hpp"
 #include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/ordered_subsets.hpp"
@@ -30,7 +32,8 @@ class ThreadRanks {
       : barrier_(n),
         floats_(static_cast<std::size_t>(n)),
         doubles_(static_cast<std::size_t>(n)),
-        texts_(static_cast<std::size_t>(n)) {
+        texts_(static_cast<std::size_t>(n)),
+        outboxes_(static_cast<std::size_t>(n)) {
     for (int r = 0; r < n; ++r) ranks_.emplace_back(*this, r);
   }
   const Communicator& rank(int r) const { return ranks_[static_cast<std::size_t>(r)]; }
@@ -52,6 +55,17 @@ class ThreadRanks {
       all_.barrier_.arrive_and_wait();
       return out;
     }
+    std::vector<std::vector<float>> exchange(std::vector<std::vector<float>> to) const override {
+      all_.outboxes_[static_cast<std::size_t>(rank_)] = std::move(to);
+      all_.barrier_.arrive_and_wait();
+      std::vector<std::vector<float>> from;
+      for (const auto& outbox : all_.outboxes_) from.push_back(outbox[static_cast<std::size_t>(rank_)]);
+      all_.barrier_.arrive_and_wait();
+      return from;
+    }
+    // The operators and solvers never send one rank's values to another alone.
+    void send(int, std::span<const float>) const override { throw std::logic_error("send: not offered by thread ranks"); }
+    void receive(int, std::span<float>) const override { throw std::logic_error("receive: not offered by thread ranks"); }
     [[noreturn]] void abort(int) const override { throw std::logic_error("a rank aborted"); }
 
    private:
@@ -74,6 +88,7 @@ class ThreadRanks {
   std::vector<std::span<float>> floats_;
   std::vector<std::span<double>> doubles_;
   std::vector<std::string> texts_;
+  std::vector<std::vector<std::vector<float>>> outboxes_;
   std::vector<Rank> ranks_;
 };
 
@@ -110,6 +125,25 @@ struct Problem {
   }
   std::shared_ptr<const ProjectionOperator> local(const std::vector<int>& mine) const {
     return JosephOperator(views, layout, b.rows, b.cols).subset(mine);
+  }
+};
+
+// What the spread runs must reproduce: WLS-CG (8 iterations, penalty `lambda`), SIRT (10) and
+// OS-SQS (3 epochs of 4 subsets) on one process.
+struct SingleProcess {
+  WlsOptions cg_options;
+  OsSqsOptions os_options;
+  std::vector<std::vector<int>> subsets;
+  Volume cg, sirt, os;
+  SingleProcess(const Problem& p, double lambda) : cg(p.layout), sirt(p.layout), os(p.layout) {
+    const JosephOperator whole(p.views, p.layout, p.b.rows, p.b.cols);
+    cg_options.iterations = 8;
+    cg_options.lambda = lambda;
+    solve_wls_cg(whole, p.b, nullptr, cg, cg_options);
+    solve_sirt(whole, p.b, sirt, {10, 1.0, true});
+    subsets = ordered_subsets(p.views, 4, Eigen::Vector3d::Zero());
+    os_options.epochs = 3;
+    solve_os_sqs(whole, p.b, nullptr, os, subsets, os_options);
   }
 };
 
@@ -174,16 +208,11 @@ TEST(ViewSplit, IsAdjointAcrossTheRanks) {
 
 TEST(ViewSplit, SolversGiveTheSingleProcessVolumeOnEveryRank) {
   const Problem p;
-  const JosephOperator whole(p.views, p.layout, p.b.rows, p.b.cols);
-  WlsOptions w;
-  w.iterations = 8;
-  Volume single_cg(p.layout), single_sirt(p.layout), single_os(p.layout);
-  solve_wls_cg(whole, p.b, nullptr, single_cg, w);
-  solve_sirt(whole, p.b, single_sirt, {10, 1.0, true});
-  const std::vector<std::vector<int>> subsets = ordered_subsets(p.views, 4, Eigen::Vector3d::Zero());
-  OsSqsOptions os;
-  os.epochs = 3;
-  solve_os_sqs(whole, p.b, nullptr, single_os, subsets, os);
+  const SingleProcess one(p, 0.0);
+  const WlsOptions& w = one.cg_options;
+  const OsSqsOptions& os = one.os_options;
+  const Volume &single_cg = one.cg, &single_sirt = one.sirt, &single_os = one.os;
+  const std::vector<std::vector<int>>& subsets = one.subsets;
   for (int n : {2, 3}) {
     for (const Volume& x :
          on_ranks(p, n, [&](const ProjectionOperator&A, const ProjectionStack&b, Volume&x, const std::vector<int>&, int) {
@@ -206,6 +235,146 @@ TEST(ViewSplit, SolversGiveTheSingleProcessVolumeOnEveryRank) {
            solve_os_sqs(A, b, nullptr, x, local, os);
          }))
       EXPECT_LT(largest_difference(single_os, x), 1e-5) << "OS-SQS over " << n << " ranks";
+  }
+}
+
+// Slabs: every rank holds all views, its slab and its owned rows of each view.
+struct SlabRank {
+  std::shared_ptr<const SlabRows> rows;
+  int rank = 0;
+  // The rows rank `rank` owns of every view of `stack`, at the top of its range's height.
+  ProjectionStack owned_rows(const ProjectionStack& stack, int height) const {
+    ProjectionStack out(stack.views, height, stack.cols);
+    for (int v = 0; v < stack.views; ++v) {
+      const RowRange own = rows->owned(v, rank);
+      std::copy_n(stack.view(v) + static_cast<std::size_t>(own.first) * static_cast<std::size_t>(stack.cols),
+                  static_cast<std::size_t>(own.count) * static_cast<std::size_t>(stack.cols), out.view(v));
+    }
+    return out;
+  }
+};
+
+// Every rank runs `solve(its operator, its data, its slab, its rank)`; returns the slabs put
+// together into the whole volume.
+template <typename Solve>
+Volume on_slab_ranks(const Problem& p, int n, Solve solve) {
+  ThreadRanks ranks(n);
+  const auto rows = std::make_shared<const SlabRows>(p.views, p.layout, p.b.rows, n);
+  std::vector<Volume> slabs(static_cast<std::size_t>(n));
+  std::vector<std::thread> threads;
+  for (int r = 0; r < n; ++r)
+    threads.emplace_back([&, r] {
+      const SlabSplitOperator A(p.views, p.layout, p.b.rows, p.b.cols, rows, ranks.rank(r));
+      Volume& x = slabs[static_cast<std::size_t>(r)];
+      x = Volume(A.domain());
+      solve(A, SlabRank{rows, r}.owned_rows(p.b, A.range().rows), x, r);
+    });
+  for (auto& t : threads) t.join();
+  Volume whole(p.layout);
+  for (int r = 0; r < n; ++r) {
+    const RowRange planes = slab_planes(p.layout.size[2], r, n);
+    std::copy(slabs[static_cast<std::size_t>(r)].data.begin(), slabs[static_cast<std::size_t>(r)].data.end(),
+              whole.data.begin() + static_cast<std::ptrdiff_t>(planes.first) * p.layout.size[0] * p.layout.size[1]);
+  }
+  return whole;
+}
+
+TEST(SlabSplit, EachViewsRowsAreOwnedOnceAndEverySlabStaysInItsFootprint) {
+  const Problem p;
+  const JosephOperator whole(p.views, p.layout, p.b.rows, p.b.cols);
+  for (int n : {2, 3}) {
+    const SlabRows rows(p.views, p.layout, p.b.rows, n);
+    for (int v = 0; v < rows.views(); ++v) {
+      std::vector<int> owners(static_cast<std::size_t>(p.b.rows), 0);
+      for (int q = 0; q < n; ++q)
+        for (int i = rows.owned(v, q).first; i < rows.owned(v, q).end(); ++i) ++owners[static_cast<std::size_t>(i)];
+      EXPECT_EQ(std::count(owners.begin(), owners.end(), 1), p.b.rows) << "view " << v << " over " << n << " ranks";
+    }
+    // A slab of ones, projected on the whole detector: nothing outside its footprint.
+    for (int q = 0; q < n; ++q) {
+      Volume ones(p.layout);
+      const RowRange planes = slab_planes(p.layout.size[2], q, n);
+      std::fill(ones.data.begin() + static_cast<std::ptrdiff_t>(planes.first) * 400,
+                ones.data.begin() + static_cast<std::ptrdiff_t>(planes.end()) * 400, 1.0f);
+      ProjectionStack y;
+      whole.apply(ones, y);
+      for (int v = 0; v < y.views; ++v)
+        for (int i = 0; i < y.rows; ++i) {
+          const RowRange reach = rows.footprint(v, q);
+          if (i >= reach.first && i < reach.end()) continue;
+          for (int c = 0; c < y.cols; ++c)
+            ASSERT_EQ(y.view(v)[static_cast<std::size_t>(i * y.cols + c)], 0.0f) << "view " << v << " row " << i << " slab " << q;
+        }
+    }
+  }
+}
+
+TEST(SlabSplit, IsTheWholeOperatorAndAdjointAcrossTheRanks) {
+  const Problem p;
+  std::mt19937 random(5);
+  std::uniform_real_distribution<float> uniform(-1, 1);
+  Volume x(p.layout);
+  for (float& v : x.data) v = uniform(random);
+  ProjectionStack y = p.b;
+  for (float& v : y.data) v = uniform(random);
+  const JosephOperator whole(p.views, p.layout, p.b.rows, p.b.cols);
+  ProjectionStack Ax_whole;
+  whole.apply(x, Ax_whole);
+  for (int n : {2, 3}) {
+    std::vector<double> forward(static_cast<std::size_t>(n)), backward(static_cast<std::size_t>(n));
+    std::vector<float> worst(static_cast<std::size_t>(n), 0.0f);
+    on_slab_ranks(p, n, [&](const ProjectionOperator& A, const ProjectionStack&, Volume& slab, int r) {
+      const SlabRank me{std::make_shared<const SlabRows>(p.views, p.layout, p.b.rows, n), r};
+      const RowRange planes = slab_planes(p.layout.size[2], r, n);
+      Volume x_slab(A.domain());
+      std::copy_n(x.data.begin() + static_cast<std::ptrdiff_t>(planes.first) * 400, x_slab.data.size(), x_slab.data.begin());
+      ProjectionStack Ax;
+      A.apply(x_slab, Ax);
+      const ProjectionStack expected = me.owned_rows(Ax_whole, A.range().rows), y_mine = me.owned_rows(y, A.range().rows);
+      double ax_y = 0, x_aty = 0;
+      for (std::size_t i = 0; i < Ax.data.size(); ++i) {
+        worst[static_cast<std::size_t>(r)] =
+            std::max(worst[static_cast<std::size_t>(r)], std::abs(Ax.data[i] - expected.data[i]));
+        ax_y += double(Ax.data[i]) * y_mine.data[i];
+      }
+      A.apply_adjoint(y_mine, slab);
+      for (std::size_t i = 0; i < slab.data.size(); ++i) x_aty += double(x_slab.data[i]) * slab.data[i];
+      forward[static_cast<std::size_t>(r)] = A.sum_over_range(ax_y);
+      backward[static_cast<std::size_t>(r)] = A.sum_over_domain(x_aty);
+    });
+    for (int r = 0; r < n; ++r) {
+      EXPECT_LT(worst[static_cast<std::size_t>(r)], 1e-4) << "rank " << r << " of " << n << ": A x on its rows";
+      EXPECT_NEAR(forward[static_cast<std::size_t>(r)], backward[static_cast<std::size_t>(r)],
+                  1e-5 * std::abs(backward[static_cast<std::size_t>(r)]));
+    }
+  }
+}
+
+TEST(SlabSplit, SolversGiveTheSingleProcessVolume) {
+  const Problem p;
+  const SingleProcess one(p, 0.5);  // the Tikhonov penalty's sums over the volume are the ranks' sums
+  const WlsOptions& w = one.cg_options;
+  const OsSqsOptions& os = one.os_options;
+  const Volume &single_cg = one.cg, &single_sirt = one.sirt, &single_os = one.os;
+  const std::vector<std::vector<int>>& subsets = one.subsets;
+  for (int n : {2, 3}) {
+    EXPECT_LT(largest_difference(single_cg, on_slab_ranks(p, n,
+                                                          [&](const ProjectionOperator& A, const ProjectionStack& b, Volume& x,
+                                                              int) { solve_wls_cg(A, b, nullptr, x, w); })),
+              1e-5)
+        << "WLS-CG over " << n << " slabs";
+    EXPECT_LT(
+        largest_difference(single_sirt, on_slab_ranks(p, n,
+                                                      [&](const ProjectionOperator& A, const ProjectionStack& b, Volume& x, int) {
+                                                        solve_sirt(A, b, x, {10, 1.0, true});
+                                                      })),
+        1e-5)
+        << "SIRT over " << n << " slabs";
+    EXPECT_LT(largest_difference(single_os, on_slab_ranks(p, n,
+                                                          [&](const ProjectionOperator& A, const ProjectionStack& b, Volume& x,
+                                                              int) { solve_os_sqs(A, b, nullptr, x, subsets, os); })),
+              1e-5)
+        << "OS-SQS over " << n << " slabs";
   }
 }
 

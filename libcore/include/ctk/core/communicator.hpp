@@ -26,6 +26,14 @@ class Communicator {
   /// Every rank's `text`, in rank order, on every rank.
   virtual std::vector<std::string> gather(const std::string& text) const = 0;
 
+  /// Rank q receives `to[q]` from every rank: returns what each rank sent this one, in rank order
+  /// (`to` has size() entries; this rank's own entry comes back as it is).
+  virtual std::vector<std::vector<float>> exchange(std::vector<std::vector<float>> to) const = 0;
+
+  /// `values` to rank `to`, which takes them with receive(this rank, ...) into as many values.
+  virtual void send(int to, std::span<const float> values) const = 0;
+  virtual void receive(int from, std::span<float> values) const = 0;
+
   /// Ends every rank of the run with `exit_code` (after this rank has said why); one rank alone
   /// calls it.
   [[noreturn]] virtual void abort(int exit_code) const = 0;

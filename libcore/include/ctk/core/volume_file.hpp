@@ -9,6 +9,8 @@
 // Every format keeps the float32 voxels bitwise, the voxel size and the origin (the centre of
 // voxel 0, holder frame, mm). Outputs are written atomically.
 #include <filesystem>
+#include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -27,6 +29,19 @@ std::vector<std::filesystem::path> volume_files(const std::filesystem::path& fil
 
 /// Writes `volume` in the format of `file`'s extension (InputError for an unknown one).
 void write_volume(const Volume& volume, const std::filesystem::path& file);
+
+/// A volume handed to a writer in slabs of z planes, in order, so that the writer never holds it
+/// whole (a run whose slabs are on other ranks): `planes[k]` planes in slab k (summing to the
+/// layout's), `slab(k)` their voxels (x fastest), valid until the next call; called once per
+/// slab, in order.
+struct VolumeSlabs {
+  VolumeLayout layout;
+  std::vector<int> planes;
+  std::function<std::span<const float>(int slab)> slab;
+};
+
+/// The same, slab by slab; std::invalid_argument when the planes do not add up to the layout's.
+void write_volume(const VolumeSlabs& volume, const std::filesystem::path& file);
 
 /// Reads a volume any of the writers wrote (and such files from other tools: NRRD and MetaImage
 /// with float voxels and axis-aligned spacing, raw encoding, either byte order). InputError naming

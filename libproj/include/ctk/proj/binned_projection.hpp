@@ -18,6 +18,7 @@ class BinnedProjection final : public ProjectionOperator {
   StackShape range() const override;
   std::shared_ptr<const ProjectionOperator> subset(const std::vector<int>& views) const override;
   double sum_over_range(double part) const override { return inner_->sum_over_range(part); }
+  double sum_over_domain(double part) const override { return inner_->sum_over_domain(part); }
   int factor() const { return factor_; }
 
  private:

@@ -4,8 +4,8 @@
 // views implements it (joseph_operator.hpp), and variants compose with any operator: detector
 // binning (binned_projection.hpp), per-pixel weights (weighted_projection.hpp), the mean over an
 // arc of sub-views (arc_averaged_projection.hpp). Every operator can restrict itself to a subset
-// of its views, which ordered-subset methods and distributed runs need; a range spread over
-// ranks says so through sum_over_range.
+// of its views, which ordered-subset methods and distributed runs need; a range or a domain
+// spread over ranks says so through sum_over_range and sum_over_domain.
 #include <memory>
 #include <vector>
 
@@ -48,6 +48,10 @@ class ProjectionOperator {
   /// spread over ranks (view_split_operator.hpp), when it is every rank's part summed. Solvers
   /// pass every reduction over projections (a residual's norm, a curvature) through it.
   virtual double sum_over_range(double part) const { return part; }
+  /// The same over the domain: the part itself, unless the volume is split into slabs over ranks
+  /// (slab_split_operator.hpp). Solvers pass every sum over voxels (a gradient's norm, a
+  /// penalty) through it.
+  virtual double sum_over_domain(double part) const { return part; }
 
   /// A zero stack of the range's shape, a zero volume of the domain's layout.
   ProjectionStack range_zeros() const;

@@ -17,6 +17,7 @@ class WeightedProjection final : public ProjectionOperator {
   StackShape range() const override { return inner_->range(); }
   std::shared_ptr<const ProjectionOperator> subset(const std::vector<int>& views) const override;
   double sum_over_range(double part) const override { return inner_->sum_over_range(part); }
+  double sum_over_domain(double part) const override { return inner_->sum_over_domain(part); }
   const ProjectionStack& factors() const { return factors_; }
 
  private:

@@ -5,6 +5,7 @@
 // declared radial detector distortion is undone by resampling (DetectorUndistortion).
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,14 @@ struct MeasurementOptions {
   /// A run spread over ranks reads only its share of the ok views: those whose position among
   /// them is `share` modulo `shares` (every other ok view is still checked, not read).
   int share = 0, shares = 1;
+  /// A rank holding a slab of the volume keeps only the rows it owns of each view: those of ok
+  /// view k (its position among them) are rows [first[k], first[k] + count[k]), stored at the top
+  /// of stacks `height` rows high (zeros below). Empty: whole images.
+  struct RowWindow {
+    std::vector<int> first, count;
+    int height = 0;
+  };
+  std::optional<RowWindow> rows = std::nullopt;
   void validate() const;  // std::invalid_argument naming the field
 };
 

@@ -4,7 +4,8 @@
 // memory plan are decided from the matrices before any image is read, and a run that cannot fit
 // is refused then; an iterative run hands its state over for checkpoints and continues from one.
 // Spread over the ranks of an MPI run, each rank reads and projects its share of the views and
-// holds the whole volume (docs/distributed.md); the result is the same volume on every rank.
+// holds the whole volume, or holds a slab of the volume and the rows of every view it owns
+// (distribution_plan.hpp, docs/distributed.md).
 // `ctk reconstruct` and `ctk.reconstruct` wrap it with files.
 #include <array>
 #include <cstddef>
@@ -18,6 +19,7 @@
 #include "ctk/core/volume.hpp"
 #include "ctk/geom/geometry_file.hpp"
 #include "ctk/geom/scan.hpp"
+#include "ctk/recon/distribution_plan.hpp"
 #include "ctk/recon/fdk.hpp"
 #include "ctk/recon/iteration_log.hpp"
 #include "ctk/recon/measurements.hpp"
@@ -39,8 +41,9 @@ struct ReconstructionOptions {
   bool undistort = true;             // a declared detector distortion resampled away (MeasurementOptions)
   std::array<int, 3> size{0, 0, 0};  // voxels; 0: cover the holder, or the field of view
   double voxel_mm = 0;               // 0: a detector pixel seen at the holder origin
-  void validate() const;             // std::invalid_argument naming the field
-  int iteration_count() const;       // `iterations`, or the method's default
+  Decomposition decomposition = Decomposition::automatic;  // over several ranks (distribution_plan.hpp)
+  void validate() const;                                   // std::invalid_argument naming the field
+  int iteration_count() const;                             // `iterations`, or the method's default
 };
 
 /// OS-SQS's subsets when none are asked for: about 15 views each, at most 24 (12 to 24 subsets of
@@ -52,13 +55,9 @@ struct ReconstructionPlan {
   ReconstructionMethod method = ReconstructionMethod::wls_cg;
   bool weighted = false;
   VolumeLayout layout;
-  int views = 0;           // ok views of the geometry
-  int ranks = 1;           // processes the views are spread over
-  int views_per_rank = 0;  // the largest rank's share, what `memory` is planned for
-  MemoryPlan memory;       // per rank
-  /// Bytes each rank hands to the sums over ranks per iteration (epoch for OS-SQS): the back
-  /// projected volume (one per subset for OS-SQS) and the scalars of the step; 0 on one process.
-  std::size_t summed_bytes_per_iteration = 0;
+  int views = 0;                  // ok views of the geometry
+  DistributionPlan distribution;  // over the ranks (one rank: views split, nothing exchanged)
+  MemoryPlan memory;              // per rank, of the decomposition picked
   std::size_t available_bytes = 0;
 };
 
@@ -86,9 +85,10 @@ struct ReconstructionRun {
   std::string distortion_note;
   std::optional<CircularTrajectory> circle;  // FDK: the orbit fitted to the matrices
   SolverReport solver;
-  /// Spread over ranks: the bytes this rank handed to the sums over ranks per iteration, counted
-  /// (the median over the iterations), against the plan's model.
-  std::size_t counted_summed_bytes_per_iteration = 0;
+  /// Spread over ranks: the bytes this rank handed to the others per iteration, counted (the
+  /// median over the iterations), against the plan's model.
+  std::size_t counted_bytes_per_iteration = 0;
+  std::vector<std::size_t> peak_resident_bytes;  // every rank's, at the end of the run
   double seconds = 0;
   /// Stopped on request (WLS-CG and SIRT with their state saved; OS-SQS after an epoch): the
   /// volume is the last iterate.
@@ -100,15 +100,18 @@ struct ReconstructionRun {
 };
 
 /// Throws InputError naming the geometry when no view is ok; the options' own errors as validate();
-/// std::invalid_argument for FDK over several ranks.
+/// std::invalid_argument for FDK over several ranks, or a decomposition that cannot run. The
+/// plan is rank `rank`'s (its traffic; the memory is the largest rank's).
 ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geometry& geometry,
-                                       const ReconstructionOptions& options, int ranks = 1);
+                                       const ReconstructionOptions& options, int ranks = 1, int rank = 0);
 
 /// Plans (refusing a run whose memory plan exceeds what is available, with the plan in the
 /// message), reads the ok views, solves. Throws InputError for unreadable images, std::invalid_argument
 /// for FDK on a scan that is not circular, with the deviation found. Over several `ranks`, every
 /// rank calls it with the same arguments; checkpoints, continuing and stop requests are then not
 /// offered (a state would be spread over the ranks), and the hooks see the whole run's numbers.
+/// Split into slabs, each rank's `volume` is its slab (slab_layout); the caller writes them in
+/// turn (volume_file.hpp's VolumeSlabs), so no rank ever holds the whole volume.
 ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry& geometry, const ReconstructionOptions& options,
                                      const ReconstructionHooks& hooks = {}, const Communicator& ranks = single_process());
 
