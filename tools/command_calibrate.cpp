@@ -146,8 +146,8 @@ void run_calibrate(const CalibrateOptions& o) {
     control.on_view = [&](int view, const ViewCalibration& result) { journal->record(view, result); };
     control.stop_requested = [] { return InterruptionWatch::requested(); };
   } else {
-    std::cout << "spread over " << ranks.size() << " ranks: each calibrates every " << ranks.size()
-              << "th view; progress counts the first rank's\n";
+    std::cout << "spread over " << ranks.size() << " ranks: rank r calibrates views r, r + " << ranks.size()
+              << ", ...; progress counts the first rank's\n";
   }
   Progress progress("calibrate", "views");
   const CalibrationRun run_result =
