@@ -164,21 +164,29 @@ std::vector<ProjectionMatrix> SlabSplitOperator::band_matrices() const {
   return out;
 }
 
+std::vector<std::vector<float>> SlabSplitOperator::rows_for_each_rank(const std::function<const float*(int)>& view, RowsOf held,
+                                                                      RowsOf wanted) const {
+  const int me = ranks_.rank();
+  const std::size_t row = static_cast<std::size_t>(cols_);
+  std::vector<std::vector<float>> to(static_cast<std::size_t>(ranks_.size()));
+  for (int q = 0; q < ranks_.size(); ++q)
+    for (std::size_t k = 0; k < view_ids_.size(); ++k) {
+      const RowRange mine = (*rows_.*held)(view_ids_[k], me), shared = mine.intersection((*rows_.*wanted)(view_ids_[k], q));
+      const float* from = view(static_cast<int>(k)) + static_cast<std::size_t>(shared.first - mine.first) * row;
+      to[static_cast<std::size_t>(q)].insert(to[static_cast<std::size_t>(q)].end(), from,
+                                             from + static_cast<std::size_t>(shared.count) * row);
+    }
+  return to;
+}
+
 void SlabSplitOperator::do_apply(ConstVolumeSpan x, StackSpan y) const {
   const int me = ranks_.rank(), n = ranks_.size();
   const std::size_t row = static_cast<std::size_t>(cols_);
   ProjectionStack& band = band_buffer();
   projector_.forward(x, band_matrices(), band);
   // To each owner, the rows of every view this slab reaches and it owns.
-  std::vector<std::vector<float>> to(static_cast<std::size_t>(n));
-  for (int q = 0; q < n; ++q)
-    for (std::size_t k = 0; k < view_ids_.size(); ++k) {
-      const RowRange mine = rows_->footprint(view_ids_[k], me), shared = mine.intersection(rows_->owned(view_ids_[k], q));
-      const float* from = band.view(static_cast<int>(k)) + static_cast<std::size_t>(shared.first - mine.first) * row;
-      to[static_cast<std::size_t>(q)].insert(to[static_cast<std::size_t>(q)].end(), from,
-                                             from + static_cast<std::size_t>(shared.count) * row);
-    }
-  const std::vector<std::vector<float>> from = ranks_.exchange(std::move(to));
+  const std::vector<std::vector<float>> from = ranks_.exchange(
+      rows_for_each_rank([&](int k) { return static_cast<const float*>(band.view(k)); }, &SlabRows::footprint, &SlabRows::owned));
   // Each owned row: the ranks' parts added in rank order.
   std::fill_n(y.data, static_cast<std::size_t>(y.views) * static_cast<std::size_t>(y.rows) * row, 0.0f);
   for (int q = 0; q < n; ++q) {
@@ -197,15 +205,8 @@ void SlabSplitOperator::do_apply_adjoint(ConstStackSpan y, VolumeSpan x) const {
   const int me = ranks_.rank(), n = ranks_.size();
   const std::size_t row = static_cast<std::size_t>(cols_);
   // To each rank, the rows of every view this rank owns and that rank's slab reaches.
-  std::vector<std::vector<float>> to(static_cast<std::size_t>(n));
-  for (int q = 0; q < n; ++q)
-    for (std::size_t k = 0; k < view_ids_.size(); ++k) {
-      const RowRange owned = rows_->owned(view_ids_[k], me), shared = owned.intersection(rows_->footprint(view_ids_[k], q));
-      const float* from = y.view(static_cast<int>(k)) + static_cast<std::size_t>(shared.first - owned.first) * row;
-      to[static_cast<std::size_t>(q)].insert(to[static_cast<std::size_t>(q)].end(), from,
-                                             from + static_cast<std::size_t>(shared.count) * row);
-    }
-  const std::vector<std::vector<float>> from = ranks_.exchange(std::move(to));
+  const std::vector<std::vector<float>> from =
+      ranks_.exchange(rows_for_each_rank([&](int k) { return y.view(k); }, &SlabRows::owned, &SlabRows::footprint));
   ProjectionStack& band = band_buffer();
   std::fill(band.data.begin(), band.data.end(), 0.0f);
   for (int q = 0; q < n; ++q) {

@@ -8,6 +8,7 @@
 // its footprint into its slab. Joseph line integrals add up over slabs exactly (a ray's samples
 // interpolate against zero beyond a slab), so the pair equals the whole volume's operator up to
 // float rounding. Sums over the range and over the domain are summed over the ranks.
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -79,6 +80,11 @@ class SlabSplitOperator final : public ProjectionOperator {
   // The slab's projection onto the rows it reaches: kept between calls (allocating it for every
   // projection left the heap holding several, measured as peak memory).
   ProjectionStack& band_buffer() const;
+  // To each rank q, the rows of every view that `held` gives this rank (view k's rows from
+  // view(k), its first row the first held) and `wanted` gives q.
+  using RowsOf = const RowRange& (SlabRows::*)(int view, int rank) const;
+  std::vector<std::vector<float>> rows_for_each_rank(const std::function<const float*(int)>& view, RowsOf held,
+                                                     RowsOf wanted) const;
 
   std::vector<ProjectionMatrix> all_views_;  // the run's views, as SlabRows indexes them
   std::vector<int> view_ids_;                // this operator's views among them
