@@ -170,7 +170,7 @@ std::vector<std::vector<float>> SlabSplitOperator::rows_for_each_rank(const std:
   const std::size_t row = static_cast<std::size_t>(cols_);
   std::vector<std::vector<float>> to(static_cast<std::size_t>(ranks_.size()));
   for (int q = 0; q < ranks_.size(); ++q)
-    for (std::size_t k = 0; k < view_ids_.size(); ++k) {
+    for (std::size_t k = 0; k < view_ids_.size() && q != me; ++k) {  // this rank's own rows stay where they are
       const RowRange mine = (*rows_.*held)(view_ids_[k], me), shared = mine.intersection((*rows_.*wanted)(view_ids_[k], q));
       const float* from = view(static_cast<int>(k)) + static_cast<std::size_t>(shared.first - mine.first) * row;
       to[static_cast<std::size_t>(q)].insert(to[static_cast<std::size_t>(q)].end(), from,
@@ -192,11 +192,14 @@ void SlabSplitOperator::do_apply(ConstVolumeSpan x, StackSpan y) const {
   for (int q = 0; q < n; ++q) {
     const float* part = from[static_cast<std::size_t>(q)].data();
     for (std::size_t k = 0; k < view_ids_.size(); ++k) {
-      const RowRange owned = rows_->owned(view_ids_[k], me), shared = rows_->footprint(view_ids_[k], q).intersection(owned);
+      const RowRange owned = rows_->owned(view_ids_[k], me), reach = rows_->footprint(view_ids_[k], q),
+                     shared = reach.intersection(owned);
       float* out = y.view(static_cast<int>(k)) + static_cast<std::size_t>(shared.first - owned.first) * row;
       const std::size_t values = static_cast<std::size_t>(shared.count) * row;
-      for (std::size_t i = 0; i < values; ++i) out[i] += part[i];
-      part += values;
+      const float* in =
+          q == me ? band.view(static_cast<int>(k)) + static_cast<std::size_t>(shared.first - reach.first) * row : part;
+      for (std::size_t i = 0; i < values; ++i) out[i] += in[i];
+      if (q != me) part += values;
     }
   }
 }
@@ -212,10 +215,12 @@ void SlabSplitOperator::do_apply_adjoint(ConstStackSpan y, VolumeSpan x) const {
   for (int q = 0; q < n; ++q) {
     const float* part = from[static_cast<std::size_t>(q)].data();
     for (std::size_t k = 0; k < view_ids_.size(); ++k) {
-      const RowRange mine = rows_->footprint(view_ids_[k], me), shared = rows_->owned(view_ids_[k], q).intersection(mine);
+      const RowRange mine = rows_->footprint(view_ids_[k], me), owned = rows_->owned(view_ids_[k], q),
+                     shared = owned.intersection(mine);
       const std::size_t values = static_cast<std::size_t>(shared.count) * row;
-      std::copy_n(part, values, band.view(static_cast<int>(k)) + static_cast<std::size_t>(shared.first - mine.first) * row);
-      part += values;
+      const float* in = q == me ? y.view(static_cast<int>(k)) + static_cast<std::size_t>(shared.first - owned.first) * row : part;
+      std::copy_n(in, values, band.view(static_cast<int>(k)) + static_cast<std::size_t>(shared.first - mine.first) * row);
+      if (q != me) part += values;
     }
   }
   projector_.back(band, band_matrices(), x);
