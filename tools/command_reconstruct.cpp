@@ -179,7 +179,7 @@ void run_reconstruct(const ReconstructOptions& o) {
     const VolumeLayout& l = plan.layout;
     std::cout << "volume " << l.size[0] << " x " << l.size[1] << " x " << l.size[2] << " voxels of " << l.voxel_mm.x()
               << " mm (holder frame, centred on the holder origin)\n"
-              << "memory plan (" << to_string(plan.method) << (spread ? ", per rank" : "") << "): " << plan.memory.describe()
+              << "memory plan (" << to_string(plan.method) << (spread ? ", per rank" : "") << "): " << plan.memory().describe()
               << "; available " << static_cast<double>(plan.available_bytes) / 1e9 << " GB\n";
     if (spread) std::cout << "spread over " << plan.distribution.ranks << " ranks:\n" << plan.distribution.describe() << "\n";
     solving.emplace(to_string(plan.method), "iterations");

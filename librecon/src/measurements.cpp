@@ -119,25 +119,28 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
   // Reading is I/O bound and OpenImageIO is thread safe: a few images at a time.
   const std::size_t full_pixels = static_cast<std::size_t>(d.rows) * static_cast<std::size_t>(d.cols);
   parallel_for_dynamic(n, [&](int k) {
-    std::vector<float> weights(m.weights.views ? full_pixels : 0);
-    Image image = read_line_integrals(scan, m.view_indices[static_cast<std::size_t>(k)], flat_dark,
-                                      m.weights.views ? weights.data() : nullptr, &clamped[static_cast<std::size_t>(k)],
-                                      &masked[static_cast<std::size_t>(k)]);
-    if (undistortion) {
-      const std::vector<float> measured = image.pixels;
-      undistortion->apply(measured.data(), image.pixels.data(), DetectorUndistortion::Outside::nearest_edge);
-      if (m.weights.views) {
-        const std::vector<float> measured_weights = weights;
-        undistortion->apply(measured_weights.data(), weights.data(), DetectorUndistortion::Outside::zero);
+    // A whole image goes straight into its stack view; a window's rows through full-size buffers.
+    std::vector<float> full(window ? full_pixels : 0), full_weights(window && m.weights.views ? full_pixels : 0);
+    float* li = window ? full.data() : m.line_integrals.view(k);
+    float* w = !m.weights.views ? nullptr : window ? full_weights.data() : m.weights.view(k);
+    const Image image = read_line_integrals(scan, m.view_indices[static_cast<std::size_t>(k)], flat_dark, w,
+                                            &clamped[static_cast<std::size_t>(k)], &masked[static_cast<std::size_t>(k)]);
+    if (!undistortion) {
+      std::copy(image.pixels.begin(), image.pixels.end(), li);
+    } else {
+      undistortion->apply(image.pixels.data(), li, DetectorUndistortion::Outside::nearest_edge);
+      if (w) {
+        const std::vector<float> measured(w, w + full_pixels);
+        undistortion->apply(measured.data(), w, DetectorUndistortion::Outside::zero);
       }
     }
-    // The whole image, or the window's rows of it.
-    const int first = window ? window->first[static_cast<std::size_t>(positions[static_cast<std::size_t>(k)])] : 0;
-    const int count = window ? window->count[static_cast<std::size_t>(positions[static_cast<std::size_t>(k)])] : d.rows;
-    const std::size_t begin = static_cast<std::size_t>(first) * static_cast<std::size_t>(d.cols),
-                      values = static_cast<std::size_t>(count) * static_cast<std::size_t>(d.cols);
-    std::copy_n(image.pixels.begin() + static_cast<std::ptrdiff_t>(begin), values, m.line_integrals.view(k));
-    if (m.weights.views) std::copy_n(weights.begin() + static_cast<std::ptrdiff_t>(begin), values, m.weights.view(k));
+    if (window) {
+      const auto at = static_cast<std::size_t>(positions[static_cast<std::size_t>(k)]);
+      const std::size_t begin = static_cast<std::size_t>(window->first[at]) * static_cast<std::size_t>(d.cols),
+                        values = static_cast<std::size_t>(window->count[at]) * static_cast<std::size_t>(d.cols);
+      std::copy_n(full.begin() + static_cast<std::ptrdiff_t>(begin), values, m.line_integrals.view(k));
+      if (w) std::copy_n(full_weights.begin() + static_cast<std::ptrdiff_t>(begin), values, m.weights.view(k));
+    }
 #pragma omp critical(ctk_measurements_progress)
     if (progress) progress(++done, n);
   });

@@ -131,7 +131,8 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
 
   SolverReport report;
   // A cold start's residual is -b: no projection needed for its cost.
-  const bool cold = A.sum_over_domain(detail::nonzero_count(x.data)) == 0;
+  const bool cold =
+      A.sum_over_domain(std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; }) ? 0.0 : 1.0) == 0;
   report.iterations.push_back(cost_now(
       cold ? 0.5 * A.sum_over_range(detail::weighted_square_sum(b.data, weights ? weights->data : unit)) : exact_data_term(), 0));
   double t = 1;  // Nesterov's sequence

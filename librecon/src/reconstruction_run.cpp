@@ -180,7 +180,7 @@ nlohmann::json ReconstructionRun::report() const {
       {"views_left_out", views_left_out},
       {"notes", notes},
       {"detector_distortion", distortion_note},
-      {"memory_plan", plan.memory.describe()},
+      {"memory_plan", plan.memory().describe()},
       {"solver", to_json(solver)},
       {"peak_resident_bytes_per_rank", peak_resident_bytes},
       {"seconds", seconds}};
@@ -234,7 +234,6 @@ ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geomet
   const int subsets = o.subsets > 0 ? o.subsets : default_subset_count(plan.views);
   plan.distribution = plan_distribution(solver, plan.layout, ok, scan.detector.rows, scan.detector.cols, subsets, ranks, rank,
                                         plan.available_bytes, o.decomposition);
-  plan.memory = plan.distribution.memory();
   return plan;
 }
 
@@ -248,8 +247,8 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   const ReconstructionPlan& plan = run.plan;
   const bool slabs = spread && plan.distribution.decomposition == Decomposition::slabs;
   if (hooks.planned) hooks.planned(plan);
-  if (plan.memory.total_bytes() > plan.available_bytes)
-    throw std::runtime_error("the run needs " + plan.memory.describe() + (spread ? " per rank" : "") + " but only " +
+  if (plan.memory().total_bytes() > plan.available_bytes)
+    throw std::runtime_error("the run needs " + plan.memory().describe() + (spread ? " per rank" : "") + " but only " +
                              std::to_string(static_cast<double>(plan.available_bytes) / 1e9) +
                              " GB are available: use a coarser voxel, a smaller volume or fewer views" +
                              (spread ? "" : ", or spread the views over more processes (mpirun)"));

@@ -41,15 +41,6 @@ inline double weighted_square_sum(const FloatBuffer& a, const FloatBuffer& w) {
   return sum;
 }
 
-/// How many values are not zero (a cold start has none).
-inline double nonzero_count(const FloatBuffer& a) {
-  double count = 0;
-  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(a.size());
-#pragma omp parallel for reduction(+ : count) schedule(static)
-  for (std::ptrdiff_t i = 0; i < n; ++i) count += a[static_cast<std::size_t>(i)] != 0.0f ? 1.0 : 0.0;
-  return count;
-}
-
 /// y += alpha * x
 inline void axpy(double alpha, const FloatBuffer& x, FloatBuffer& y) {
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(x.size());

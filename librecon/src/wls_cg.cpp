@@ -33,7 +33,8 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
   detail::require_problem_shapes("solve_wls_cg", A, b, x);
   ProjectionStack residual(b.views, b.rows, b.cols);
   if (!(checkpointing && checkpointing->resume)) {  // a continued run takes its residual from the state
-    const bool cold = A.sum_over_domain(detail::nonzero_count(x.data)) == 0;
+    const bool cold =
+        A.sum_over_domain(std::all_of(x.data.begin(), x.data.end(), [](float v) { return v == 0.0f; }) ? 0.0 : 1.0) == 0;
     if (!cold) A.apply(x, residual);
     axpy(-1.0, b.data, residual.data);
   }

@@ -57,7 +57,8 @@ struct ReconstructionPlan {
   VolumeLayout layout;
   int views = 0;                  // ok views of the geometry
   DistributionPlan distribution;  // over the ranks (one rank: views split, nothing exchanged)
-  MemoryPlan memory;              // per rank, of the decomposition picked
+  /// Per rank, of the decomposition picked.
+  const MemoryPlan& memory() const { return distribution.memory(); }
   std::size_t available_bytes = 0;
 };
 
