@@ -188,6 +188,10 @@ def run_case(ctk, case, work, size):
             truth = json.loads((folder / "scan.json").read_text())["holder"]["wall"]
             calibration["wall_measured"] = {k: measured[f"{k}_radius_mm"] - truth[f"{k}_radius_mm"] for k in ("inner", "outer")}
             calibration["wall_measured"].update({f"{k}_sigma_mm": measured[f"{k}_sigma_mm"] for k in ("inner", "outer")})
+            if measured.get("ends") and truth.get("ends_mm"):
+                for i, k in enumerate(("lower_end", "upper_end")):
+                    calibration["wall_measured"][k] = measured["ends"]["ends_mm"][i] - truth["ends_mm"][i]
+                    calibration["wall_measured"][f"{k}_sigma_mm"] = measured["ends"]["ends_sigma_mm"][i]
     run(["diagnose", "--scan", str(folder / "scan.json"), "--geometry", str(folder / "geometry.json"), "--out", str(folder / "d.json")])
     report = json.loads((folder / "d.json").read_text())
     without_wall = None
@@ -319,10 +323,13 @@ def main():
     walls = [r["calibration"]["wall_measured"] for r in results if r.get("calibration", {}).get("wall_measured")]
     wall_summary = {"scans": len(walls)}
     if walls:
-        for k in ("inner", "outer"):
-            errors = sorted(abs(w[k]) for w in walls)
-            wall_summary[f"{k}_worst_error_mm"] = errors[-1]
-            wall_summary[f"{k}_within_2_sigma"] = sum(abs(w[k]) <= 2 * w[f"{k}_sigma_mm"] for w in walls) / len(walls)
+        for k in ("inner", "outer", "lower_end", "upper_end"):
+            mine = [w for w in walls if k in w]
+            if not mine:
+                continue
+            wall_summary[f"{k}_measured_on"] = len(mine)
+            wall_summary[f"{k}_worst_error_mm"] = max(abs(w[k]) for w in mine)
+            wall_summary[f"{k}_within_2_sigma"] = sum(abs(w[k]) <= 2 * w[f"{k}_sigma_mm"] for w in mine) / len(mine)
 
     by_family = {}
     for traj in TRAJECTORIES:

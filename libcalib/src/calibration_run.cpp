@@ -48,15 +48,15 @@ CalibrationRun run_calibration(const ScanDescription& scan, const CalibrationRun
   run.has_holder = scan.holder.has_value();
   if (scan.holder && scan.holder->wall) run.declared_wall = scan.holder->wall;
   ScanCalibration& c = run.calibration;
-  // A holder whose wall the scan does not declare: measured first in a sample of views that see it
-  // from the side, then every view calibrated with it as if declared (its shadow part of the
-  // spheres' background, the spheres on its silhouette kept).
+  // A holder whose wall (or the wall's ends) the scan does not declare: measured first in a sample
+  // of views that see it from the side, then every view calibrated with it as if declared (its
+  // shadow part of the spheres' background, the spheres on its silhouette kept).
   double wall_seconds = 0;
   ScanDescription with_wall = scan;
-  if (scan.holder && !scan.holder->wall) {
+  if (wall_to_measure(scan)) {
     const auto start = std::chrono::steady_clock::now();
     run.wall = measure_holder_wall(scan, calibrate_scan_views(scan, wall_sample_views(scan), o.calibration, ranks));
-    if (run.wall) with_wall.holder->wall = run.wall->wall;
+    if (run.wall) with_wall.holder->wall = modelled_wall(scan, *run.wall);
     wall_seconds = seconds_since(start);
   }
   c = calibrate_scan(with_wall, o.calibration, progress, control, ranks);
@@ -119,14 +119,17 @@ nlohmann::json CalibrationRun::report() const {
       {"options", {{"min_spheres", options.min_spheres}, {"max_rms_px", options.max_rms_px}, {"search_px", options.search_px}}},
       {"views", views}};
   j["robot_prior"] = robot_prior_json(prior);
-  if (declared_wall)
+  if (declared_wall) {
     j["holder_wall"] = {{"declared", true},
                         {"inner_radius_mm", declared_wall->inner_radius_mm},
                         {"outer_radius_mm", declared_wall->outer_radius_mm}};
-  else if (wall)
-    j["holder_wall"] = {{"declared", false}, {"measured", to_json(*wall)}};
-  else if (has_holder)
-    j["holder_wall"] = {{"declared", false}, {"measured", nullptr}};
+    if (declared_wall->ends_mm)
+      j["holder_wall"]["ends_mm"] = {declared_wall->ends_mm->x(), declared_wall->ends_mm->y()};
+    else
+      j["holder_wall"]["measured"] = wall ? to_json(*wall) : nlohmann::json();  // the ends looked for
+  } else if (has_holder) {
+    j["holder_wall"] = {{"declared", false}, {"measured", wall ? to_json(*wall) : nlohmann::json()}};
+  }
   return j;
 }
 
@@ -143,12 +146,7 @@ std::string CalibrationRun::brief() const {
 
 std::string CalibrationRun::wall_and_prior() const {
   std::ostringstream b;
-  if (wall)
-    b << "holder wall not declared by the scan; measured in " << wall->views << " views: inner radius "
-      << wall->wall.inner_radius_mm << " +- " << wall->inner_sigma_mm << " mm, outer " << wall->wall.outer_radius_mm << " +- "
-      << wall->outer_sigma_mm << " mm (declare it as holder.wall to skip this)\n";
-  else if (has_holder && !declared_wall)
-    b << "holder wall not declared by the scan and not measurable (fewer than 3 views see the holder from the side)\n";
+  if (has_holder) b << wall_line(declared_wall, wall) << "\n";
   if (prior.applied)
     b << "poses combined with the robot's prior over " << prior.views << " views: repeatability measured " << prior.sigma_mm
       << " mm, " << prior.sigma_deg << " deg; median rotation uncertainty " << prior.image_rotation_sigma_deg

@@ -58,15 +58,11 @@ DiagnosisRun run_diagnosis(const ScanDescription& scan, const Geometry& geometry
   // A wall the scan does not declare is measured in the views that see it from the side (from
   // the given poses) and then modelled as if declared, as ctk calibrate does.
   ScanDescription modelled = scan;
-  if (!scan.holder->wall) {
+  run.wall_declared = scan.holder->wall.has_value();
+  if (wall_to_measure(scan)) {
     run.wall = measure_holder_wall(scan, recalibrate_scan_views(scan, geometry, wall_sample_views(scan), o.calibration));
-    if (run.wall) {
-      modelled.holder->wall = run.wall->wall;
-      std::ostringstream wall;
-      wall << "holder wall not declared by the scan; measured in " << run.wall->views << " views: radii "
-           << run.wall->wall.inner_radius_mm << " and " << run.wall->wall.outer_radius_mm << " mm, modelled as declared";
-      say(wall.str());
-    }
+    if (run.wall) modelled.holder->wall = modelled_wall(scan, *run.wall);
+    say(wall_line(scan.holder->wall, run.wall));
   }
   // The detections and matches behind the given calibration, each view started from its pose.
   const ScanCalibration c = recalibrate_scan(modelled, geometry, o.calibration, progress);
@@ -88,7 +84,7 @@ DiagnosisRun run_diagnosis(const ScanDescription& scan, const Geometry& geometry
 
 nlohmann::json DiagnosisRun::report() const {
   nlohmann::json j = diagnosis_to_json(diagnosis, observations);
-  if (wall) j["holder_wall"] = {{"declared", false}, {"measured", to_json(*wall)}};
+  if (wall) j["holder_wall"] = {{"declared", wall_declared}, {"measured", to_json(*wall)}};
   return j;
 }
 

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <mutex>
+#include <sstream>
 
 #include "ctk/core/statistics.hpp"
 #include "ctk/core/parallel.hpp"
@@ -94,8 +95,14 @@ std::vector<WallSample> wall_samples(const ScanDescription& scan, const Image& i
   return out;
 }
 
+// The tube in one view: TubeResidual's parameters (outer and inner radius, attenuation, background).
+struct TubeFit {
+  double outer = 0, inner = 0, mu = 0, b0 = 0, b1 = 0;
+  double robust_scale = 0;  // of the residuals, for the ends' fit
+};
+
 // The tube's radii in one view, from the declared helix radius as the outer one's first guess.
-std::optional<Eigen::Vector2d> fit_view(const std::vector<WallSample>& samples, double helix_radius) {
+std::optional<TubeFit> fit_view(const std::vector<WallSample>& samples, double helix_radius) {
   if (samples.size() < 200) return std::nullopt;
   double x[5] = {helix_radius, 0.9 * helix_radius, 0.0, 0.0, 0.0};
   double peak = 0;
@@ -108,7 +115,161 @@ std::optional<Eigen::Vector2d> fit_view(const std::vector<WallSample>& samples, 
   const ceres::Solver::Summary summary = solve_small_problem(problem, 100, 1e-10);
   if (!summary.IsSolutionUsable() || !(x[1] > 0.3 * helix_radius && x[1] < x[0] && x[0] < 1.4 * helix_radius && x[2] > 0))
     return std::nullopt;
-  return Eigen::Vector2d(x[1], x[0]);
+  return TubeFit{x[0], x[1], x[2], x[3], x[4], 0.05 * peak};
+}
+
+// Where a ray runs inside the wall of an infinitely long tube: up to two stretches of the holder's
+// w, each with its path length (a ray square to the axis has its whole chord at one w).
+struct RayInWall {
+  struct Stretch {
+    double low = 0, high = 0, length = 0;
+  };
+  std::array<Stretch, 2> stretches;
+  int count = 0;
+
+  RayInWall(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double inner, double outer) {
+    const double a = direction.head<2>().squaredNorm(), b = origin.head<2>().dot(direction.head<2>());
+    const double c = origin.head<2>().squaredNorm();
+    auto crossing = [&](double r, double& t0, double& t1) {
+      const double discriminant = b * b - a * (c - r * r);
+      if (a < 1e-24 || discriminant <= 0) return false;
+      t0 = (-b - std::sqrt(discriminant)) / a;
+      t1 = (-b + std::sqrt(discriminant)) / a;
+      return true;
+    };
+    double t0 = 0, t1 = 0, s0 = 0, s1 = 0;
+    if (!crossing(outer, t0, t1)) return;
+    auto add = [&](double from, double to) {
+      const double w0 = origin.z() + from * direction.z(), w1 = origin.z() + to * direction.z();
+      stretches[static_cast<std::size_t>(count++)] = {std::min(w0, w1), std::max(w0, w1), to - from};
+    };
+    if (crossing(inner, s0, s1)) {
+      add(t0, s0);
+      add(s1, t1);
+    } else {
+      add(t0, t1);
+    }
+  }
+
+  /// Path length in the wall on the tube's side of an end at w = `end` (side -1: the lower end,
+  /// the tube above it; +1: the upper end).
+  double chord(double end, int side) const {
+    double sum = 0;
+    for (int i = 0; i < count; ++i) {
+      const Stretch& s = stretches[static_cast<std::size_t>(i)];
+      const double span = s.high - s.low;
+      const double kept = side < 0 ? s.high - std::max(s.low, end) : std::min(s.high, end) - s.low;
+      sum += span > 1e-12 ? s.length * std::clamp(kept / span, 0.0, 1.0)
+                          : ((side < 0 ? s.low >= end : s.low <= end) ? s.length : 0.0);
+    }
+    return sum;
+  }
+};
+
+struct EndSample {
+  std::vector<RayInWall> rays;  // rays_per_pixel of them
+  double mean_d = 0, p = 0;
+  double low = 1e300, high = -1e300;     // the w its rays spend in the wall
+  double loss_whole = 0, loss_none = 0;  // the wall all on the tube's side of the end, or none
+};
+
+// The tube's end beyond the spheres on one side (-1: below the lowest, +1: above the highest) in
+// one view: the pixels whose rays pass within the wall's radii (never through the bore, where a
+// sample may be) and beyond the spheres' band on that side, each predicted by the view's fitted
+// tube cut at w = e; e chosen by least squares (Huber), first on a 0.5 mm grid out to the last
+// such pixel, then by golden section. None when the best end lies within 2 mm of where the view
+// stops seeing the tube (it runs off the detector) or the cut explains nothing.
+std::optional<double> fit_end(const Holder& holder, const Image& image, const ViewCalibration& view, const TubeFit& tube,
+                              int side) {
+  const ProjectionMatrix& P = *view.P;
+  const Eigen::Vector3d source = P.source_position();
+  const double band_edge = side < 0 ? holder.tau_min() : holder.tau_max();
+  std::vector<Eigen::Vector2d> discs;
+  for (const auto& X : holder.spheres_mm) discs.push_back(P.project(X));
+  const ProjectionMatrix::Decomposition camera = P.decompose();
+  const double magnification = camera.intrinsics.K()(0, 0) / camera.T_camera_frame.translation().norm();
+  const double sphere_px = 0.5 * holder.sphere_diameter_mm * std::abs(magnification) + 3.0;
+  // Rays through pixels: the inverse of P's left 3 x 3 once, its sign making depths positive.
+  const Eigen::Matrix3d M_inverse = P.matrix().leftCols<3>().inverse();
+  const double sign = P.matrix().block<1, 3>(2, 0).dot(M_inverse.col(2)) < 0 ? -1.0 : 1.0;
+  auto ray_through = [&](double u, double v) { return (sign * (M_inverse * Eigen::Vector3d(u, v, 1))).normalized(); };
+  std::vector<EndSample> samples;
+  double farthest = band_edge;
+  for (int v = 0; v < image.rows; ++v)
+    for (int u = 0; u < image.cols; ++u) {
+      // The ray's closest approach to the axis: its distance d and where along the axis.
+      const Eigen::Vector3d ray = ray_through(u, v);
+      const double b = ray.z(), denominator = 1 - b * b;
+      if (denominator < 1e-6) continue;
+      const double s = (-source.dot(ray) + b * source.z()) / denominator;
+      const Eigen::Vector3d closest = source + s * ray;
+      const double d = closest.head<2>().norm(), along = closest.z();
+      if (d < tube.inner || d > tube.outer || side * (along - band_edge) < 0) continue;
+      const Eigen::Vector2d pixel(u, v);
+      if (std::any_of(discs.begin(), discs.end(), [&](const Eigen::Vector2d& c) { return (c - pixel).norm() < sphere_px; }))
+        continue;
+      EndSample sample;
+      for (int k = 0; k < rays_per_pixel; ++k)
+        sample.rays.emplace_back(source, ray_through(u + (k % 2 - 0.5) / 2, v + (k / 2 - 0.5) / 2), tube.inner, tube.outer);
+      sample.mean_d = d;
+      sample.p = image.pixels[static_cast<std::size_t>(v) * static_cast<std::size_t>(image.cols) + static_cast<std::size_t>(u)];
+      for (const RayInWall& r : sample.rays)
+        for (int i = 0; i < r.count; ++i) {
+          sample.low = std::min(sample.low, r.stretches[static_cast<std::size_t>(i)].low);
+          sample.high = std::max(sample.high, r.stretches[static_cast<std::size_t>(i)].high);
+        }
+      samples.push_back(std::move(sample));
+      farthest = side < 0 ? std::min(farthest, along) : std::max(farthest, along);
+    }
+  if (samples.size() < 100) return std::nullopt;
+  const double huber = tube.robust_scale;
+  auto loss = [&](const EndSample& s, double end) {
+    double transmission = 0;
+    for (const RayInWall& r : s.rays) transmission += std::exp(-tube.mu * r.chord(end, side));
+    const double residual = s.p - (tube.b0 + tube.b1 * (s.mean_d - tube.outer) - std::log(transmission / rays_per_pixel));
+    const double a = std::abs(residual);
+    return a <= huber ? residual * residual : huber * (2 * a - huber);
+  };
+  // An end beyond a pixel's stretch of wall leaves all of it or none: those two losses once, so a
+  // trial end computes only the pixels whose wall it cuts.
+  for (EndSample& s : samples) {
+    s.loss_whole = loss(s, side < 0 ? s.low - 1 : s.high + 1);
+    s.loss_none = loss(s, side < 0 ? s.high + 1 : s.low - 1);
+  }
+  auto cost = [&](double end) {
+    double sum = 0;
+    for (const EndSample& s : samples) {
+      if (end <= s.low)
+        sum += side < 0 ? s.loss_whole : s.loss_none;
+      else if (end >= s.high)
+        sum += side < 0 ? s.loss_none : s.loss_whole;
+      else
+        sum += loss(s, end);
+    }
+    return sum;
+  };
+  // The cost grows about linearly with the distance from the true end (the pixels between them
+  // predicted wrong): a 2 mm grid, then 0.5 mm around its best node.
+  double best_end = band_edge, best = cost(band_edge);
+  for (double e = band_edge + side * 2.0; side * (e - farthest) < 0; e += side * 2.0)
+    if (const double c = cost(e); c < best) best = c, best_end = e;
+  for (const double e : {best_end - 1.5, best_end - 1.0, best_end - 0.5, best_end + 0.5, best_end + 1.0, best_end + 1.5})
+    if (side * (e - band_edge) >= 0 && side * (e - farthest) < 0)
+      if (const double c = cost(e); c < best) best = c, best_end = e;
+  constexpr double kGridMm = 0.5;
+  if (side * (farthest - best_end) < 2 || !(best < cost(farthest + side * 1e6))) return std::nullopt;
+  // Golden section over the grid step either side of the best node.
+  double lo = best_end - kGridMm, hi = best_end + kGridMm;
+  const double g = 0.5 * (std::sqrt(5.0) - 1);
+  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = cost(x1), f2 = cost(x2);
+  while (hi - lo > 0.005) {
+    if (f1 < f2) {
+      hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = cost(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = cost(x2);
+    }
+  }
+  return 0.5 * (lo + hi);
 }
 
 }  // namespace
@@ -148,18 +309,23 @@ std::optional<WallMeasurement> measure_holder_wall(const ScanDescription& scan, 
   const std::vector<int> chosen = spread_side_views(poses, max_views);
   const double helix_radius = scan.holder->helix.radius_mm;
   const std::optional<FlatDark> flat_dark = read_flat_dark(scan);
-  std::vector<double> inner, outer, scale_sigma;
+  std::vector<double> inner, outer, scale_sigma, lower, upper, lower_scale, upper_scale;
   std::mutex found;
   parallel_for_dynamic(static_cast<int>(chosen.size()), [&](int i) {
     const int v = chosen[static_cast<std::size_t>(i)];
-    const Image image = read_line_integrals(scan, v, flat_dark);
-    const auto radii = fit_view(wall_samples(scan, image, c.views[static_cast<std::size_t>(v)], helix_radius), helix_radius);
-    if (!radii) return;
-    const std::lock_guard<std::mutex> lock(found);
-    inner.push_back(radii->x());
-    outer.push_back(radii->y());
     const ViewCalibration& view = c.views[static_cast<std::size_t>(v)];
-    scale_sigma.push_back(view.translation_sigma_mm[2] / view.P->decompose().T_camera_frame.translation().norm());
+    const Image image = read_line_integrals(scan, v, flat_dark);
+    const auto tube = fit_view(wall_samples(scan, image, view, helix_radius), helix_radius);
+    if (!tube) return;
+    const auto lower_end = fit_end(*scan.holder, image, view, *tube, -1),
+               upper_end = fit_end(*scan.holder, image, view, *tube, 1);
+    const double scale = view.translation_sigma_mm[2] / view.P->decompose().T_camera_frame.translation().norm();
+    const std::lock_guard<std::mutex> lock(found);
+    inner.push_back(tube->inner);
+    outer.push_back(tube->outer);
+    scale_sigma.push_back(scale);
+    if (lower_end) lower.push_back(*lower_end), lower_scale.push_back(scale);
+    if (upper_end) upper.push_back(*upper_end), upper_scale.push_back(scale);
   });
   if (inner.size() < 3) return std::nullopt;
   WallMeasurement m;
@@ -167,9 +333,9 @@ std::optional<WallMeasurement> measure_holder_wall(const ScanDescription& scan, 
   // The radii are lengths in the views' frames, whose scale is the magnification, known as well
   // as each view's depth along the beam. A depth error shared by the views (a bias of the sphere
   // centres) is not averaged away by their number, so it enters the uncertainty undivided.
-  const double scale = median_in_place(scale_sigma);
   // Median and its standard error from the spread (1.2533 sigma / sqrt(n) for a median).
-  auto estimate = [scale](std::vector<double> values, double& sigma) {
+  auto estimate = [](std::vector<double> values, std::vector<double> scales, double& sigma) {
+    const double scale = median_in_place(scales);
     std::vector<double> deviation = values;
     const double centre = median_in_place(values);
     for (double& x : deviation) x = std::abs(x - centre);
@@ -177,17 +343,65 @@ std::optional<WallMeasurement> measure_holder_wall(const ScanDescription& scan, 
     sigma = std::hypot(spread, scale * centre);
     return centre;
   };
-  m.wall.inner_radius_mm = estimate(inner, m.inner_sigma_mm);
-  m.wall.outer_radius_mm = estimate(outer, m.outer_sigma_mm);
+  m.wall.inner_radius_mm = estimate(inner, scale_sigma, m.inner_sigma_mm);
+  m.wall.outer_radius_mm = estimate(outer, scale_sigma, m.outer_sigma_mm);
+  // The ends when at least 3 views see each (a tube longer than the field of view shows none).
+  if (lower.size() >= 3 && upper.size() >= 3) {
+    Eigen::Vector2d ends, sigma;
+    ends.x() = estimate(lower, lower_scale, sigma.x());
+    ends.y() = estimate(upper, upper_scale, sigma.y());
+    m.wall.ends_mm = ends;
+    m.ends_sigma_mm = sigma;
+    m.end_views = static_cast<int>(std::min(lower.size(), upper.size()));
+  }
   return m;
 }
 
+bool wall_to_measure(const ScanDescription& scan) { return scan.holder && (!scan.holder->wall || !scan.holder->wall->ends_mm); }
+
+HolderWall modelled_wall(const ScanDescription& scan, const WallMeasurement& measured) {
+  if (!scan.holder || !scan.holder->wall) return measured.wall;
+  HolderWall wall = *scan.holder->wall;
+  if (!wall.ends_mm) wall.ends_mm = measured.wall.ends_mm;
+  return wall;
+}
+
+std::string wall_line(const std::optional<HolderWall>& declared, const std::optional<WallMeasurement>& measured) {
+  if (declared && declared->ends_mm) return "";
+  std::ostringstream b;
+  b.precision(4);
+  const bool ends = measured && measured->wall.ends_mm;
+  if (declared)
+    b << "holder wall declared without its ends";
+  else if (measured)
+    b << "holder wall not declared by the scan; measured in " << measured->views << " views: inner radius "
+      << measured->wall.inner_radius_mm << " +- " << measured->inner_sigma_mm << " mm, outer " << measured->wall.outer_radius_mm
+      << " +- " << measured->outer_sigma_mm << " mm";
+  else
+    return "holder wall not declared by the scan and not measurable (fewer than 3 views see the holder from the side)";
+  if (ends)
+    b << "; its ends measured in " << measured->end_views << " views at " << measured->wall.ends_mm->x() << " +- "
+      << measured->ends_sigma_mm->x() << " and " << measured->wall.ends_mm->y() << " +- " << measured->ends_sigma_mm->y()
+      << " mm along the axis (declare holder.wall with ends_mm to skip this)";
+  else
+    b << "; its ends seen in too few views (modelled as an infinitely long tube, and within about 5 deg of its axis, "
+         "where the ends decide its shadow, views are calibrated without it)";
+  return b.str();
+}
+
 nlohmann::json to_json(const WallMeasurement& m) {
-  return {{"inner_radius_mm", m.wall.inner_radius_mm},
-          {"outer_radius_mm", m.wall.outer_radius_mm},
-          {"inner_sigma_mm", m.inner_sigma_mm},
-          {"outer_sigma_mm", m.outer_sigma_mm},
-          {"views", m.views}};
+  nlohmann::json j = {{"inner_radius_mm", m.wall.inner_radius_mm},
+                      {"outer_radius_mm", m.wall.outer_radius_mm},
+                      {"inner_sigma_mm", m.inner_sigma_mm},
+                      {"outer_sigma_mm", m.outer_sigma_mm},
+                      {"views", m.views}};
+  if (m.wall.ends_mm)
+    j["ends"] = {{"ends_mm", {m.wall.ends_mm->x(), m.wall.ends_mm->y()}},
+                 {"ends_sigma_mm", {m.ends_sigma_mm->x(), m.ends_sigma_mm->y()}},
+                 {"views", m.end_views}};
+  else
+    j["ends"] = nullptr;
+  return j;
 }
 
 }  // namespace ctk

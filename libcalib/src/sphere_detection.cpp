@@ -58,6 +58,27 @@ void DetectionOptions::validate() const {
   require_option(max_candidates >= 1, "DetectionOptions.max_candidates", "at least 1", max_candidates);
 }
 
+namespace {
+
+// The image less its running median over `window` pixels (odd), float. OpenCV's median takes
+// windows wider than 5 only on 8 bits, so the median is taken of the image quantised to 256 levels
+// over its range: the step (a 256th of the range) is below the noise of a line-integral image
+// whose range is a few units, and only the detection sees it.
+cv::Mat without_running_median(const cv::Mat& image, int window) {
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(image, &lo, &hi);
+  cv::Mat out;
+  if (!(hi > lo)) return cv::Mat::zeros(image.size(), CV_32F);
+  cv::Mat levels, median;
+  image.convertTo(levels, CV_8U, 255.0 / (hi - lo), -lo * 255.0 / (hi - lo));
+  cv::medianBlur(levels, median, window);
+  median.convertTo(out, CV_32F, (hi - lo) / 255.0, lo);
+  cv::subtract(image, out, out);
+  return out;
+}
+
+}  // namespace
+
 std::vector<SphereDetection> detect_spheres(const Image& im, const DetectionOptions& o) {
   o.validate();
   // The searched rectangle; the filters read the image around it (OpenCV filters a submatrix with
@@ -71,10 +92,28 @@ std::vector<SphereDetection> detect_spheres(const Image& im, const DetectionOpti
     if (c1 - c0 < 2 || r1 - r0 < 2) return {};
     roi = cv::Rect(c0, r0, c1 - c0 + 1, r1 - r0 + 1);
   }
-  // Difference of Gaussians matched to a disc of radius R: sigma R / sqrt(2) against 2x that.
-  const cv::Mat whole(im.rows, im.cols, CV_32F, const_cast<float*>(im.pixels.data()));
-  const cv::Mat image = whole(roi);
   const double s = std::max(0.7, o.radius_px / std::sqrt(2.0));
+  const cv::Mat whole(im.rows, im.cols, CV_32F, const_cast<float*>(im.pixels.data()));
+  // What the filters and centroids work on: the image, or the remainder after its running median
+  // over a window two sphere diameters across (a disc covers a sixth of it, two touching discs a
+  // third, so the median stays the background), taken over the region and the filters' reach.
+  cv::Rect frame(0, 0, im.cols, im.rows);
+  cv::Mat source = whole;
+  Image remainder;
+  if (o.edge_preserving_background) {
+    const int half = std::max(2, static_cast<int>(std::lround(2 * o.radius_px)));
+    const int reach = half + static_cast<int>(std::ceil(8 * s + o.radius_px)) + 8;
+    frame = cv::Rect(roi.x - reach, roi.y - reach, roi.width + 2 * reach, roi.height + 2 * reach) & frame;
+    const cv::Mat remainder_mat = without_running_median(whole(frame), 2 * half + 1);
+    remainder.cols = frame.width;
+    remainder.rows = frame.height;
+    remainder.pixels.assign(remainder_mat.begin<float>(), remainder_mat.end<float>());
+    source = cv::Mat(remainder.rows, remainder.cols, CV_32F, remainder.pixels.data());
+    roi -= frame.tl();
+  }
+  const Image& centroid_image = o.edge_preserving_background ? remainder : im;
+  // Difference of Gaussians matched to a disc of radius R: sigma R / sqrt(2) against 2x that.
+  const cv::Mat image = source(roi);
   cv::Mat narrow, wide, dog;
   cv::GaussianBlur(image, narrow, cv::Size(0, 0), s, s, cv::BORDER_REPLICATE);
   cv::GaussianBlur(image, wide, cv::Size(0, 0), 2 * s, 2 * s, cv::BORDER_REPLICATE);
@@ -106,15 +145,18 @@ std::vector<SphereDetection> detect_spheres(const Image& im, const DetectionOpti
       const double mean_curvature = 0.5 * (dxx + dyy), spread = std::sqrt(0.25 * (dxx - dyy) * (dxx - dyy) + dxy * dxy);
       const double l_large = mean_curvature - spread, l_small = mean_curvature + spread;  // both < 0 for a bump
       if (!(l_small < 0) || l_small > o.min_roundness * l_large) continue;
-      candidates.push_back({Eigen::Vector2d(c + roi.x, r + roi.y), 0.0, d[c]});
+      candidates.push_back({Eigen::Vector2d(c + roi.x, r + roi.y), 0.0, d[c]});  // in the frame
     }
   }
   std::sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.response > b.response; });
   if (static_cast<int>(candidates.size()) > o.max_candidates) candidates.resize(static_cast<std::size_t>(o.max_candidates));
   std::vector<SphereDetection> detections;
+  const Eigen::Vector2d frame_origin(frame.x, frame.y);
   for (const auto& cand : candidates) {
     SphereDetection d = cand;
-    if (refine_centroid(im, cand.uv, o.radius_px, d)) detections.push_back(d);
+    if (!refine_centroid(centroid_image, cand.uv, o.radius_px, d)) continue;
+    d.uv += frame_origin;
+    detections.push_back(d);
   }
   return detections;
 }

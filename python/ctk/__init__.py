@@ -223,8 +223,9 @@ class CalibrationResult:
 def calibrate(scan: str | os.PathLike, *, min_spheres: int = 6, max_rms_px: float = 0.5, search_px: float = 40.0,
               image_only: bool = False, progress: Optional[Callable[[int, int], None]] = None) -> CalibrationResult:
     """`ctk calibrate` on a robot scan with a helix holder: every view's matrix from the spheres in
-    its image (the robot's forward kinematics as the first guess), an undeclared holder wall
-    measured from the images, the poses combined with the robot's prior unless image_only.
+    its image (the robot's forward kinematics as the first guess), an undeclared holder wall (or
+    its undeclared ends) measured from the images, the poses combined with the robot's prior
+    unless image_only.
     progress(done, total) after each view; Ctrl-C stops the batch (KeyboardInterrupt). Nothing is
     written: save the geometry with write_geometry."""
     d = _ctk._calibrate(os.fspath(scan), min_spheres, max_rms_px, search_px, image_only, progress)

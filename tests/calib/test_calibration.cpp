@@ -172,12 +172,6 @@ TEST(Calibration, KeepsItsAccuracyWithASampleInTheBeam) {
   EXPECT_LE(e.across_rms_mm, 0.01);
 }
 
-// Views with the holder's axis near the beam see the helix wind around itself, and every ray
-// runs nearly along the wall: the views a circular scan lacks and a spherical one exists for. A
-// cap of directions 2 to 24 deg from the axis (either end, spun about the beam), the robot base
-// 2.6 mm off: every view from 5 deg on is calibrated, wall declared or not. At 2 deg the tube is
-// seen end on through 118 mm of its wall, which hides the spheres in its ring: such a view may
-// be rejected, but only as one whose spheres cannot be found.
 // A scan that does not declare its holder's wall: the tube's radii from the calibrated views'
 // images (the reference holder: 25 and 28 mm), within 0.1 mm and within their stated uncertainty.
 TEST(Calibration, MeasuresAnUndeclaredHolderWallFromTheImages) {
@@ -196,6 +190,34 @@ TEST(Calibration, MeasuresAnUndeclaredHolderWallFromTheImages) {
   EXPECT_NEAR(m->wall.inner_radius_mm, truth.inner_radius_mm, 2 * m->inner_sigma_mm);
   EXPECT_NEAR(m->wall.outer_radius_mm, truth.outer_radius_mm, 2 * m->outer_sigma_mm);
   EXPECT_LE(std::max(m->inner_sigma_mm, m->outer_sigma_mm), 0.01);
+  // The ends (-59 and +59 mm) where the side views see the wall's shadow stop, within 0.1 mm and
+  // three stated standard deviations.
+  ASSERT_TRUE(m->wall.ends_mm && m->ends_sigma_mm);
+  std::cout << "ends measured in " << m->end_views << " views: " << m->wall.ends_mm->x() << " +- " << m->ends_sigma_mm->x()
+            << " and " << m->wall.ends_mm->y() << " +- " << m->ends_sigma_mm->y() << " mm\n";
+  EXPECT_GE(m->end_views, 10);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NEAR((*m->wall.ends_mm)(i), (*truth.ends_mm)(i), std::min(0.1, 3 * (*m->ends_sigma_mm)(i)));
+    EXPECT_LE((*m->ends_sigma_mm)(i), 0.03);
+  }
+}
+
+// A wall declared without its ends: the workflow measures them in side views and models them, and
+// the report says so; the declared radii stay as declared.
+TEST(Calibration, WorkflowMeasuresTheEndsOfAWallDeclaredWithoutThem) {
+  const auto dir = testing::scratch_dir();
+  simulate_scan(reference_scan(24), dir);
+  ScanDescription scan = read_scan(dir / "scan.json");
+  const Eigen::Vector2d truth = *scan.holder->wall->ends_mm;
+  scan.holder->wall->ends_mm.reset();
+  const CalibrationRun run = run_calibration(scan, {});
+  ASSERT_TRUE(run.wall && run.wall->wall.ends_mm);
+  EXPECT_LE((*run.wall->wall.ends_mm - truth).cwiseAbs().maxCoeff(), 0.1);
+  const nlohmann::json wall = run.report().at("holder_wall");
+  EXPECT_TRUE(wall.at("declared").get<bool>());
+  EXPECT_DOUBLE_EQ(wall.at("inner_radius_mm").get<double>(), scan.holder->wall->inner_radius_mm);
+  EXPECT_EQ(wall.at("measured").at("ends").at("ends_mm").size(), 2u);
+  EXPECT_NE(run.wall_and_prior().find("its ends measured"), std::string::npos) << run.wall_and_prior();
 }
 
 // The calibration workflow on a scan that does not declare its wall: measured first in a sample of
@@ -223,6 +245,12 @@ TEST(Calibration, WorkflowModelsAnUndeclaredWallAsIfDeclared) {
   EXPECT_NE(measured.report().at("holder_wall").at("measured"), nullptr);
 }
 
+// Views with the holder's axis near the beam see the helix wind around itself, and every ray
+// runs nearly along the wall: the views a circular scan lacks and a spherical one exists for. A
+// cap of directions 2 to 24 deg from the axis (either end, spun about the beam), the robot base
+// 2.6 mm off: every view is calibrated, with the wall and its ends declared, as an infinitely long
+// tube, or not declared. At 2 deg the tube is seen end on through 118 mm of its wall and the
+// spheres sit on the steep edge of its ring-shaped shadow.
 TEST(Calibration, CalibratesViewsAlongTheHolderAxisWallDeclaredOrNot) {
   const auto dir = testing::scratch_dir();
   ScanSimulation sim = reference_scan(1);
@@ -247,31 +275,30 @@ TEST(Calibration, CalibratesViewsAlongTheHolderAxisWallDeclaredOrNot) {
   std::vector<double> rotation_rms_deg;
   for (const ScanDescription* s : std::initializer_list<const ScanDescription*>{&scan, &infinite_tube, &wall_unknown}) {
     const ScanCalibration c = calibrate_scan(*s, {});
-    int required = 0, ok = 0;
+    int reached = 0, ok = 0;
     for (std::size_t v = 0; v < c.views.size(); ++v) {
       if (!sim.trajectory[v].joints) continue;
+      ++reached;
       const ViewCalibration& view = c.views[v];
       ok += view.status == ViewStatus::ok;
-      if (polar_deg[v] >= 5) {
-        ++required;
-        EXPECT_EQ(view.status, ViewStatus::ok) << "view " << v << ", " << polar_deg[v] << " deg from the axis: " << view.reason;
-      } else if (view.status != ViewStatus::ok) {
-        EXPECT_NE(view.reason.find("too few spheres"), std::string::npos) << view.reason;
-        EXPECT_NE(view.reason.find("deg from the holder axis"), std::string::npos) << view.reason;
-      }
+      EXPECT_EQ(view.status, ViewStatus::ok) << "view " << v << ", " << polar_deg[v] << " deg from the axis: " << view.reason;
     }
     const PoseErrors e = compare_with_truth(c, dir);
     rotation_rms_deg.push_back(e.rotation_rms_deg);
     std::cout << (!s->holder->wall           ? "wall not declared: "
                   : s->holder->wall->ends_mm ? "wall with its ends: "
                                              : "infinite tube: ")
-              << ok << " views calibrated, " << required << " of them 5 deg or more from the axis; across "
-              << e.across_rms_mm * 1000 << " um, rotation " << e.rotation_rms_deg << " deg RMS\n";
-    EXPECT_GE(required, 6);
-    EXPECT_LE(e.across_rms_mm, 0.015);
-    // Seen along its axis the pattern is a small ring: tilts are weakly fixed (0.026 deg RMS over
-    // these views with the wall's ends, 0.04-0.05 without them, against 0.011 side on).
-    EXPECT_LE(e.rotation_rms_deg, 0.1);
+              << ok << " of " << reached << " views calibrated; across " << e.across_rms_mm * 1000 << " um, rotation "
+              << e.rotation_rms_deg << " deg RMS\n";
+    EXPECT_GE(reached, 8);
+    // Seen along its axis the pattern is a small ring: tilts are weakly fixed (0.034 deg RMS over
+    // these views with the wall's ends, against 0.011 side on). Without the ends (no view here sees
+    // the tube from the side to measure them) the views within about 5 deg of the axis are
+    // calibrated without the wall's shadow, the ring's edges pull their spheres' centres: 53 um
+    // across and 0.16 deg RMS.
+    const bool ends = s->holder->wall && s->holder->wall->ends_mm;
+    EXPECT_LE(e.across_rms_mm, ends ? 0.015 : 0.08);
+    EXPECT_LE(e.rotation_rms_deg, ends ? 0.05 : 0.25);
   }
   // The wall's shadow between its ends pulls the spheres' centres least.
   EXPECT_LE(rotation_rms_deg[0], rotation_rms_deg[1]);

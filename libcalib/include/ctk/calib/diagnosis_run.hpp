@@ -27,7 +27,8 @@ struct DiagnosisRun {
   Diagnosis diagnosis;
   ScanDescription corrected;            // the scan with the accepted effects (and a measured wall) declared
   std::string repeatability;            // how the robot's repeatability was set, one line
-  std::optional<WallMeasurement> wall;  // measured, when the scan does not declare it
+  std::optional<WallMeasurement> wall;  // measured, when the scan does not declare it (or its ends)
+  bool wall_declared = false;           // the scan declared the wall's radii
   /// ctk-diagnosis/1 (the caller adds file names and pictures).
   nlohmann::json report() const;
   /// The baseline and each accepted effect, a line each.

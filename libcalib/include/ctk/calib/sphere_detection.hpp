@@ -3,6 +3,10 @@
 // difference-of-Gaussians tuned to the projected sphere size, kept when the image curves down in
 // every direction there (a sphere is a bump; the tube's silhouette edges are ridges), each refined to a sub-pixel centre by an
 // intensity-weighted centroid after removing a plane fitted to the surrounding ring.
+// Where the background is not locally planar (looking along the holder's axis, the tube's end-on
+// shadow is a ring a few sphere diameters wide with the spheres on its steep edge), the plane and
+// the filters' wide Gaussian see the edge, not the sphere; a median over a window two
+// sphere diameters across follows such edges and leaves the bumps, so it can be removed first.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <vector>
@@ -24,7 +28,10 @@ struct DetectionOptions {
   int max_candidates = 400;
   Eigen::AlignedBox2d region;  // the pixels searched, e.g. where a first guess puts the spheres
                                // with room for its error (empty: the whole image)
-  void validate() const;       // std::invalid_argument naming the field
+  /// Subtract a running median of the image before filtering, and take centroids on the
+  /// remainder (steep non-planar backgrounds; the centres are coarser, about 0.3 px).
+  bool edge_preserving_background = false;
+  void validate() const;  // std::invalid_argument naming the field
 };
 
 /// `line_integrals` is one view's image; returns the detections, strongest first.
