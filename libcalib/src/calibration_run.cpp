@@ -146,7 +146,7 @@ std::string CalibrationRun::brief() const {
 
 std::string CalibrationRun::wall_and_prior() const {
   std::ostringstream b;
-  if (has_holder) b << wall_line(declared_wall, wall) << "\n";
+  if (const std::string line = has_holder ? wall_line(declared_wall, wall) : ""; !line.empty()) b << line << "\n";
   if (prior.applied)
     b << "poses combined with the robot's prior over " << prior.views << " views: repeatability measured " << prior.sigma_mm
       << " mm, " << prior.sigma_deg << " deg; median rotation uncertainty " << prior.image_rotation_sigma_deg

@@ -176,9 +176,10 @@ struct EndSample {
 // The tube's end beyond the spheres on one side (-1: below the lowest, +1: above the highest) in
 // one view: the pixels whose rays pass within the wall's radii (never through the bore, where a
 // sample may be) and beyond the spheres' band on that side, each predicted by the view's fitted
-// tube cut at w = e; e chosen by least squares (Huber), first on a 0.5 mm grid out to the last
-// such pixel, then by golden section. None when the best end lies within 2 mm of where the view
-// stops seeing the tube (it runs off the detector) or the cut explains nothing.
+// tube cut at w = e; e chosen by least squares (Huber), on a 2 mm grid out to the last such
+// pixel, then 0.5 mm around its best node, then by golden section to 0.005 mm. None when the best
+// end lies within 2 mm of where the view stops seeing the tube (it runs off the detector) or the
+// cut explains nothing.
 std::optional<double> fit_end(const Holder& holder, const Image& image, const ViewCalibration& view, const TubeFit& tube,
                               int side) {
   const ProjectionMatrix& P = *view.P;
@@ -187,12 +188,12 @@ std::optional<double> fit_end(const Holder& holder, const Image& image, const Vi
   std::vector<Eigen::Vector2d> discs;
   for (const auto& X : holder.spheres_mm) discs.push_back(P.project(X));
   const ProjectionMatrix::Decomposition camera = P.decompose();
-  const double magnification = camera.intrinsics.K()(0, 0) / camera.T_camera_frame.translation().norm();
-  const double sphere_px = 0.5 * holder.sphere_diameter_mm * std::abs(magnification) + 3.0;
-  // Rays through pixels: the inverse of P's left 3 x 3 once, its sign making depths positive.
+  const double px_per_mm = camera.intrinsics.K()(0, 0) / camera.T_camera_frame.translation().norm();
+  const double sphere_px = 0.5 * holder.sphere_diameter_mm * std::abs(px_per_mm) + 3.0;
+  // Rays through pixels from the inverse of P's left 3 x 3, taken once (P is scaled to give
+  // positive depths, so M^-1 (u, v, 1) points away from the source, as ray_direction has it).
   const Eigen::Matrix3d M_inverse = P.matrix().leftCols<3>().inverse();
-  const double sign = P.matrix().block<1, 3>(2, 0).dot(M_inverse.col(2)) < 0 ? -1.0 : 1.0;
-  auto ray_through = [&](double u, double v) { return (sign * (M_inverse * Eigen::Vector3d(u, v, 1))).normalized(); };
+  auto ray_through = [&](double u, double v) { return (M_inverse * Eigen::Vector3d(u, v, 1)).normalized(); };
   std::vector<EndSample> samples;
   double farthest = band_edge;
   for (int v = 0; v < image.rows; ++v)
@@ -249,17 +250,18 @@ std::optional<double> fit_end(const Holder& holder, const Image& image, const Vi
     return sum;
   };
   // The cost grows about linearly with the distance from the true end (the pixels between them
-  // predicted wrong): a 2 mm grid, then 0.5 mm around its best node.
+  // predicted wrong): a coarse grid, then a fine one around its best node.
+  constexpr double kCoarseMm = 2.0, kFineMm = 0.5;
   double best_end = band_edge, best = cost(band_edge);
-  for (double e = band_edge + side * 2.0; side * (e - farthest) < 0; e += side * 2.0)
+  for (double e = band_edge + side * kCoarseMm; side * (e - farthest) < 0; e += side * kCoarseMm)
     if (const double c = cost(e); c < best) best = c, best_end = e;
-  for (const double e : {best_end - 1.5, best_end - 1.0, best_end - 0.5, best_end + 0.5, best_end + 1.0, best_end + 1.5})
+  const double coarse_best = best_end;
+  for (double e = coarse_best - kCoarseMm + kFineMm; e < coarse_best + kCoarseMm; e += kFineMm)
     if (side * (e - band_edge) >= 0 && side * (e - farthest) < 0)
       if (const double c = cost(e); c < best) best = c, best_end = e;
-  constexpr double kGridMm = 0.5;
   if (side * (farthest - best_end) < 2 || !(best < cost(farthest + side * 1e6))) return std::nullopt;
-  // Golden section over the grid step either side of the best node.
-  double lo = best_end - kGridMm, hi = best_end + kGridMm;
+  // Golden section over the fine step either side of the best node.
+  double lo = best_end - kFineMm, hi = best_end + kFineMm;
   const double g = 0.5 * (std::sqrt(5.0) - 1);
   double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = cost(x1), f2 = cost(x2);
   while (hi - lo > 0.005) {
