@@ -26,9 +26,9 @@ bool grazes_wall(const Eigen::Vector3d& sphere, const Eigen::Vector3d& source) {
   return std::abs(radial.normalized().dot(across.normalized())) < kGrazingCosine;
 }
 
-// Looking within a few degrees of the holder's axis, the spheres sit in the wall's end-on shadow
-// (rays running tens of mm inside the tube), where no detector tells them from it: the reason
-// then says how close to the axis the first guess looks.
+// Looking within a few degrees of the holder's axis, the spheres sit on the steep edge of the
+// wall's end-on shadow (rays running tens of mm inside the tube), where even the search over the
+// running median may find too few: the reason then says how close to the axis the first guess looks.
 std::string along_the_axis_note(const Rigid& T_camera_holder) {
   constexpr double kNearAxisDeg = 10;
   const double angle = std::acos(std::min(1.0, std::abs(T_camera_holder.linear().col(2).z()))) * 180 / M_PI;
@@ -36,7 +36,7 @@ std::string along_the_axis_note(const Rigid& T_camera_holder) {
   std::ostringstream note;
   note.precision(2);
   note << std::fixed << "; the first guess looks " << angle
-       << " deg from the holder axis, where the tube carrying the spheres, seen end on, hides them in its shadow";
+       << " deg from the holder axis, where the tube, seen end on, puts the spheres on the steep edge of its shadow";
   return note.str();
 }
 
