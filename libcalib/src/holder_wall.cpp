@@ -169,22 +169,23 @@ struct RayInWall {
 struct EndSample {
   std::vector<RayInWall> rays;  // rays_per_pixel of them
   double mean_d = 0, p = 0;
-  double low = 1e300, high = -1e300;     // the w its rays spend in the wall
-  double loss_whole = 0, loss_none = 0;  // the wall all on the tube's side of the end, or none
+  double low = 1e300, high = -1e300;  // the w its rays spend in the wall
 };
 
-// The tube's end beyond the spheres on one side (-1: below the lowest, +1: above the highest) in
-// one view: the pixels whose rays pass within the wall's radii (never through the bore, where a
-// sample may be) and beyond the spheres' band on that side, each predicted by the view's fitted
-// tube cut at w = e; e chosen by least squares (Huber), on a 2 mm grid out to the last such
-// pixel, then 0.5 mm around its best node, then by golden section to 0.005 mm. None when the best
-// end lies within 2 mm of where the view stops seeing the tube (it runs off the detector) or the
-// cut explains nothing.
-std::optional<double> fit_end(const Holder& holder, const Image& image, const ViewCalibration& view, const TubeFit& tube,
-                              int side) {
+// The pixels beyond one end of the spheres' band whose rays pass within the wall's radii (never
+// through the bore, where a sample may be), and how far along the axis the last of them looks.
+struct EndSamples {
+  std::vector<EndSample> samples;
+  double farthest = 0;
+};
+
+// Both ends' pixels of one view in one pass over the detector: [0] below the lowest sphere, [1]
+// above the highest.
+std::array<EndSamples, 2> end_samples(const Holder& holder, const Image& image, const ViewCalibration& view,
+                                      const TubeFit& tube) {
   const ProjectionMatrix& P = *view.P;
   const Eigen::Vector3d source = P.source_position();
-  const double band_edge = side < 0 ? holder.tau_min() : holder.tau_max();
+  const double band_low = holder.tau_min(), band_high = holder.tau_max();
   std::vector<Eigen::Vector2d> discs;
   for (const auto& X : holder.spheres_mm) discs.push_back(P.project(X));
   const ProjectionMatrix::Decomposition camera = P.decompose();
@@ -194,8 +195,9 @@ std::optional<double> fit_end(const Holder& holder, const Image& image, const Vi
   // positive depths, so M^-1 (u, v, 1) points away from the source, as ray_direction has it).
   const Eigen::Matrix3d M_inverse = P.matrix().leftCols<3>().inverse();
   auto ray_through = [&](double u, double v) { return (M_inverse * Eigen::Vector3d(u, v, 1)).normalized(); };
-  std::vector<EndSample> samples;
-  double farthest = band_edge;
+  std::array<EndSamples, 2> ends;
+  ends[0].farthest = band_low;
+  ends[1].farthest = band_high;
   for (int v = 0; v < image.rows; ++v)
     for (int u = 0; u < image.cols; ++u) {
       // The ray's closest approach to the axis: its distance d and where along the axis.
@@ -205,7 +207,7 @@ std::optional<double> fit_end(const Holder& holder, const Image& image, const Vi
       const double s = (-source.dot(ray) + b * source.z()) / denominator;
       const Eigen::Vector3d closest = source + s * ray;
       const double d = closest.head<2>().norm(), along = closest.z();
-      if (d < tube.inner || d > tube.outer || side * (along - band_edge) < 0) continue;
+      if (d < tube.inner || d > tube.outer || (along >= band_low && along <= band_high)) continue;
       const Eigen::Vector2d pixel(u, v);
       if (std::any_of(discs.begin(), discs.end(), [&](const Eigen::Vector2d& c) { return (c - pixel).norm() < sphere_px; }))
         continue;
@@ -219,33 +221,49 @@ std::optional<double> fit_end(const Holder& holder, const Image& image, const Vi
           sample.low = std::min(sample.low, r.stretches[static_cast<std::size_t>(i)].low);
           sample.high = std::max(sample.high, r.stretches[static_cast<std::size_t>(i)].high);
         }
-      samples.push_back(std::move(sample));
-      farthest = side < 0 ? std::min(farthest, along) : std::max(farthest, along);
+      EndSamples& end = ends[along < band_low ? 0 : 1];
+      end.samples.push_back(std::move(sample));
+      end.farthest = along < band_low ? std::min(end.farthest, along) : std::max(end.farthest, along);
     }
+  return ends;
+}
+
+// The tube's end beyond the spheres on one side (-1: below the lowest, +1: above the highest) in
+// one view: each of that end's pixels (end_samples) predicted by the view's fitted tube cut at
+// w = e; e chosen by least squares (Huber), on a 2 mm grid out to the last such pixel, then
+// 0.5 mm around its best node, then by golden section to 0.005 mm. None when the best end lies
+// within 2 mm of where the view stops seeing the tube (it runs off the detector) or the cut
+// explains nothing.
+std::optional<double> fit_end(const EndSamples& pixels, const TubeFit& tube, double band_edge, int side) {
+  const std::vector<EndSample>& samples = pixels.samples;
+  const double farthest = pixels.farthest;
   if (samples.size() < 100) return std::nullopt;
   const double huber = tube.robust_scale;
-  auto loss = [&](const EndSample& s, double end) {
+  auto loss = [&](const EndSample& s, double cut) {
     double transmission = 0;
-    for (const RayInWall& r : s.rays) transmission += std::exp(-tube.mu * r.chord(end, side));
+    for (const RayInWall& r : s.rays) transmission += std::exp(-tube.mu * r.chord(cut, side));
     const double residual = s.p - (tube.b0 + tube.b1 * (s.mean_d - tube.outer) - std::log(transmission / rays_per_pixel));
     const double a = std::abs(residual);
     return a <= huber ? residual * residual : huber * (2 * a - huber);
   };
   // An end beyond a pixel's stretch of wall leaves all of it or none: those two losses once, so a
   // trial end computes only the pixels whose wall it cuts.
-  for (EndSample& s : samples) {
-    s.loss_whole = loss(s, side < 0 ? s.low - 1 : s.high + 1);
-    s.loss_none = loss(s, side < 0 ? s.high + 1 : s.low - 1);
+  std::vector<double> loss_whole(samples.size()), loss_none(samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const EndSample& s = samples[i];
+    loss_whole[i] = loss(s, side < 0 ? s.low - 1 : s.high + 1);
+    loss_none[i] = loss(s, side < 0 ? s.high + 1 : s.low - 1);
   }
-  auto cost = [&](double end) {
+  auto cost = [&](double e) {
     double sum = 0;
-    for (const EndSample& s : samples) {
-      if (end <= s.low)
-        sum += side < 0 ? s.loss_whole : s.loss_none;
-      else if (end >= s.high)
-        sum += side < 0 ? s.loss_none : s.loss_whole;
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const EndSample& s = samples[i];
+      if (e <= s.low)
+        sum += side < 0 ? loss_whole[i] : loss_none[i];
+      else if (e >= s.high)
+        sum += side < 0 ? loss_none[i] : loss_whole[i];
       else
-        sum += loss(s, end);
+        sum += loss(s, e);
     }
     return sum;
   };
@@ -319,8 +337,9 @@ std::optional<WallMeasurement> measure_holder_wall(const ScanDescription& scan, 
     const Image image = read_line_integrals(scan, v, flat_dark);
     const auto tube = fit_view(wall_samples(scan, image, view, helix_radius), helix_radius);
     if (!tube) return;
-    const auto lower_end = fit_end(*scan.holder, image, view, *tube, -1),
-               upper_end = fit_end(*scan.holder, image, view, *tube, 1);
+    const std::array<EndSamples, 2> ends = end_samples(*scan.holder, image, view, *tube);
+    const auto lower_end = fit_end(ends[0], *tube, scan.holder->tau_min(), -1),
+               upper_end = fit_end(ends[1], *tube, scan.holder->tau_max(), 1);
     const double scale = view.translation_sigma_mm[2] / view.P->decompose().T_camera_frame.translation().norm();
     const std::lock_guard<std::mutex> lock(found);
     inner.push_back(tube->inner);
