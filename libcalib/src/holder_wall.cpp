@@ -48,47 +48,65 @@ struct TubeResidual {
   }
 };
 
+// One view's rays in the holder frame: through a pixel (or a point within one), where such a ray
+// passes closest to the holder's axis, and whether a pixel lies on a sphere's disc.
+class ViewRays {
+ public:
+  ViewRays(const Holder& holder, const ProjectionMatrix& P)
+      // P is scaled to give positive depths, so M^-1 (u, v, 1) points away from the source (as
+      // ray_direction has it); the inverse is taken once.
+      : source_(P.source_position()), M_inverse_(P.matrix().leftCols<3>().inverse()) {
+    for (const auto& X : holder.spheres_mm) discs_.push_back(P.project(X));
+    const ProjectionMatrix::Decomposition camera = P.decompose();
+    const double px_per_mm = std::abs(camera.intrinsics.K()(0, 0)) / camera.T_camera_frame.translation().norm();
+    disc_px_ = 0.5 * holder.sphere_diameter_mm * px_per_mm + 3.0;
+  }
+
+  const Eigen::Vector3d& source() const { return source_; }
+  Eigen::Vector3d ray(double u, double v) const { return (M_inverse_ * Eigen::Vector3d(u, v, 1)).normalized(); }
+
+  struct Approach {
+    double d = 0, along = 0;  // distance to the axis and where along it (mm)
+    double sine = 0;          // of the ray's angle to the axis
+  };
+  /// None for a ray (nearly) along the axis.
+  std::optional<Approach> approach(const Eigen::Vector3d& ray) const {
+    const double b = ray.z(), denominator = 1 - b * b;
+    if (denominator < 1e-6) return std::nullopt;
+    const Eigen::Vector3d closest = source_ + ((-source_.dot(ray) + b * source_.z()) / denominator) * ray;
+    return Approach{closest.head<2>().norm(), closest.z(), std::sqrt(denominator)};
+  }
+
+  bool on_a_sphere(const Eigen::Vector2d& pixel) const {
+    return std::any_of(discs_.begin(), discs_.end(), [&](const Eigen::Vector2d& c) { return (c - pixel).norm() < disc_px_; });
+  }
+
+  /// The point k of a pixel's 2 x 2 rays.
+  static Eigen::Vector2d sub_ray(int u, int v, int k) { return {u + (k % 2 - 0.5) / 2, v + (k / 2 - 0.5) / 2}; }
+
+ private:
+  Eigen::Vector3d source_;
+  Eigen::Matrix3d M_inverse_;
+  std::vector<Eigen::Vector2d> discs_;
+  double disc_px_ = 0;
+};
+
 // The pixels of one view near the tube, between the first and the last sphere along the axis and
 // off every sphere's disc.
-std::vector<WallSample> wall_samples(const ScanDescription& scan, const Image& image, const ViewCalibration& view,
-                                     double helix_radius) {
-  const Holder& holder = *scan.holder;
-  // The view's own camera (a declared drift moves its principal point) and pose in it.
-  const ProjectionMatrix::Decomposition camera = view.P->decompose();
-  const Eigen::Matrix3d K_inverse = camera.intrinsics.K().inverse();
-  const Rigid& T = camera.T_camera_frame;
-  const Eigen::Vector3d origin = T.translation(), axis = T.linear().col(2);
-  double z_min = 1e300, z_max = -1e300;
-  for (const auto& X : holder.spheres_mm) z_min = std::min(z_min, X.z()), z_max = std::max(z_max, X.z());
-  const double margin = 0.15 * (z_max - z_min);
-  const double magnification = scan.source_to_detector_mm / origin.norm();
-  const double sphere_px = 0.5 * holder.sphere_diameter_mm * magnification / scan.detector.pitch_u_mm + 3.0;
-  std::vector<Eigen::Vector2d> discs;
-  for (const auto& X : holder.spheres_mm) discs.push_back(view.P->project(X));
+std::vector<WallSample> wall_samples(const Holder& holder, const Image& image, const ViewCalibration& view, double helix_radius) {
+  const ViewRays rays(holder, *view.P);
+  const double z_min = holder.tau_min(), z_max = holder.tau_max(), margin = 0.15 * (z_max - z_min);
   std::vector<WallSample> out;
   for (int v = 0; v < image.rows; v += 2)
     for (int u = 0; u < image.cols; u += 2) {
-      // Closest approach of a ray (through the focal spot) and the axis line.
-      auto closest = [&](double pu, double pv, double& along, double& denominator) {
-        const Eigen::Vector3d ray = (K_inverse * Eigen::Vector3d(pu, pv, 1)).normalized();
-        const double b = ray.dot(axis), e = axis.dot(origin), f = ray.dot(origin);
-        denominator = 1 - b * b;
-        const double s = (f - b * e) / denominator;
-        along = (b * f - e) / denominator;
-        return (s * ray - (origin + along * axis)).norm();
-      };
-      double t = 0, denominator = 0;
-      const double d = closest(u, v, t, denominator);
-      if (denominator < 1e-6 || t < z_min + margin || t > z_max - margin) continue;
-      if (d < 0.6 * helix_radius || d > 1.4 * helix_radius) continue;
-      const Eigen::Vector2d pixel(u, v);
-      if (std::any_of(discs.begin(), discs.end(), [&](const Eigen::Vector2d& c) { return (c - pixel).norm() < sphere_px; }))
-        continue;
-      WallSample sample{{}, 1 / std::sqrt(denominator), image.pixels[static_cast<std::size_t>(v) * image.cols + u]};
+      const auto a = rays.approach(rays.ray(u, v));
+      if (!a || a->along < z_min + margin || a->along > z_max - margin) continue;
+      if (a->d < 0.6 * helix_radius || a->d > 1.4 * helix_radius || rays.on_a_sphere({u, v})) continue;
+      WallSample sample{{}, 1 / a->sine, image.pixels[static_cast<std::size_t>(v) * image.cols + u]};
       for (int k = 0; k < rays_per_pixel; ++k) {
-        double ignored_t = 0, ignored_denominator = 0;
-        sample.d[static_cast<std::size_t>(k)] =
-            closest(u + (k % 2 - 0.5) / 2, v + (k / 2 - 0.5) / 2, ignored_t, ignored_denominator);
+        const Eigen::Vector2d sub = ViewRays::sub_ray(u, v, k);
+        const auto sub_approach = rays.approach(rays.ray(sub.x(), sub.y()));
+        sample.d[static_cast<std::size_t>(k)] = sub_approach ? sub_approach->d : a->d;
       }
       out.push_back(sample);
     }
@@ -183,47 +201,31 @@ struct EndSamples {
 // above the highest.
 std::array<EndSamples, 2> end_samples(const Holder& holder, const Image& image, const ViewCalibration& view,
                                       const TubeFit& tube) {
-  const ProjectionMatrix& P = *view.P;
-  const Eigen::Vector3d source = P.source_position();
+  const ViewRays rays(holder, *view.P);
   const double band_low = holder.tau_min(), band_high = holder.tau_max();
-  std::vector<Eigen::Vector2d> discs;
-  for (const auto& X : holder.spheres_mm) discs.push_back(P.project(X));
-  const ProjectionMatrix::Decomposition camera = P.decompose();
-  const double px_per_mm = camera.intrinsics.K()(0, 0) / camera.T_camera_frame.translation().norm();
-  const double sphere_px = 0.5 * holder.sphere_diameter_mm * std::abs(px_per_mm) + 3.0;
-  // Rays through pixels from the inverse of P's left 3 x 3, taken once (P is scaled to give
-  // positive depths, so M^-1 (u, v, 1) points away from the source, as ray_direction has it).
-  const Eigen::Matrix3d M_inverse = P.matrix().leftCols<3>().inverse();
-  auto ray_through = [&](double u, double v) { return (M_inverse * Eigen::Vector3d(u, v, 1)).normalized(); };
   std::array<EndSamples, 2> ends;
   ends[0].farthest = band_low;
   ends[1].farthest = band_high;
   for (int v = 0; v < image.rows; ++v)
     for (int u = 0; u < image.cols; ++u) {
-      // The ray's closest approach to the axis: its distance d and where along the axis.
-      const Eigen::Vector3d ray = ray_through(u, v);
-      const double b = ray.z(), denominator = 1 - b * b;
-      if (denominator < 1e-6) continue;
-      const double s = (-source.dot(ray) + b * source.z()) / denominator;
-      const Eigen::Vector3d closest = source + s * ray;
-      const double d = closest.head<2>().norm(), along = closest.z();
-      if (d < tube.inner || d > tube.outer || (along >= band_low && along <= band_high)) continue;
-      const Eigen::Vector2d pixel(u, v);
-      if (std::any_of(discs.begin(), discs.end(), [&](const Eigen::Vector2d& c) { return (c - pixel).norm() < sphere_px; }))
-        continue;
+      const auto a = rays.approach(rays.ray(u, v));
+      if (!a || a->d < tube.inner || a->d > tube.outer || (a->along >= band_low && a->along <= band_high)) continue;
+      if (rays.on_a_sphere({u, v})) continue;
       EndSample sample;
-      for (int k = 0; k < rays_per_pixel; ++k)
-        sample.rays.emplace_back(source, ray_through(u + (k % 2 - 0.5) / 2, v + (k / 2 - 0.5) / 2), tube.inner, tube.outer);
-      sample.mean_d = d;
+      for (int k = 0; k < rays_per_pixel; ++k) {
+        const Eigen::Vector2d sub = ViewRays::sub_ray(u, v, k);
+        sample.rays.emplace_back(rays.source(), rays.ray(sub.x(), sub.y()), tube.inner, tube.outer);
+      }
+      sample.mean_d = a->d;
       sample.p = image.pixels[static_cast<std::size_t>(v) * static_cast<std::size_t>(image.cols) + static_cast<std::size_t>(u)];
       for (const RayInWall& r : sample.rays)
         for (int i = 0; i < r.count; ++i) {
           sample.low = std::min(sample.low, r.stretches[static_cast<std::size_t>(i)].low);
           sample.high = std::max(sample.high, r.stretches[static_cast<std::size_t>(i)].high);
         }
-      EndSamples& end = ends[along < band_low ? 0 : 1];
+      EndSamples& end = ends[a->along < band_low ? 0 : 1];
       end.samples.push_back(std::move(sample));
-      end.farthest = along < band_low ? std::min(end.farthest, along) : std::max(end.farthest, along);
+      end.farthest = a->along < band_low ? std::min(end.farthest, a->along) : std::max(end.farthest, a->along);
     }
   return ends;
 }
@@ -335,7 +337,7 @@ std::optional<WallMeasurement> measure_holder_wall(const ScanDescription& scan, 
     const int v = chosen[static_cast<std::size_t>(i)];
     const ViewCalibration& view = c.views[static_cast<std::size_t>(v)];
     const Image image = read_line_integrals(scan, v, flat_dark);
-    const auto tube = fit_view(wall_samples(scan, image, view, helix_radius), helix_radius);
+    const auto tube = fit_view(wall_samples(*scan.holder, image, view, helix_radius), helix_radius);
     if (!tube) return;
     const std::array<EndSamples, 2> ends = end_samples(*scan.holder, image, view, *tube);
     const auto lower_end = fit_end(ends[0], *tube, scan.holder->tau_min(), -1),
