@@ -3,9 +3,13 @@
 //   ctk import circular  — a circular orbit by its numbers (SOD, SDD, pitch, angles, principal point, sense)
 //   ctk import cone-vec  — per-view ASTRA cone_vec rows (e.g. a CWI ".geom" file)
 //   ctk import rtk       — RTK's geometry XML (RTKThreeDCircularGeometry)
+//   ctk import nxtomo    — an HDF5/NeXus NXtomo file (frames copied out as TIFF)
+//   ctk import nikon     — a Nikon .xtekct file beside its TIFF projections
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -17,7 +21,11 @@
 #include "ctk/geom/geometry_summary.hpp"
 #include "ctk/geom/rtk_geometry.hpp"
 #include "ctk/geom/scan_import.hpp"
+#include "ctk/core/file_names.hpp"
 #include "ctk/core/image_io.hpp"
+#include "ctk/core/nexus_tomo.hpp"
+#include "ctk/geom/nikon_xtekct.hpp"
+#include "ctk/geom/nxtomo_import.hpp"
 
 namespace ctk::tools {
 
@@ -48,6 +56,19 @@ struct ConeVecOptions : ProjectionOptions {
   std::string orientation = "as-described";
 };
 
+struct NxTomoOptions {
+  fs::path nexus, out;
+  std::string entry, kind = "counts";
+  std::optional<double> sod, sdd;
+  std::vector<double> pitch, principal_point;
+  int sense = 1;
+};
+
+struct NikonOptions {
+  fs::path xtekct, out;
+  int sense = 1;
+};
+
 struct RtkOptions : ProjectionOptions {
   fs::path geometry;
   std::string rows;  // empty: what the file's ctk comment names, else as-stored
@@ -74,7 +95,16 @@ void add_projection_options(CLI::App* cmd, ProjectionOptions& o, bool pitch_requ
 ProjectionSet projection_set(const ProjectionOptions& o) {
   ProjectionSet p;
   const bool pattern = o.files.size() == 1 && o.files.front().find('%') != std::string::npos;
-  if (pattern) {
+  if (o.files.size() == 1 && is_glob(o.files.front())) {
+    // A quoted glob: the files it matches in natural order (a shell's own glob sorts 10 before 2).
+    const fs::path glob(o.files.front());
+    for (const fs::path& f : matching_files(glob.parent_path(), glob.filename().string())) p.file_names.push_back(f.string());
+    if (p.file_names.empty()) throw InputError("--files", "", "no file matches '" + o.files.front() + "'");
+    p.count = static_cast<int>(p.file_names.size());
+    if (o.count > 0 && o.count != p.count)
+      throw InputError("--count", "",
+                       std::to_string(o.count) + " but '" + o.files.front() + "' matches " + std::to_string(p.count) + " files");
+  } else if (pattern) {
     if (o.count <= 0) throw InputError("--files", "", "a printf pattern needs --count");
     p.files_pattern = o.files.front();
     p.count = o.count;
@@ -216,6 +246,96 @@ void run_rtk(const RtkOptions& o) {
   finish(import_matrices(detector, matrices, projections, o.out), o.out, "--geometry", o.geometry);
 }
 
+// The scan's files written together (frames, matrices, scan), then read back as every command will.
+void publish_scan(const std::function<ImportedScan()>& write_frames, const fs::path& out) {
+  ImportedScan imported;
+  {
+    OutputSet outputs;
+    imported = write_frames();
+    write_imported_scan(imported, out);
+    outputs.publish();
+  }
+  const ScanDescription check = read_scan(out);
+  for (const auto& w : check.warnings) std::cerr << "warning: " << w << "\n";
+  std::cout << "wrote " << out.string() << " (" << check.projections.count << " views, detector " << check.detector.cols << " x "
+            << check.detector.rows << ") and " << check.resolve(check.matrices->file).string() << "\n"
+            << to_text(summarize_geometry(imported.geometry));
+}
+
+void run_nxtomo(const NxTomoOptions& o) {
+  const NxTomo scan = read_nxtomo(o.nexus, o.entry);
+  NxTomoSetup setup;
+  setup.source_to_axis_mm = o.sod;
+  setup.source_to_detector_mm = o.sdd;
+  if (!o.pitch.empty()) setup.pitch_mm = Eigen::Vector2d(o.pitch.front(), o.pitch.back());
+  if (!o.principal_point.empty()) setup.principal_point_px = Eigen::Vector2d(o.principal_point[0], o.principal_point[1]);
+  setup.sense = o.sense;
+  setup.line_integrals = o.kind == "line_integrals";
+  const NxTomoPlan plan = plan_nxtomo_import(scan, setup);
+  if (!(plan.orbit.source_to_axis_mm < plan.orbit.source_to_detector_mm))
+    throw InputError("--sod", "",
+                     "the rotation axis must lie between the source and the detector (source to axis " +
+                         std::to_string(plan.orbit.source_to_axis_mm) + " mm, to the detector " +
+                         std::to_string(plan.orbit.source_to_detector_mm) + " mm)");
+  std::cout << o.nexus.string() << " " << scan.entry << ": " << scan.frames << " frames of " << scan.cols << " x " << scan.rows
+            << " (" << plan.projections.size() << " projections, " << plan.flats.size() << " flats, " << plan.darks.size()
+            << " darks)\n";
+  for (const std::string& n : plan.notes) std::cout << "  " << n << "\n";
+  const fs::path frames = fs::absolute(o.out).parent_path() / (o.out.stem().string() + ".frames");
+  RunFiles files;
+  files.input("--nexus", o.nexus);
+  files.output("--out", o.out);
+  files.output("the matrices beside --out", fs::absolute(o.out).parent_path() / (o.out.stem().string() + ".matrices.json"));
+  files.output_folder("the frames beside --out", frames);
+  files.check();
+  publish_scan(
+      [&] {
+        return import_nxtomo(scan, plan, o.out, [](int written, int total) {
+          if (written == total || written % 50 == 0)
+            std::cout << "\r  frames " << written << " of " << total << (written == total ? "\n" : "") << std::flush;
+        });
+      },
+      o.out);
+}
+
+void run_nikon(const NikonOptions& o) {
+  const NikonScan scan = read_xtekct(o.xtekct);
+  const std::vector<fs::path> images = nikon_projection_files(scan);
+  for (const std::string& w : scan.warnings) std::cerr << "warning: " << w << "\n";
+  std::cout << o.xtekct.string() << ": " << scan.projections << " projections in " << scan.input_folder.string()
+            << ", white level " << scan.white_level << "\n";
+  ProjectionSet set;
+  for (const fs::path& f : images) set.file_names.push_back(f.string());
+  set.count = scan.projections;
+  set.kind = ProjectionKind::counts;
+  const std::string stem = o.out.stem().string();
+  const fs::path folder = fs::absolute(o.out).parent_path();
+  set.flat = {(folder / (stem + ".white-level.tif")).string()};
+  set.dark = {(folder / (stem + ".zero-dark.tif")).string()};
+  ImportedScan imported = import_matrices(scan.detector, nikon_matrices(scan, o.sense), set, o.out);
+  check_images(imported.scan);
+  RunFiles files;
+  files.input("--xtekct", o.xtekct);
+  for (int v = 0; v < set.count; ++v)
+    files.input("--xtekct: projection " + std::to_string(v), images[static_cast<std::size_t>(v)]);
+  files.output("--out", o.out);
+  files.output("the matrices beside --out", imported.scan.resolve(imported.scan.matrices->file));
+  files.output("the white level beside --out", set.flat.front());
+  files.output("the zero dark beside --out", set.dark.front());
+  files.check();
+  publish_scan(
+      [&] {
+        // Nikon normalises by one white level and no dark: both as images, so the scan stays ctk-scan/1.
+        const std::size_t n = static_cast<std::size_t>(scan.detector.cols) * static_cast<std::size_t>(scan.detector.rows);
+        write_image_float(
+            Image{scan.detector.cols, scan.detector.rows, std::vector<float>(n, static_cast<float>(scan.white_level))},
+            set.flat.front());
+        write_image_uint16(Image{scan.detector.cols, scan.detector.rows, std::vector<float>(n, 0.0f)}, set.dark.front());
+        return imported;
+      },
+      o.out);
+}
+
 }  // namespace
 
 void register_import(CLI::App& app) {
@@ -269,6 +389,41 @@ void register_import(CLI::App& app) {
                   "(y = ((rows - 1) / 2 - v) pitch); default: what a file written by ctk names, else as-stored")
       ->check(CLI::IsMember({"as-stored", "flipped"}));
   rtk->callback([r] { run_rtk(*r); });
+
+  auto n = std::make_shared<NxTomoOptions>();
+  CLI::App* nxtomo = cmd->add_subcommand(
+      "nxtomo",
+      "An HDF5/NeXus NXtomo file: projections, flats and darks by image key, a circular orbit from the rotation angles; "
+      "the frames are copied out as TIFF into <out stem>.frames/. NeXus' frame: the sample turns right-handed about the "
+      "vertical by the angle, columns run along +x (to the left looking downstream), row 0 at the top");
+  nxtomo->add_option("--nexus", n->nexus, "The NXtomo file (.nx, .nxs, .h5)")->required()->check(CLI::ExistingFile);
+  nxtomo->add_option("--out", n->out, "scan.json to write (the matrices go beside it as <stem>.matrices.json)")->required();
+  nxtomo->add_option("--entry", n->entry, "The NXentry to read (default: the first whose definition is NXtomo)");
+  nxtomo->add_option("--sod", n->sod, "Source to rotation axis, mm (default: |instrument/source/distance|)")
+      ->check(positive_number);
+  nxtomo->add_option("--sdd", n->sdd, "Source to detector, mm (default: SOD + instrument/detector/distance)")
+      ->check(positive_number);
+  nxtomo->add_option("--pitch", n->pitch, "Pixel pitch in mm: one value or u v (default: the detector's x/y_pixel_size)")
+      ->expected(1, 2)
+      ->check(positive_number);
+  nxtomo->add_option("--principal-point", n->principal_point, "u0 v0 in pixels (default: the detector centre)")->expected(2);
+  nxtomo->add_option("--sense", n->sense, "Rotation sense, +1 or -1")->check(CLI::IsMember({1, -1}))->capture_default_str();
+  nxtomo->add_option("--kind", n->kind, "counts (normalised by the flat and dark frames) or line_integrals")
+      ->check(CLI::IsMember({"counts", "line_integrals"}))
+      ->capture_default_str();
+  nxtomo->callback([n] { run_nxtomo(*n); });
+
+  auto k = std::make_shared<NikonOptions>();
+  CLI::App* nikon = cmd->add_subcommand(
+      "nikon",
+      "A Nikon (X-Tek) scan: its .xtekct file and the <Name>_NNNN.tif projections beside it, placed as CIL's reader "
+      "documents (axis offset, tilt and roll included), counts normalised by the white level");
+  nikon->add_option("--xtekct", k->xtekct, "The .xtekct file")->required()->check(CLI::ExistingFile);
+  nikon->add_option("--out", k->out, "scan.json to write (the matrices go beside it as <stem>.matrices.json)")->required();
+  nikon->add_option("--sense", k->sense, "+1 as the file states, -1 the sample turning the other way")
+      ->check(CLI::IsMember({1, -1}))
+      ->capture_default_str();
+  nikon->callback([k] { run_nikon(*k); });
 }
 
 }  // namespace ctk::tools

@@ -9,33 +9,17 @@
 
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/error.hpp"
+#include "hdf5_handle.hpp"
 #include "volume_formats.hpp"
 
 namespace ctk::volume_formats {
 
 namespace fs = std::filesystem;
 
+using hdf5::Handle;
+using hdf5::quiet_library;
+
 namespace {
-
-// One HDF5 identifier, closed by the function that matches its kind.
-class Handle {
- public:
-  Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
-  Handle(const Handle&) = delete;
-  Handle& operator=(const Handle&) = delete;
-  ~Handle() {
-    if (id_ >= 0) close_(id_);
-  }
-  hid_t get() const { return id_; }
-  bool valid() const { return id_ >= 0; }
-
- private:
-  hid_t id_;
-  herr_t (*close_)(hid_t);
-};
-
-// The library prints its error stack to stderr by default; ctk reports errors itself.
-void quiet_library() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 
 void write_vector_attribute(hid_t dataset, const char* name, const Eigen::Vector3d& value) {
   const hsize_t three = 3;

@@ -1,0 +1,265 @@
+// NXtomo through the HDF Group's C library. Where the definition leaves a choice, readers in the
+// field (CIL, tomwer) take the frames as [frames][rows][cols] and the angle in degrees; so does this.
+#include "ctk/core/nexus_tomo.hpp"
+
+#include <array>
+#include <cmath>
+
+#include "ctk/core/error.hpp"
+#include "hdf5_handle.hpp"
+
+namespace ctk {
+
+namespace fs = std::filesystem;
+
+using hdf5::Handle;
+
+namespace {
+
+bool exists(hid_t location, const std::string& path) {
+  // H5Lexists checks one link at a time: every parent must exist before a child is asked for.
+  std::size_t from = path.front() == '/' ? 1 : 0;
+  while (true) {
+    const std::size_t slash = path.find('/', from);
+    const std::string prefix = path.substr(0, slash);
+    if (H5Lexists(location, prefix.c_str(), H5P_DEFAULT) <= 0) return false;
+    if (slash == std::string::npos) return true;
+    from = slash + 1;
+  }
+}
+
+// A string attribute or dataset (fixed or variable length), or "" when it is not a string.
+std::string read_string(hid_t object, bool attribute) {
+  const Handle type(attribute ? H5Aget_type(object) : H5Dget_type(object), H5Tclose);
+  if (!type.valid() || H5Tget_class(type.get()) != H5T_STRING) return {};
+  const Handle space(attribute ? H5Aget_space(object) : H5Dget_space(object), H5Sclose);
+  if (H5Sget_simple_extent_npoints(space.get()) != 1) return {};
+  if (H5Tis_variable_str(type.get()) > 0) {
+    char* value = nullptr;
+    const Handle memory(H5Tcopy(H5T_C_S1), H5Tclose);
+    H5Tset_size(memory.get(), H5T_VARIABLE);
+    const herr_t read =
+        attribute ? H5Aread(object, memory.get(), &value) : H5Dread(object, memory.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &value);
+    std::string s = read >= 0 && value ? std::string(value) : std::string();
+    if (value) H5free_memory(value);
+    return s;
+  }
+  std::string s(H5Tget_size(type.get()), '\0');
+  const Handle memory(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(memory.get(), s.size());
+  const herr_t read = attribute ? H5Aread(object, memory.get(), s.data())
+                                : H5Dread(object, memory.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, s.data());
+  if (read < 0) return {};
+  s.resize(s.find('\0') == std::string::npos ? s.size() : s.find('\0'));
+  return s;
+}
+
+std::string string_attribute(hid_t object, const char* name) {
+  if (H5Aexists(object, name) <= 0) return {};
+  const Handle a(H5Aopen(object, name, H5P_DEFAULT), H5Aclose);
+  return a.valid() ? read_string(a.get(), true) : std::string();
+}
+
+class Reader {
+ public:
+  explicit Reader(const fs::path& file) : file_(file) {
+    hdf5::quiet_library();
+    require_regular_file(file);
+    if (H5Fis_hdf5(file.c_str()) <= 0) throw InputError(file.string(), "", "not an HDF5 file (NXtomo is stored in HDF5)");
+    h5_ = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (h5_ < 0) throw InputError(file.string(), "", "cannot open the HDF5 file");
+  }
+  ~Reader() { H5Fclose(h5_); }
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+
+  hid_t file() const { return h5_; }
+  bool has(const std::string& path) const { return exists(h5_, path); }
+  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
+    throw InputError(file_.string(), "dataset '" + path + "'", what);
+  }
+
+  std::string string(const std::string& path) const {
+    const Handle d(H5Dopen2(h5_, path.c_str(), H5P_DEFAULT), H5Dclose);
+    return d.valid() ? read_string(d.get(), false) : std::string();
+  }
+
+  // A one-dimensional numeric dataset (a scalar counts as one value) and its `units` attribute.
+  std::vector<double> numbers(const std::string& path, std::string* units = nullptr) const {
+    const Handle d(H5Dopen2(h5_, path.c_str(), H5P_DEFAULT), H5Dclose);
+    if (!d.valid()) fail(path, "cannot be opened");
+    const Handle type(H5Dget_type(d.get()), H5Tclose);
+    const H5T_class_t c = H5Tget_class(type.get());
+    if (c != H5T_INTEGER && c != H5T_FLOAT) fail(path, "expected numbers");
+    const Handle space(H5Dget_space(d.get()), H5Sclose);
+    if (H5Sget_simple_extent_ndims(space.get()) > 1) fail(path, "expected one value per frame (one dimension)");
+    std::vector<double> v(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get())));
+    if (!v.empty() && H5Dread(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) < 0)
+      fail(path, "cannot read its values");
+    for (double x : v)
+      if (!std::isfinite(x)) fail(path, "holds a value that is not finite");
+    if (units) *units = string_attribute(d.get(), "units");
+    return v;
+  }
+
+ private:
+  fs::path file_;
+  hid_t h5_ = -1;
+};
+
+// mm per unit of a NeXus length, or 0 when the unit is not one this knows.
+double mm_per(const std::string& unit) {
+  if (unit == "m" || unit == "meter" || unit == "metre" || unit == "meters" || unit == "metres") return 1000;
+  if (unit == "cm") return 10;
+  if (unit == "mm" || unit == "millimeter" || unit == "millimetre") return 1;
+  if (unit == "um" || unit == "micron" || unit == "microns" || unit == "micrometer" || unit == "micrometre" ||
+      unit == "\xC2\xB5m")
+    return 1e-3;
+  if (unit == "nm") return 1e-6;
+  return 0;
+}
+
+// The first group at the root whose `definition` says NXtomo.
+std::string find_entry(const Reader& r, const fs::path& file) {
+  H5G_info_t info{};
+  if (H5Gget_info(r.file(), &info) < 0) throw InputError(file.string(), "", "cannot list the root group");
+  for (hsize_t i = 0; i < info.nlinks; ++i) {
+    const ssize_t n = H5Lget_name_by_idx(r.file(), "/", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
+    if (n <= 0) continue;
+    std::string name(static_cast<std::size_t>(n) + 1, '\0');
+    H5Lget_name_by_idx(r.file(), "/", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size(), H5P_DEFAULT);
+    name.resize(static_cast<std::size_t>(n));
+    const std::string definition = "/" + name + "/definition";
+    if (r.has(definition) && r.string(definition) == "NXtomo") return "/" + name;
+  }
+  throw InputError(file.string(), "", "no group at the root has definition 'NXtomo' (name one with --entry)");
+}
+
+// A length in mm from a dataset with a `units` attribute; nothing (and a warning) without a unit.
+std::optional<double> length_mm(const Reader& r, const std::string& path, NxTomo& scan) {
+  if (!r.has(path)) return std::nullopt;
+  std::string units;
+  const std::vector<double> v = r.numbers(path, &units);
+  if (v.size() != 1) r.fail(path, "expected one value, got " + std::to_string(v.size()));
+  const double scale = mm_per(units);
+  if (scale == 0) {
+    scan.warnings.push_back(path + " is ignored: its units attribute ('" + units + "') is not a length ctk knows");
+    return std::nullopt;
+  }
+  return v.front() * scale;
+}
+
+// The NXsource group of the instrument (any name; "source" when no NX_class says so).
+std::string find_source(const Reader& r, const std::string& instrument) {
+  H5G_info_t info{};
+  const Handle group(H5Gopen2(r.file(), instrument.c_str(), H5P_DEFAULT), H5Gclose);
+  if (group.valid() && H5Gget_info(group.get(), &info) >= 0)
+    for (hsize_t i = 0; i < info.nlinks; ++i) {
+      const ssize_t n = H5Lget_name_by_idx(group.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
+      if (n <= 0) continue;
+      std::string name(static_cast<std::size_t>(n) + 1, '\0');
+      H5Lget_name_by_idx(group.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size(), H5P_DEFAULT);
+      name.resize(static_cast<std::size_t>(n));
+      H5O_info_t object{};
+      if (H5Oget_info_by_name(group.get(), name.c_str(), &object, H5P_DEFAULT) < 0 || object.type != H5O_TYPE_GROUP) continue;
+      const Handle child(H5Gopen2(group.get(), name.c_str(), H5P_DEFAULT), H5Gclose);
+      if (child.valid() && string_attribute(child.get(), "NX_class") == "NXsource") return instrument + "/" + name;
+    }
+  return instrument + "/source";
+}
+
+}  // namespace
+
+std::vector<int> NxTomo::frames_of(NxFrameKind k) const {
+  std::vector<int> out;
+  for (int f = 0; f < frames; ++f)
+    if (kind[static_cast<std::size_t>(f)] == k) out.push_back(f);
+  return out;
+}
+
+NxTomo read_nxtomo(const fs::path& file, const std::string& entry_name) {
+  const Reader r(file);
+  NxTomo scan;
+  scan.file = file;
+  scan.entry = entry_name.empty() ? find_entry(r, file) : (entry_name.front() == '/' ? entry_name : "/" + entry_name);
+  if (!r.has(scan.entry)) throw InputError(file.string(), "group '" + scan.entry + "'", "missing");
+  const std::string detector = scan.entry + "/instrument/detector";
+  scan.data_path = r.has(detector + "/data") ? detector + "/data" : scan.entry + "/data/data";
+  if (!r.has(scan.data_path)) r.fail(detector + "/data", "missing: NXtomo keeps its frames there");
+  {
+    const Handle d(H5Dopen2(r.file(), scan.data_path.c_str(), H5P_DEFAULT), H5Dclose);
+    const Handle space(H5Dget_space(d.get()), H5Sclose);
+    const Handle type(H5Dget_type(d.get()), H5Tclose);
+    if (!d.valid() || H5Sget_simple_extent_ndims(space.get()) != 3)
+      r.fail(scan.data_path, "expected three dimensions (frames, rows, columns)");
+    const H5T_class_t c = H5Tget_class(type.get());
+    if (c != H5T_INTEGER && c != H5T_FLOAT) r.fail(scan.data_path, "expected numbers (integer counts or floats)");
+    scan.integer_data = c == H5T_INTEGER;
+    std::array<hsize_t, 3> dims{};
+    H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+    for (hsize_t n : dims)
+      if (n == 0 || n > (1u << 30)) r.fail(scan.data_path, "has an empty or implausibly large dimension");
+    scan.frames = static_cast<int>(dims[0]);
+    scan.rows = static_cast<int>(dims[1]);
+    scan.cols = static_cast<int>(dims[2]);
+  }
+  const std::size_t frames = static_cast<std::size_t>(scan.frames);
+
+  const std::string key_path = detector + "/image_key";
+  if (r.has(key_path)) {
+    for (double k : r.numbers(key_path)) {
+      if (k != 0 && k != 1 && k != 2 && k != 3)
+        r.fail(key_path, "expected 0 (projection), 1 (flat), 2 (dark) or 3 (invalid), got " + std::to_string(k));
+      scan.kind.push_back(static_cast<NxFrameKind>(static_cast<int>(k)));
+    }
+    if (scan.kind.size() != frames)
+      r.fail(key_path, std::to_string(scan.kind.size()) + " keys for " + std::to_string(frames) + " frames");
+  } else {
+    scan.kind.assign(frames, NxFrameKind::projection);
+    scan.warnings.push_back(key_path + " is missing: every frame taken as a projection");
+  }
+
+  std::string angle_path = scan.entry + "/sample/rotation_angle";
+  if (!r.has(angle_path)) angle_path = scan.entry + "/data/rotation_angle";
+  if (!r.has(angle_path))
+    r.fail(scan.entry + "/sample/rotation_angle", "missing: NXtomo gives each frame's rotation angle there");
+  std::string units;
+  scan.rotation_angle_deg = r.numbers(angle_path, &units);
+  if (scan.rotation_angle_deg.size() != frames)
+    r.fail(angle_path, std::to_string(scan.rotation_angle_deg.size()) + " angles for " + std::to_string(frames) + " frames");
+  if (units == "rad" || units == "radian" || units == "radians") {
+    for (double& a : scan.rotation_angle_deg) a *= 180.0 / M_PI;
+  } else if (units.empty()) {
+    scan.warnings.push_back(angle_path + " has no units attribute: taken in degrees");
+  } else if (units != "deg" && units != "degree" && units != "degrees") {
+    r.fail(angle_path, "units '" + units + "': expected degree or rad");
+  }
+
+  scan.x_pixel_size_mm = length_mm(r, detector + "/x_pixel_size", scan);
+  scan.y_pixel_size_mm = length_mm(r, detector + "/y_pixel_size", scan);
+  scan.sample_to_detector_mm = length_mm(r, detector + "/distance", scan);
+  if (const auto d = length_mm(r, find_source(r, scan.entry + "/instrument") + "/distance", scan))
+    scan.source_to_sample_mm = std::abs(*d);
+  for (const auto* d : {&scan.x_pixel_size_mm, &scan.y_pixel_size_mm})
+    if (*d && !(**d > 0))
+      r.fail(detector + (d == &scan.x_pixel_size_mm ? "/x_pixel_size" : "/y_pixel_size"), "expected a size above 0");
+  return scan;
+}
+
+Image read_nxtomo_frame(const NxTomo& scan, int frame) {
+  const Reader r(scan.file);
+  if (frame < 0 || frame >= scan.frames) r.fail(scan.data_path, "has no frame " + std::to_string(frame));
+  const Handle d(H5Dopen2(r.file(), scan.data_path.c_str(), H5P_DEFAULT), H5Dclose);
+  const Handle space(H5Dget_space(d.get()), H5Sclose);
+  const std::array<hsize_t, 3> start{static_cast<hsize_t>(frame), 0, 0},
+      count{1, static_cast<hsize_t>(scan.rows), static_cast<hsize_t>(scan.cols)};
+  Image image{scan.cols, scan.rows,
+              std::vector<float>(static_cast<std::size_t>(scan.rows) * static_cast<std::size_t>(scan.cols))};
+  const Handle memory(H5Screate_simple(3, count.data(), nullptr), H5Sclose);
+  if (!d.valid() || H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr) < 0 ||
+      H5Dread(d.get(), H5T_NATIVE_FLOAT, memory.get(), space.get(), H5P_DEFAULT, image.pixels.data()) < 0)
+    r.fail(scan.data_path, "cannot read frame " + std::to_string(frame));
+  return image;
+}
+
+}  // namespace ctk
