@@ -35,6 +35,7 @@ namespace fs = std::filesystem;
 
 struct CalibrateOptions {
   fs::path scan, out = "geometry.json", report;
+  int bin = 1;
   CalibrationOptions calibration;
   bool image_only = false;  // no robot prior
   bool resume = false;
@@ -105,7 +106,7 @@ fs::path report_file(const CalibrateOptions& o) {
 }
 
 void run_calibrate(const CalibrateOptions& o) {
-  const ScanDescription scan = read_scan(o.scan);
+  const ScanDescription scan = read_scan_binned(o.scan, o.bin);
   RunFiles files;
   require_projection_files(scan, o.scan.string(), "projections.count");
   files.scan("--scan", o.scan, scan);
@@ -184,6 +185,9 @@ void register_calibrate(CLI::App& app) {
   auto o = std::make_shared<CalibrateOptions>();
   CLI::App* cmd = app.add_subcommand("calibrate", "Calibrate every view of a scan from the helix spheres in its image");
   cmd->add_option("--scan", o->scan, "scan.json (ctk-scan/1) with a holder section")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--bin", o->bin, "Bin the detector n x n (counts summed, pitch scaled; the matrices address binned pixels)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--out", o->out, "Geometry to write (ctk-geometry/1)")->capture_default_str();
   cmd->add_option("--report", o->report, "Report (JSON; default: <out>.report.json)");
   cmd->add_option("--min-spheres", o->calibration.min_spheres, "Fewer matched spheres: view rejected")

@@ -39,7 +39,7 @@ void run_diagnose(const DiagnoseOptions& o) {
   OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   if (!scan.holder) throw InputError(o.scan.string(), "holder", "the diagnosis needs the holder's spheres (missing)");
-  const Geometry geometry = read_geometry(o.geometry);
+  const Geometry geometry = geometry_for_scan(scan, read_geometry(o.geometry));
   Progress progress("detect", "views");
   const DiagnosisRun run =
       run_diagnosis(scan, geometry, o.run, std::ref(progress), [](const std::string& s) { std::cout << s << std::endl; });

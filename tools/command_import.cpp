@@ -42,6 +42,7 @@ struct ProjectionOptions {
   std::vector<int> detector;  // cols rows (of the image the geometry describes)
   std::vector<double> pitch;  // mm: one value or u v
   fs::path out;
+  int bin = 1;
 };
 
 struct CircularOptions : ProjectionOptions {
@@ -61,18 +62,25 @@ struct NxTomoOptions {
   std::string entry, kind = "counts";
   std::optional<double> sod, sdd;
   std::vector<double> pitch, principal_point;
-  int sense = 1;
+  int sense = 1, bin = 1;
 };
 
 struct NikonOptions {
   fs::path xtekct, out;
-  int sense = 1;
+  int sense = 1, bin = 1;
 };
 
 struct RtkOptions : ProjectionOptions {
   fs::path geometry;
   std::string rows;  // empty: what the file's ctk comment names, else as-stored
 };
+
+// Recorded in the scan (detector.binning): every command then bins the images as it reads them.
+void add_bin_option(CLI::App* cmd, int& bin) {
+  cmd->add_option("--bin", bin, "Bin the detector n x n in every command that reads the scan (counts summed, pitch scaled)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+}
 
 void add_projection_options(CLI::App* cmd, ProjectionOptions& o, bool pitch_required) {
   cmd->add_option("--out", o.out, "scan.json to write (the matrices go beside it as <stem>.matrices.json)")->required();
@@ -90,6 +98,7 @@ void add_projection_options(CLI::App* cmd, ProjectionOptions& o, bool pitch_requ
   auto* pitch =
       cmd->add_option("--pitch", o.pitch, "Pixel pitch in mm: one value or u v")->expected(1, 2)->check(positive_number);
   if (pitch_required) pitch->required();
+  add_bin_option(cmd, o.bin);
 }
 
 ProjectionSet projection_set(const ProjectionOptions& o) {
@@ -153,11 +162,36 @@ void check_images(const ScanDescription& scan) {
   read_image(census.first_present, scan.detector.cols, scan.detector.rows);  // names the file and both sizes where they differ
 }
 
+// --bin, recorded in the scan (detector.binning); the matrices file keeps addressing stored pixels.
+void bin_imported(ImportedScan& imported, int bin) {
+  try {
+    bin_scan(imported.scan, bin);
+  } catch (const std::invalid_argument&) {
+    throw InputError("--bin", "",
+                     std::to_string(bin) + " does not fit the " + std::to_string(imported.scan.detector.cols) + " x " +
+                         std::to_string(imported.scan.detector.rows) + " detector");
+  }
+}
+
+// The scan read back as every other command will read it, and the geometry it describes.
+void report_written(const fs::path& out) {
+  const ScanDescription check = read_scan(out);
+  for (const auto& w : check.warnings) std::cerr << "warning: " << w << "\n";
+  std::cout << "wrote " << out.string() << " (" << check.projections.count << " views, detector " << check.detector.cols << " x "
+            << check.detector.rows;
+  if (check.binning > 1)
+    std::cout << ", binned " << check.binning << " x " << check.binning << " from " << check.stored_detector.cols << " x "
+              << check.stored_detector.rows;
+  std::cout << ") and " << check.resolve(check.matrices->file).string() << "\n"
+            << to_text(summarize_geometry(check.matrices->geometry));
+}
+
 // `geometry_file`: the geometry file read, if any, and the option that named it.
-void finish(const ImportedScan& imported, const fs::path& out, const std::string& geometry_option = {},
+void finish(ImportedScan imported, const fs::path& out, int bin, const std::string& geometry_option = {},
             const fs::path& geometry_file = {}) {
+  check_images(imported.scan);
+  bin_imported(imported, bin);
   const ScanDescription& scan = imported.scan;
-  check_images(scan);
   RunFiles files;
   for (int v = 0; v < scan.projections.count; ++v)
     files.input("--files: projection " + std::to_string(v), scan.projection_path(v));
@@ -172,11 +206,7 @@ void finish(const ImportedScan& imported, const fs::path& out, const std::string
     write_imported_scan(imported, out);
     outputs.publish();
   }
-  const ScanDescription check = read_scan(out);  // what every other command will read
-  for (const auto& w : check.warnings) std::cerr << "warning: " << w << "\n";
-  std::cout << "wrote " << out.string() << " (" << check.projections.count << " views, detector " << check.detector.cols << " x "
-            << check.detector.rows << ") and " << check.resolve(check.matrices->file).string() << "\n"
-            << to_text(summarize_geometry(imported.geometry));
+  report_written(out);
 }
 
 void run_circular(const CircularOptions& o) {
@@ -196,7 +226,7 @@ void run_circular(const CircularOptions& o) {
   orbit.sense = o.sense;
   for (int k = 0; k < projections.count; ++k) orbit.angles_rad.push_back((o.first_angle_deg + k * o.step_deg) * M_PI / 180.0);
   const std::vector<ProjectionMatrix> matrices = circular_matrices(orbit);
-  finish(import_matrices(orbit.detector, matrices, projections, o.out), o.out);
+  finish(import_matrices(orbit.detector, matrices, projections, o.out), o.out, o.bin);
 }
 
 void run_cone_vec(const ConeVecOptions& o) {
@@ -228,7 +258,8 @@ void run_cone_vec(const ConeVecOptions& o) {
                        "or numbers too large to multiply)");
     }
   }
-  finish(import_matrices(stored_detector(orientation, described), matrices, projections, o.out), o.out, "--vectors", o.vectors);
+  finish(import_matrices(stored_detector(orientation, described), matrices, projections, o.out), o.out, o.bin, "--vectors",
+         o.vectors);
 }
 
 void run_rtk(const RtkOptions& o) {
@@ -243,23 +274,19 @@ void run_rtk(const RtkOptions& o) {
   for (const RtkProjection& v : g.views)
     matrices.push_back(from_rtk(v, detector, rows));  // the reader refused what this cannot take
   std::cout << "pixel map " << to_string(rows) << (o.rows.empty() && g.rows ? " (named by the file)" : "") << "\n";
-  finish(import_matrices(detector, matrices, projections, o.out), o.out, "--geometry", o.geometry);
+  finish(import_matrices(detector, matrices, projections, o.out), o.out, o.bin, "--geometry", o.geometry);
 }
 
 // The scan's files written together (frames, matrices, scan), then read back as every command will.
-void publish_scan(const std::function<ImportedScan()>& write_frames, const fs::path& out) {
-  ImportedScan imported;
+void publish_scan(const std::function<ImportedScan()>& write_frames, const fs::path& out, int bin) {
   {
     OutputSet outputs;
-    imported = write_frames();
+    ImportedScan imported = write_frames();
+    bin_imported(imported, bin);
     write_imported_scan(imported, out);
     outputs.publish();
   }
-  const ScanDescription check = read_scan(out);
-  for (const auto& w : check.warnings) std::cerr << "warning: " << w << "\n";
-  std::cout << "wrote " << out.string() << " (" << check.projections.count << " views, detector " << check.detector.cols << " x "
-            << check.detector.rows << ") and " << check.resolve(check.matrices->file).string() << "\n"
-            << to_text(summarize_geometry(imported.geometry));
+  report_written(out);
 }
 
 void run_nxtomo(const NxTomoOptions& o) {
@@ -295,7 +322,7 @@ void run_nxtomo(const NxTomoOptions& o) {
             std::cout << "\r  frames " << written << " of " << total << (written == total ? "\n" : "") << std::flush;
         });
       },
-      o.out);
+      o.out, o.bin);
 }
 
 void run_nikon(const NikonOptions& o) {
@@ -333,7 +360,7 @@ void run_nikon(const NikonOptions& o) {
         write_image_uint16(Image{scan.detector.cols, scan.detector.rows, std::vector<float>(n, 0.0f)}, set.dark.front());
         return imported;
       },
-      o.out);
+      o.out, o.bin);
 }
 
 }  // namespace
@@ -411,6 +438,7 @@ void register_import(CLI::App& app) {
   nxtomo->add_option("--kind", n->kind, "counts (normalised by the flat and dark frames) or line_integrals")
       ->check(CLI::IsMember({"counts", "line_integrals"}))
       ->capture_default_str();
+  add_bin_option(nxtomo, n->bin);
   nxtomo->callback([n] { run_nxtomo(*n); });
 
   auto k = std::make_shared<NikonOptions>();
@@ -423,6 +451,7 @@ void register_import(CLI::App& app) {
   nikon->add_option("--sense", k->sense, "+1 as the file states, -1 the sample turning the other way")
       ->check(CLI::IsMember({1, -1}))
       ->capture_default_str();
+  add_bin_option(nikon, k->bin);
   nikon->callback([k] { run_nikon(*k); });
 }
 

@@ -34,6 +34,7 @@ namespace fs = std::filesystem;
 
 struct ReconstructOptions {
   fs::path scan, geometry, out;
+  int bin = 1;
   std::string method = "wls-cg";
   int iterations = 0;  // 0: the method's default
   int subsets = 0;     // OS-SQS: 0 chosen from the views
@@ -126,7 +127,7 @@ void write_slabs(const Volume& mine, const VolumeLayout& whole, const Communicat
 void run_reconstruct(const ReconstructOptions& o) {
   const Communicator& ranks = world();
   const bool spread = ranks.size() > 1;
-  const ScanDescription scan = read_scan(o.scan);
+  const ScanDescription scan = read_scan_binned(o.scan, o.bin);
   RunFiles files;
   require_projection_files(scan, o.scan.string(), "projections.count");
   files.scan("--scan", o.scan, scan);
@@ -252,6 +253,11 @@ void register_reconstruct(CLI::App& app) {
   auto o = std::make_shared<ReconstructOptions>();
   CLI::App* cmd = app.add_subcommand("reconstruct", "Reconstruct a volume (holder frame) from a scan and its per-view matrices");
   cmd->add_option("--scan", o->scan, "scan.json (ctk-scan/1)")->required()->check(CLI::ExistingFile);
+  cmd->add_option(
+         "--bin", o->bin,
+         "Bin the detector n x n (counts summed, pitch scaled); a --geometry made for the stored pixels is binned with it")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--geometry", o->geometry, "Per-view matrices (ctk-geometry/1); default: the scan's nominal geometry")
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out,

@@ -5,12 +5,30 @@
 #include <CLI/CLI.hpp>
 
 #include <cmath>
+#include <iostream>
 #include <string>
 
 #include "ctk/core/error.hpp"
 #include "ctk/core/volume_file.hpp"
+#include "ctk/geom/scan.hpp"
 
 namespace ctk::tools {
+
+// The scan as a command works on it: binned by --bin on top of its own detector.binning.
+inline ScanDescription read_scan_binned(const std::filesystem::path& file, int bin) {
+  ScanDescription scan = read_scan(file);
+  try {
+    bin_scan(scan, bin);
+  } catch (const std::invalid_argument&) {
+    throw InputError("--bin", "",
+                     std::to_string(bin) + " does not fit the " + std::to_string(scan.detector.cols) + " x " +
+                         std::to_string(scan.detector.rows) + " detector of " + file.string());
+  }
+  if (bin > 1)
+    std::cout << "detector binned " << scan.binning << " x " << scan.binning << ": " << scan.detector.cols << " x "
+              << scan.detector.rows << " pixels of " << scan.detector.pitch_u_mm << " mm\n";
+  return scan;
+}
 
 // A finite number above zero (`strictly`) or at least zero.
 inline CLI::Validator finite_number_from_zero(bool strictly) {

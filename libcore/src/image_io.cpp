@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <fstream>
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "ctk/core/atomic_write.hpp"
@@ -105,6 +107,20 @@ void write_image_uint16(const Image& counts, const fs::path& file) {
   std::transform(counts.pixels.begin(), counts.pixels.end(), pixels.begin(),
                  [](float c) { return static_cast<std::uint16_t>(std::lround(std::clamp(c, 0.0f, 65535.0f))); });
   write_single_image(counts.cols, counts.rows, TypeDesc::UINT16, pixels.data(), file);
+}
+
+Image binned_image(const Image& image, int b) {
+  if (b < 1 || b > image.cols || b > image.rows)
+    throw std::invalid_argument("binning factor " + std::to_string(b) + " does not fit a " + std::to_string(image.cols) + " x " +
+                                std::to_string(image.rows) + " image");
+  const int cols = image.cols / b, rows = image.rows / b;
+  Image out{cols, rows, std::vector<float>(static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows), 0.0f)};
+  const float scale = 1.0f / static_cast<float>(b * b);
+  for (int r = 0; r < rows * b; ++r)
+    for (int c = 0; c < cols * b; ++c)
+      out.pixels[static_cast<std::size_t>(r / b) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(c / b)] +=
+          scale * image.pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(image.cols) + static_cast<std::size_t>(c)];
+  return out;
 }
 
 float preview_ceiling(const Volume& volume) {

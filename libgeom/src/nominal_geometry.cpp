@@ -55,7 +55,7 @@ Geometry nominal_geometry(const ScanDescription& scan) {
 
 Geometry geometry_or_nominal(const ScanDescription& scan, const std::filesystem::path& scan_file,
                              const std::filesystem::path& geometry_file) {
-  if (!geometry_file.empty()) return read_geometry(geometry_file);
+  if (!geometry_file.empty()) return geometry_for_scan(scan, read_geometry(geometry_file));
   Geometry g = nominal_geometry(scan);
   g.file = scan_file;
   return g;

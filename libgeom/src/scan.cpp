@@ -5,6 +5,7 @@
 
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/provenance.hpp"
+#include "ctk/geom/detector_binning.hpp"
 
 namespace ctk {
 
@@ -58,7 +59,7 @@ nlohmann::json frame_names_to_json(const std::vector<std::string>& names) {
 }
 
 Detector read_detector(const JsonNode& node, Eigen::Vector2d* principal_point) {
-  node.warn_unknown_keys({"cols", "rows", "pixel_pitch_mm", "principal_point_px", "radial_distortion"});
+  node.warn_unknown_keys({"cols", "rows", "pixel_pitch_mm", "principal_point_px", "radial_distortion", "binning"});
   Detector d;
   d.cols = node.at("cols").integer();
   d.rows = node.at("rows").integer();
@@ -185,6 +186,27 @@ ProjectionCensus require_projection_files(const ScanDescription& scan, const std
   return census;
 }
 
+void bin_scan(ScanDescription& scan, int factor) {
+  if (factor == 1) return;
+  const Detector before = scan.detector;
+  if (scan.binning == 1) scan.stored_detector = before;
+  scan.detector = binned_detector(before, factor);
+  scan.principal_point_px = binned_pixel(scan.principal_point_px, factor);
+  if (scan.distortion) scan.distortion = binned_distortion(*scan.distortion, factor);
+  // A geometry already made for the binned detector (a refined scan's matrices) stays as it is.
+  if (scan.matrices && scan.matrices->geometry.detector.cols == before.cols &&
+      scan.matrices->geometry.detector.rows == before.rows)
+    scan.matrices->geometry = binned_geometry(scan.matrices->geometry, factor);
+  scan.binning *= factor;
+}
+
+Geometry geometry_for_scan(const ScanDescription& scan, const Geometry& geometry) {
+  if (scan.binning > 1 && geometry.detector.cols == scan.stored_detector.cols &&
+      geometry.detector.rows == scan.stored_detector.rows)
+    return binned_geometry(geometry, scan.binning);
+  return geometry;
+}
+
 ScanDescription read_scan(const fs::path& file) { return scan_from_json(read_json_file(file), file); }
 
 ScanDescription scan_from_json(const nlohmann::json& root, const fs::path& file) {
@@ -245,6 +267,24 @@ ScanDescription scan_from_json(const nlohmann::json& root, const fs::path& file)
   }
 
   if (auto holder = top.find("holder")) scan.holder = read_holder(*holder);
+  scan.stored_detector = scan.detector;
+  if (auto binning = top.at("detector").find("binning")) {
+    const int b = binning->integer();
+    if (b < 1 || b > scan.detector.cols || b > scan.detector.rows)
+      binning->fail("expected a whole number from 1 to the detector's smaller side (" +
+                    std::to_string(std::min(scan.detector.cols, scan.detector.rows)) + "), got " + std::to_string(b));
+    if (scan.matrices) {
+      const Detector& g = scan.matrices->geometry.detector;
+      const Detector binned = binned_detector(scan.detector, b);
+      if (!(g.cols == scan.detector.cols && g.rows == scan.detector.rows) && !(g.cols == binned.cols && g.rows == binned.rows))
+        top.at("pose_source")
+            .at("file")
+            .fail("its detector is " + std::to_string(g.cols) + " x " + std::to_string(g.rows) + ", neither the stored " +
+                  std::to_string(scan.detector.cols) + " x " + std::to_string(scan.detector.rows) + " nor the binned " +
+                  std::to_string(binned.cols) + " x " + std::to_string(binned.rows));
+    }
+    bin_scan(scan, b);
+  }
   return scan;
 }
 
@@ -254,13 +294,19 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
   j["format"] = kFormat;
   j["provenance"] = provenance();
   if (!scan.written_by_run.empty()) j["written_by"] = {{"run", scan.written_by_run}};
-  j["detector"] = {{"cols", scan.detector.cols},
-                   {"rows", scan.detector.rows},
-                   {"pixel_pitch_mm", {scan.detector.pitch_u_mm, scan.detector.pitch_v_mm}},
-                   {"principal_point_px", {scan.principal_point_px.x(), scan.principal_point_px.y()}}};
-  if (scan.distortion)
-    j["detector"]["radial_distortion"] = {{"k1_per_px2", scan.distortion->k1_per_px2},
-                                          {"center_px", {scan.distortion->centre_px.x(), scan.distortion->centre_px.y()}}};
+  // The file states the stored images; a binned scan's pixel positions go back to stored pixels.
+  const int b = scan.binning;
+  const Detector& stored = b > 1 ? scan.stored_detector : scan.detector;
+  const Eigen::Vector2d principal_point = unbinned_pixel(scan.principal_point_px, b);
+  j["detector"] = {{"cols", stored.cols},
+                   {"rows", stored.rows},
+                   {"pixel_pitch_mm", {stored.pitch_u_mm, stored.pitch_v_mm}},
+                   {"principal_point_px", {principal_point.x(), principal_point.y()}}};
+  if (b > 1) j["detector"]["binning"] = b;
+  if (scan.distortion) {
+    const RadialDistortion d = unbinned_distortion(*scan.distortion, b);
+    j["detector"]["radial_distortion"] = {{"k1_per_px2", d.k1_per_px2}, {"center_px", {d.centre_px.x(), d.centre_px.y()}}};
+  }
   j["source_to_detector_mm"] = scan.source_to_detector_mm;
   if (scan.source_drift_mm_per_100_views != Eigen::Vector2d::Zero())
     j["source_drift_mm_per_100_views"] = {scan.source_drift_mm_per_100_views.x(), scan.source_drift_mm_per_100_views.y()};

@@ -5,7 +5,7 @@
 #include <utility>
 
 #include "ctk/core/error.hpp"
-#include "ctk/proj/detector_binning.hpp"
+#include "ctk/geom/detector_binning.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 
 namespace ctk {

@@ -11,15 +11,17 @@ namespace ctk {
 
 namespace {
 
-// A scan written at once with its images (ctk simulate) takes only images of its own run.
+// A scan written at once with its images (ctk simulate) takes only images of its own run. A binned
+// scan's images are read at their stored size and binned (counts, flat and dark alike).
 Image read_scan_image(const ScanDescription& scan, const std::filesystem::path& file) {
   std::string written_by;
-  Image image = read_image(file, scan.detector.cols, scan.detector.rows, &written_by);
+  const Detector& stored = scan.binning > 1 ? scan.stored_detector : scan.detector;
+  Image image = read_image(file, stored.cols, stored.rows, &written_by);
   if (!scan.written_by_run.empty() && !written_by.empty() && written_by != scan.written_by_run)
     throw InputError(file.string(), "",
                      "was written by ctk run " + written_by + ", the scan by run " + scan.written_by_run +
                          ": the folder mixes two runs' files");
-  return image;
+  return scan.binning > 1 ? binned_image(image, scan.binning) : image;
 }
 
 }  // namespace

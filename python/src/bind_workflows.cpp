@@ -145,7 +145,7 @@ py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, cons
   o.repeatability_deg = repeatability_deg;
   o.diagnosis.validate();
   const ScanDescription scan = read_scan(scan_file);
-  const Geometry geometry = read_geometry(geometry_file);
+  const Geometry geometry = geometry_for_scan(scan, read_geometry(geometry_file));
   PythonBridge bridge;
   std::optional<DiagnosisRun> run;
   {

@@ -7,6 +7,7 @@
 
 #include "../test_support.hpp"
 #include "ctk/geom/astra.hpp"
+#include "ctk/geom/detector_binning.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/panda_setup.hpp"
 #include "ctk/geom/scan.hpp"
@@ -288,6 +289,63 @@ TEST(ScanFile, DistortionAndDriftExtensions) {
   write_scan(scan, file);  // each check starts from a valid file
   expect_error_naming(
       file, [](nlohmann::json& j) { j["source_drift_mm_per_100_views"] = "fast"; }, "source_drift_mm_per_100_views");
+}
+
+// detector.binning: every pixel address follows the binned detector in memory, the file keeps
+// stating the stored images, and a point projects onto the binned pixel that holds it.
+TEST(ScanFile, BinningExtension) {
+  const auto dir = testing::scratch_dir();
+  const auto file = write_valid_scan(dir, 6);
+  ScanDescription plain = read_scan(file);
+  EXPECT_EQ(plain.binning, 1);
+  plain.distortion = RadialDistortion{2e-8, {121.3, 98.7}};
+  write_scan(plain, file);
+  plain = read_scan(file);
+  nlohmann::json j = read_json_file(file);
+  j["detector"]["binning"] = 3;
+  testing::write_text(dir / "binned.json", j.dump(2));
+  const ScanDescription binned = read_scan(dir / "binned.json");
+  EXPECT_TRUE(binned.warnings.empty());
+  EXPECT_EQ(binned.binning, 3);
+  EXPECT_EQ(binned.stored_detector.cols, 240);
+  EXPECT_EQ(binned.detector.cols, 80);
+  EXPECT_EQ(binned.detector.rows, 66);  // 200 / 3: the last partial row is dropped
+  EXPECT_DOUBLE_EQ(binned.detector.pitch_u_mm, 3.6);
+  EXPECT_NEAR(binned.principal_point_px.x(), (plain.principal_point_px.x() - 1) / 3, 1e-12);
+  EXPECT_NEAR(binned.distortion->k1_per_px2, 2e-8 * 9, 1e-20);
+  // The distortion's shift, in binned pixels, is a third of the stored one at the same place.
+  const Eigen::Vector2d fine(30, 170), coarse = binned_pixel(fine, 3);
+  EXPECT_LT(
+      (binned.distortion->measured_from_ideal(coarse) - binned_pixel(plain.distortion->measured_from_ideal(fine), 3)).norm(),
+      1e-9);
+  const Geometry g = nominal_geometry(plain), gb = nominal_geometry(binned);
+  for (const Eigen::Vector3d& X : {Eigen::Vector3d(10, -5, 20), Eigen::Vector3d(-25, 15, -30)})
+    for (std::size_t v = 0; v < g.views.size(); ++v)
+      EXPECT_LT((gb.views[v].P->project(X) - binned_pixel(g.views[v].P->project(X), 3)).norm(), 1e-6);
+  // Written back, the file states what it stated.
+  write_scan(binned, dir / "again.json");
+  const nlohmann::json again = read_json_file(dir / "again.json");
+  EXPECT_EQ(again["detector"]["cols"], 240);
+  EXPECT_EQ(again["detector"]["binning"], 3);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NEAR(again["detector"]["principal_point_px"][i].get<double>(), j["detector"]["principal_point_px"][i].get<double>(),
+                1e-9);
+    EXPECT_NEAR(again["detector"]["radial_distortion"]["center_px"][i].get<double>(),
+                j["detector"]["radial_distortion"]["center_px"][i].get<double>(), 1e-9);
+  }
+  EXPECT_NEAR(again["detector"]["radial_distortion"]["k1_per_px2"].get<double>(), 2e-8, 1e-22);
+  // A geometry for the stored pixels is binned for the scan; one for the binned detector is kept.
+  write_geometry(g, dir / "stored.json");
+  write_geometry(gb, dir / "coarse.json");
+  const Geometry from_stored = geometry_or_nominal(binned, dir / "binned.json", dir / "stored.json");
+  const Geometry from_coarse = geometry_or_nominal(binned, dir / "binned.json", dir / "coarse.json");
+  EXPECT_EQ(from_stored.detector.cols, 80);
+  EXPECT_LT(max_abs_difference(*from_stored.views[2].P, *gb.views[2].P), 1e-9);
+  EXPECT_LT(max_abs_difference(*from_coarse.views[2].P, *gb.views[2].P), 1e-9);
+  expect_error_naming(
+      dir / "binned.json", [](nlohmann::json& k) { k["detector"]["binning"] = 0; }, "detector.binning");
+  expect_error_naming(
+      dir / "binned.json", [](nlohmann::json& k) { k["detector"]["binning"] = 201; }, "detector.binning");
 }
 
 TEST(ScanFile, HolderWallExtension) {

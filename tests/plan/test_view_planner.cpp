@@ -10,7 +10,7 @@
 #include "ctk/plan/direction_damage.hpp"
 #include "ctk/plan/incremental_reconstruction.hpp"
 #include "ctk/plan/view_planner.hpp"
-#include "ctk/proj/detector_binning.hpp"
+#include "ctk/geom/detector_binning.hpp"
 
 namespace ctk {
 namespace {

@@ -88,6 +88,40 @@ TEST(Measurements, CountsGiveLineIntegralsNearTheTruthAndWeights) {
   EXPECT_EQ(m.clamped_pixels, 0u);
 }
 
+// A binned counts scan: each binned pixel is the line integral of the counts its pixels collected
+// together, -log(sum(I - dark) / sum(flat - dark)), not the mean of their line integrals.
+TEST(Measurements, BinnedCountsAreSummedBeforeTheLogarithm) {
+  const auto dir = testing::scratch_dir();
+  ScanSimulation sim = tiny_scan(SimulatedOutput::counts);
+  sim.counts = {60000, 100};
+  simulate_scan(sim, dir);
+  const ScanDescription scan = read_scan(dir / "scan.json");
+  ScanDescription binned = scan;
+  bin_scan(binned, 2);
+  const Image counts = read_image(scan.projection_path(3)), flat = read_image(scan.resolve(scan.projections.flat[0])),
+              dark = read_image(scan.resolve(scan.projections.dark[0]));
+  const Image p = read_line_integrals(binned, 3, read_flat_dark(binned));
+  ASSERT_EQ(p.cols, 24);
+  ASSERT_EQ(p.rows, 20);
+  double worst = 0, unlike_mean_of_logs = 0;
+  for (int r = 0; r < p.rows; ++r)
+    for (int c = 0; c < p.cols; ++c) {
+      double detected = 0, open = 0, mean_of_logs = 0;
+      for (int dr = 0; dr < 2; ++dr)
+        for (int dc = 0; dc < 2; ++dc) {
+          const std::size_t i = static_cast<std::size_t>((2 * r + dr) * counts.cols + 2 * c + dc);
+          detected += counts.pixels[i] - dark.pixels[i];
+          open += flat.pixels[i] - dark.pixels[i];
+          mean_of_logs -= 0.25 * std::log((counts.pixels[i] - dark.pixels[i]) / (flat.pixels[i] - dark.pixels[i]));
+        }
+      const double expected = -std::log(detected / open);
+      unlike_mean_of_logs = std::max(unlike_mean_of_logs, std::abs(mean_of_logs - expected));
+      worst = std::max(worst, std::abs(p.pixels[static_cast<std::size_t>(r * p.cols + c)] - expected));
+    }
+  EXPECT_GT(unlike_mean_of_logs, 1e-4);  // the shadows' edges tell the two apart
+  EXPECT_LT(worst, 1e-5);
+}
+
 // The conversion runs as SIMD lanes and a scalar tail: every lane and the tail follow the
 // definition, -log(max(I - dark, 0.5) / (flat - dark)) with the transmission clamped to
 // (0.5 / open, 1.5] where implausible, weights the unclamped transmission, NaN counts kept NaN.

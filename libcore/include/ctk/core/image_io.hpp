@@ -27,6 +27,11 @@ void write_image_float(const Image& image, const std::filesystem::path& file);  
 /// Detector counts as a 16-bit TIFF: values rounded and clamped to 0 .. 65535.
 void write_image_uint16(const Image& counts, const std::filesystem::path& file);
 
+/// The mean of each b x b block (a last partial row or column dropped): binned counts give the
+/// same line integrals as summed ones, since flat and dark are binned alike. Throws
+/// std::invalid_argument for a factor below 1 or larger than the image.
+Image binned_image(const Image& image, int factor);
+
 /// The grey level previews map to white: the 99.9th percentile of the voxels (a few hot voxels
 /// must not darken the picture), at least 1e-6.
 float preview_ceiling(const Volume& volume);

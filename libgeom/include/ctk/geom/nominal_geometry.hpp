@@ -20,7 +20,8 @@ struct NominalView {
 std::vector<NominalView> nominal_views(const ScanDescription& scan);
 /// As a geometry file: views with a pose "ok", others "skipped" with the reason.
 Geometry nominal_geometry(const ScanDescription& scan);
-/// The geometry a run uses: `geometry_file` read when given, else the scan's nominal geometry,
+/// The geometry a run uses: `geometry_file` read when given (binned with the scan when it was made
+/// for the stored pixels: geometry_for_scan), else the scan's nominal geometry,
 /// which then names `scan_file` as its source in messages.
 Geometry geometry_or_nominal(const ScanDescription& scan, const std::filesystem::path& scan_file,
                              const std::filesystem::path& geometry_file);

@@ -62,6 +62,12 @@ struct ScanDescription {
   /// Optional key `written_by` {"run": id} (an extension of ctk-scan/1): the ctk run that wrote the
   /// scan and its images at once (ctk simulate). Images that name another run are refused.
   std::string written_by_run;
+  /// Optional key `detector.binning` (an extension of ctk-scan/1): every command works on b x b
+  /// binned pixels. `detector`, `principal_point_px`, `distortion` and the matrices then describe
+  /// the binned detector, `stored_detector` the images as stored (and as the file states them);
+  /// the loader bins each image as it reads it (projection_reading.hpp).
+  int binning = 1;
+  Detector stored_detector;
   std::vector<std::string> warnings;  // unknown keys and other non-fatal findings
 
   Intrinsics intrinsics() const { return Intrinsics::from_setup(source_to_detector_mm, detector, principal_point_px); }
@@ -72,6 +78,15 @@ struct ScanDescription {
   std::filesystem::path resolve(const std::string& name) const;
   std::filesystem::path projection_path(int view) const { return resolve(projections.file_name(view)); }
 };
+
+/// Bins the scan's detector by a further `factor` (b x b pixels become one): detector, principal
+/// point, distortion and a matrices pose source follow. Throws std::invalid_argument when the factor
+/// does not fit the detector.
+void bin_scan(ScanDescription& scan, int factor);
+
+/// A geometry for this scan's detector: one made for its stored pixels is binned as the images
+/// are; one for the binned detector is taken as it is.
+Geometry geometry_for_scan(const ScanDescription& scan, const Geometry& geometry);
 
 /// Reads and validates; throws InputError naming the file and key on any violation, including
 /// a referenced file (joints, flat, dark, matrices) that cannot be read.

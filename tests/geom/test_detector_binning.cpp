@@ -2,7 +2,8 @@
 // at the centre of those pixels.
 #include <gtest/gtest.h>
 
-#include "ctk/proj/detector_binning.hpp"
+#include "ctk/core/image_io.hpp"
+#include "ctk/geom/detector_binning.hpp"
 
 namespace ctk {
 namespace {
