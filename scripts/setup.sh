@@ -26,6 +26,7 @@ packages=(
   python3                # benchmarks/yardstick.py: the benchmark checked from outside (standard library only)
   python3-dev pybind11-dev python3-numpy   # the Python module (import ctk)
   python3-scipy python3-pytest python3-matplotlib   # its tests (scipy's solvers on the operator) and examples
+  chromium               # headless, to check that the HTML reports render
 )
 
 missing=()

@@ -26,6 +26,7 @@
 #include "ctk/proj/projection_reading.hpp"
 #include "interruption.hpp"
 #include "progress.hpp"
+#include "run_page.hpp"
 
 namespace ctk::tools {
 
@@ -112,6 +113,7 @@ void run_calibrate(const CalibrateOptions& o) {
   files.scan("--scan", o.scan, scan);
   files.output("--out", o.out);
   files.output("--report", report_file(o));
+  files.output("the HTML report beside --report", fs::path(report_file(o)).replace_extension(".html"));
   const fs::path journal_file = fs::path(o.out).replace_extension(".journal");
   files.output("the journal beside --out", journal_file);
   files.output_family("pictures beside --out", fs::path(o.out).replace_extension("").string() + ".", ".png");
@@ -166,6 +168,9 @@ void run_calibrate(const CalibrateOptions& o) {
   j["geometry"] = o.out.string();
   j["pictures"] = write_pictures(scan, c, o);
   write_text_atomically(report, j.dump(2) + "\n");
+  std::vector<fs::path> pictures;
+  for (const nlohmann::json& name : j["pictures"]) pictures.push_back(o.out.parent_path() / name.get<std::string>());
+  write_run_page("calibrate", run_result.brief(), j, pictures, fs::path(report).replace_extension(".html"));
   outputs.publish();
   if (journal) journal->remove();
   if (c.taken_over > 0) std::cout << c.taken_over << " views taken from the interrupted run, the others calibrated now\n";

@@ -12,6 +12,7 @@
 #include "ctk/calib/diagnosis_run.hpp"
 #include "ctk/core/atomic_write.hpp"
 #include "progress.hpp"
+#include "run_page.hpp"
 
 namespace ctk::tools {
 
@@ -34,12 +35,14 @@ void run_diagnose(const DiagnoseOptions& o) {
   files.input("--geometry", o.geometry);
   files.output("--out", o.out);
   files.output("--corrected-scan", corrected_file);
+  files.output("the HTML report beside --out", stem.string() + ".html");
   files.output_family("pictures beside --out", stem.string() + ".", ".png");
   files.check();
   OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   if (!scan.holder) throw InputError(o.scan.string(), "holder", "the diagnosis needs the holder's spheres (missing)");
   const Geometry geometry = geometry_for_scan(scan, read_geometry(o.geometry));
+  std::cout << "geometry: " << geometry.description() << "\n";
   Progress progress("detect", "views");
   const DiagnosisRun run =
       run_diagnosis(scan, geometry, o.run, std::ref(progress), [](const std::string& s) { std::cout << s << std::endl; });
@@ -50,16 +53,14 @@ void run_diagnose(const DiagnoseOptions& o) {
   report["scan"] = o.scan.string();
   report["geometry"] = o.geometry.string();
   report["pictures"] = write_diagnosis_pictures(d, observations, stem);
-  const ScanDescription& corrected = run.corrected;
-  // Relative names in the corrected scan must still find the projections: write it beside the
-  // original unless the user chose a place, and say where its data lives.
-  nlohmann::json corrected_json = scan_to_json(corrected);
-  if (fs::absolute(corrected_file).parent_path() != fs::absolute(o.scan).parent_path())
-    std::cerr << "note: " << corrected_file.string() << " names its files relative to " << o.scan.parent_path().string()
-              << "; keep it beside " << o.scan.filename().string() << " to use it\n";
-  write_text_atomically(corrected_file, corrected_json.dump(2) + "\n");
+  // Relative names in the corrected scan find the same files from where it is written.
+  write_scan(relocated_scan(run.corrected, corrected_file), corrected_file);
   report["corrected_scan"] = corrected_file.string();
   write_text_atomically(o.out, report.dump(2) + "\n");
+  std::vector<fs::path> pictures;
+  for (const nlohmann::json& name : report["pictures"])
+    pictures.push_back(fs::path(o.out).parent_path() / name.get<std::string>());
+  write_run_page("diagnose", run.brief(), report, pictures, stem.string() + ".html");
 
   outputs.publish();
   std::cout << run.brief() << "\n";

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 
 #include "commands.hpp"
 #include "ctk/geom/run_files.hpp"
@@ -24,6 +25,8 @@
 #include "ctk/recon/wls_cg.hpp"
 #include "ctk/core/provenance.hpp"
 #include "progress.hpp"
+#include "ctk/core/json_access.hpp"
+#include "run_page.hpp"
 
 namespace ctk::tools {
 
@@ -130,13 +133,16 @@ void report_plan(const PlanningResult& r, const fs::path& folder) {
     worst = std::max(worst, s);
     sum += s;
   }
-  std::cout << folder.string() << ": " << r.calibrated() << " views calibrated, " << r.acquired() << " acquired in "
-            << r.views.size() << " requests";
+  std::ostringstream brief;
+  brief << folder.string() << ": " << r.calibrated() << " views calibrated, " << r.acquired() << " acquired in " << r.views.size()
+        << " requests";
   if (!r.step_seconds.empty())
-    std::cout << "; planner step " << sum / static_cast<double>(r.step_seconds.size()) << " s mean, " << worst << " s max";
-  std::cout << "; absorbers: "
-            << (r.segmentation.voxels > 0 ? std::to_string(r.segmentation.voxels) + " coarse voxels" : r.segmentation.note)
-            << "\n";
+    brief << "; planner step " << sum / static_cast<double>(r.step_seconds.size()) << " s mean, " << worst << " s max";
+  brief << "; absorbers: "
+        << (r.segmentation.voxels > 0 ? std::to_string(r.segmentation.voxels) + " coarse voxels" : r.segmentation.note);
+  std::cout << brief.str() << "\n";
+  write_run_page("plan", brief.str(), read_json_file(folder / "trajectory.json"), {folder / "plan-map.png"},
+                 folder / "plan.html");
 }
 
 // The truth of the sample at the layout's voxels (2 x 2 x 2 points per voxel).
@@ -317,7 +323,9 @@ void compare(const PlanCommandOptions& o, const ScanSimulation& simulation) {
     j["flat_counts"] = o.flat_counts;
   }
   write_text_atomically(o.out / "comparison.json", j.dump(2) + "\n");
-  std::cout << "comparison written to " << (o.out / "comparison.json").string() << " and comparison.png\n";
+  write_run_page("plan", "trajectories compared on " + sample.name + " (" + std::to_string(n) + " views each)", j,
+                 {o.out / "comparison.png"}, o.out / "comparison.html");
+  std::cout << "comparison written to " << (o.out / "comparison.json").string() << ", comparison.png and comparison.html\n";
 }
 
 void run_plan(const PlanCommandOptions& o) {
@@ -333,8 +341,8 @@ void run_plan(const PlanCommandOptions& o) {
     RunFiles files;
     files.scan("--setup", o.setup, lab_scan);
     files.input_folder("--lab", o.lab);
-    for (const char* name :
-         {"scan.json", "joints.csv", "flat.tif", "dark.tif", "geometry.json", "trajectory.json", "plan-map.png", "coarse.nrrd"})
+    for (const char* name : {"scan.json", "joints.csv", "flat.tif", "dark.tif", "geometry.json", "trajectory.json",
+                             "plan-map.png", "coarse.nrrd", "plan.html"})
       files.output(std::string("--out: ") + name, o.out / name);
     files.check();
     const PlanningSetup setup = setup_from_scan(o.setup, lab_scan, o.sod_mm);

@@ -25,6 +25,8 @@
 #include "measurement_report.hpp"
 #include "option_checks.hpp"
 #include "progress.hpp"
+#include "ctk/core/slice_preview.hpp"
+#include "run_page.hpp"
 
 namespace ctk::tools {
 
@@ -71,9 +73,9 @@ fs::path preview_file(const fs::path& out, const std::string& slice) { return ou
 void write_previews(const Volume& x, const fs::path& out) {
   const float high = preview_ceiling(x);
   const auto& n = x.layout.size;
-  write_slice_png(x, 2, n[2] / 2, 0.0f, high, preview_file(out, "_axial.png"));
-  write_slice_png(x, 1, n[1] / 2, 0.0f, high, preview_file(out, "_coronal.png"));
-  write_slice_png(x, 0, n[0] / 2, 0.0f, high, preview_file(out, "_sagittal.png"));
+  write_slice_preview(x, 2, n[2] / 2, 0.0f, high, "1/mm", preview_file(out, "_axial.png"));
+  write_slice_preview(x, 1, n[1] / 2, 0.0f, high, "1/mm", preview_file(out, "_coronal.png"));
+  write_slice_preview(x, 0, n[0] / 2, 0.0f, high, "1/mm", preview_file(out, "_sagittal.png"));
 }
 
 // Split into slabs: the first rank writes its slab and takes each other rank's in turn, so no
@@ -119,9 +121,9 @@ void write_slabs(const Volume& mine, const VolumeLayout& whole, const Communicat
             std::copy(coronal.data.begin(), coronal.data.end(),
                       std::copy(axial.data.begin(), axial.data.end(), all_three.data.begin())));
   const float high = preview_ceiling(all_three);
-  write_slice_png(axial, 2, 0, 0.0f, high, preview_file(out, "_axial.png"));
-  write_slice_png(coronal, 1, 0, 0.0f, high, preview_file(out, "_coronal.png"));
-  write_slice_png(sagittal, 0, 0, 0.0f, high, preview_file(out, "_sagittal.png"));
+  write_slice_preview(axial, 2, 0, 0.0f, high, "1/mm", preview_file(out, "_axial.png"));
+  write_slice_preview(coronal, 1, 0, 0.0f, high, "1/mm", preview_file(out, "_coronal.png"));
+  write_slice_preview(sagittal, 0, 0, 0.0f, high, "1/mm", preview_file(out, "_sagittal.png"));
 }
 
 void run_reconstruct(const ReconstructOptions& o) {
@@ -135,6 +137,8 @@ void run_reconstruct(const ReconstructOptions& o) {
   for (const fs::path& written : volume_files(o.out)) files.output("--out", written);
   const fs::path log_file = fs::path(o.out).replace_extension(".log.json");
   files.output("the log beside --out", log_file);
+  const fs::path page = fs::path(o.out).replace_extension(".report.html");
+  files.output("the HTML report beside --out", page);
   const fs::path state_file = fs::path(o.out).replace_extension(".state");
   files.output("the solver state beside --out", state_file);
   for (const char* slice : {"_axial.png", "_coronal.png", "_sagittal.png"})
@@ -146,7 +150,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   const ReconstructionOptions options = library_options(o);
   options.validate();
   const int described = static_cast<int>(geometry.views.size());
-  std::cout << "geometry: " << (o.geometry.empty() ? "nominal (from the scan file)" : o.geometry.string()) << ", "
+  std::cout << "geometry: " << (o.geometry.empty() ? geometry.origin + " (from the scan file)" : geometry.description()) << ", "
             << geometry.ok_views().size() << " of " << described << " views ok (the others are not used)";
   // A geometry of part of the scan is legitimate (views are matched by index), but so is a slip
   // of the wrong file: say so.
@@ -238,8 +242,11 @@ void run_reconstruct(const ReconstructOptions& o) {
   }
   nlohmann::json log = run.report();
   log["scan"] = o.scan.string();
-  log["geometry"] = o.geometry.empty() ? "nominal" : o.geometry.string();
+  log["geometry"] = o.geometry.empty() ? geometry.origin : geometry.description();
   write_text_atomically(log_file, log.dump(2) + "\n");
+  write_run_page("reconstruct", run.brief(), log,
+                 {preview_file(o.out, "_axial.png"), preview_file(o.out, "_coronal.png"), preview_file(o.out, "_sagittal.png")},
+                 page);
   outputs.publish();
   std::error_code ignored;
   fs::remove(state_file, ignored);  // the run is complete: nothing left to continue

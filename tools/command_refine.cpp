@@ -20,6 +20,8 @@
 #include "ctk/recon/refine_scan.hpp"
 #include "measurement_report.hpp"
 #include "progress.hpp"
+#include "ctk/core/slice_preview.hpp"
+#include "run_page.hpp"
 
 namespace ctk::tools {
 
@@ -35,7 +37,19 @@ struct RefineOptions {
 fs::path beside(const fs::path& out, const std::string& suffix) { return out.parent_path() / (out.stem().string() + suffix); }
 
 void write_central_slice(const Volume& x, float high, const fs::path& file) {
-  write_slice_png(x, 2, x.layout.size[2] / 2, 0.0f, high, file);
+  write_slice_preview(x, 2, x.layout.size[2] / 2, 0.0f, high, "1/mm", file);
+}
+
+// After less before on the same central slice, mid-grey 0, black and white at the largest change,
+// so that a change too small to see between the two pictures shows.
+void write_difference_slice(const Volume& before, const Volume& after, const fs::path& file) {
+  Volume d = after;
+  float largest = 1e-12f;
+  for (std::size_t i = 0; i < d.data.size(); ++i) {
+    d.data[i] -= before.data[i];
+    largest = std::max(largest, std::abs(d.data[i]));
+  }
+  write_slice_preview(d, 2, d.layout.size[2] / 2, -largest, largest, "1/mm", file);
 }
 
 // What the final model leaves fixed on the detector: each pixel's mean held-out residual over its
@@ -64,12 +78,14 @@ void run_refine(const RefineOptions& o) {
   files.scan("--scan", o.scan, scan);
   files.input("--geometry", o.geometry);
   files.output("--out", o.out);
-  for (const char* suffix : {".geometry.json", ".scan.json", ".before.png", ".after.png", ".pattern.png", ".pixel-offsets.tif"})
+  for (const char* suffix : {".geometry.json", ".scan.json", ".before.png", ".after.png", ".difference.png", ".pattern.png",
+                             ".pixel-offsets.tif", ".html"})
     files.output(std::string("beside --out: ") + suffix, beside(o.out, suffix));
   files.check();
   OutputSet outputs;  // published together, after the last is written
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
   const Geometry geometry = geometry_or_nominal(scan, o.scan, o.geometry);
+  std::cout << "geometry: " << (o.geometry.empty() ? geometry.origin + " (from the scan file)" : geometry.description()) << "\n";
   Progress reading("reading projections", "views");
   auto log = [&](const std::string& line) {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -85,9 +101,12 @@ void run_refine(const RefineOptions& o) {
 
   const fs::path geometry_file = beside(o.out, ".geometry.json"), scan_file = beside(o.out, ".scan.json");
   write_geometry(s.refined, geometry_file);
-  ScanDescription corrected = scan;
+  // The corrected scan names its files relative to where it is written, and its summary
+  // intrinsics state what the refined matrices encode.
+  ScanDescription corrected = relocated_scan(scan, scan_file);
   corrected.panda.reset();
-  corrected.matrices = MatricesPoseSource{fs::absolute(geometry_file).lexically_proximate(scan.folder).string(), s.refined};
+  corrected.matrices = MatricesPoseSource{geometry_file.filename().string(), s.refined};
+  state_matrices_intrinsics(corrected);
   write_scan(corrected, scan_file);
 
   nlohmann::json report = s.report();
@@ -106,10 +125,15 @@ void run_refine(const RefineOptions& o) {
   const float high = preview_ceiling(r.volume_before);  // one grey scale for both pictures
   write_central_slice(r.volume_before, high, beside(o.out, ".before.png"));
   write_central_slice(r.volume_after, high, beside(o.out, ".after.png"));
+  write_difference_slice(r.volume_before, r.volume_after, beside(o.out, ".difference.png"));
   write_pattern_picture(r.residual_pattern, beside(o.out, ".pattern.png"));
   if (!r.model.pixel_offset.empty())
     write_image_float(Image{scan.detector.cols, scan.detector.rows, r.model.pixel_offset}, beside(o.out, ".pixel-offsets.tif"));
 
+  write_run_page("refine", s.brief(), report,
+                 {beside(o.out, ".before.png"), beside(o.out, ".after.png"), beside(o.out, ".difference.png"),
+                  beside(o.out, ".pattern.png")},
+                 beside(o.out, ".html"));
   outputs.publish();
   std::cout << s.brief() << "\n";
   for (const auto& e : r.effects)

@@ -107,6 +107,7 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
   result.taken_over = static_cast<int>(std::count(finished.begin(), finished.end(), 2));
 
   result.geometry.detector = scan.detector;
+  result.geometry.origin = "calibrated";
   for (int v = 0; v < n; ++v) {
     const ViewCalibration& c = result.views[static_cast<std::size_t>(v)];
     GeometryView g;

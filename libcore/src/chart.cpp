@@ -66,13 +66,17 @@ void Chart::ticks(double x_step, double y_step) {
   // Either axis may run backwards (detector rows grow downwards).
   const double x_lo = std::min(axes_.x0, axes_.x1), x_hi = std::max(axes_.x0, axes_.x1);
   const double y_lo = std::min(axes_.y0, axes_.y1), y_hi = std::max(axes_.y0, axes_.y1);
-  for (double x = std::ceil(x_lo / x_step) * x_step; x <= x_hi + 1e-9 * x_step; x += x_step) {
+  // Ticks counted from whole steps: a tick at zero is 0, not the -0 that ceil(-0.3) * step gives.
+  auto tick = [](long k, double step) { return k == 0 ? 0.0 : static_cast<double>(k) * step; };
+  for (long k = static_cast<long>(std::ceil(x_lo / x_step - 1e-9)); tick(k, x_step) <= x_hi + 1e-9 * x_step; ++k) {
+    const double x = tick(k, x_step);
     const cv::Point p = at(x, axes_.y0);
     cv::line(canvas_, p, p + cv::Point(0, 4), colour::black);
     std::snprintf(label, sizeof label, "%g", x);
     cv::putText(canvas_, label, p + cv::Point(-8, 18), font, 0.4, colour::black, 1, cv::LINE_AA);
   }
-  for (double y = std::ceil(y_lo / y_step) * y_step; y <= y_hi + 1e-9 * y_step; y += y_step) {
+  for (long k = static_cast<long>(std::ceil(y_lo / y_step - 1e-9)); tick(k, y_step) <= y_hi + 1e-9 * y_step; ++k) {
+    const double y = tick(k, y_step);
     const cv::Point p = at(axes_.x0, y);
     cv::line(canvas_, p, p - cv::Point(4, 0), colour::black);
     std::snprintf(label, sizeof label, "%g", y);

@@ -137,7 +137,8 @@ void write_slice_png(const Volume& v, int axis, int index, float low, float high
   std::vector<unsigned char> pixels(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
   for (int r = 0; r < h; ++r)
     for (int c = 0; c < w; ++c) {
-      const float value = axis == 0 ? v.at(index, c, r) : axis == 1 ? v.at(c, index, r) : v.at(c, r, index);
+      const int z = h - 1 - r;  // coronal and sagittal slices with z up, as the scanner shows them
+      const float value = axis == 0 ? v.at(index, c, z) : axis == 1 ? v.at(c, index, z) : v.at(c, r, index);
       const float g = std::clamp((value - low) / std::max(high - low, 1e-30f), 0.0f, 1.0f);
       pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(w) + static_cast<std::size_t>(c)] =
           static_cast<unsigned char>(std::lround(255.0f * g));

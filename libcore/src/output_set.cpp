@@ -117,6 +117,13 @@ void OutputSet::add(fs::path temporary, fs::path target) {
   waiting_.emplace_back(std::move(temporary), std::move(target));
 }
 
+fs::path OutputSet::current(const fs::path& target) {
+  const std::lock_guard lock(mutex_);
+  for (auto it = waiting_.rbegin(); it != waiting_.rend(); ++it)
+    if (it->second == target) return it->first;
+  return target;
+}
+
 void OutputSet::publish() {
   const std::lock_guard lock(mutex_);
   for (auto it = waiting_.begin(); it != waiting_.end(); it = waiting_.erase(it)) {

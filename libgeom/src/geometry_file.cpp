@@ -30,6 +30,11 @@ std::vector<int> Geometry::ok_views() const {
   return out;
 }
 
+std::string Geometry::description() const {
+  const std::string what = origin.empty() ? std::string("matrices of unstated origin") : origin;
+  return file.empty() ? what : what + " (" + file.string() + ")";
+}
+
 std::string Geometry::source() const { return file.empty() ? std::string("geometry") : file.string(); }
 
 Geometry read_geometry(const std::filesystem::path& file) { return geometry_from_json(read_json_file(file), file); }
@@ -41,6 +46,7 @@ Geometry geometry_from_json(const nlohmann::json& root, const std::filesystem::p
   if (format != kFormat) top.at("format").fail("expected \"" + std::string(kFormat) + "\", got \"" + format + "\"");
   Geometry g;
   g.file = file;
+  if (auto origin = top.find("origin")) g.origin = origin->string();
   const JsonNode det = top.at("detector");
   g.detector.cols = det.at("cols").integer();
   g.detector.rows = det.at("rows").integer();
@@ -94,13 +100,15 @@ nlohmann::json geometry_to_json(const Geometry& g) {
     if (v.spheres_used) jv["spheres_used"] = *v.spheres_used;
     views.push_back(std::move(jv));
   }
-  return {{"format", kFormat},
-          {"provenance", provenance()},
-          {"detector",
-           {{"cols", g.detector.cols},
-            {"rows", g.detector.rows},
-            {"pixel_pitch_mm", {g.detector.pitch_u_mm, g.detector.pitch_v_mm}}}},
-          {"views", views}};
+  json j = {{"format", kFormat},
+            {"provenance", provenance()},
+            {"detector",
+             {{"cols", g.detector.cols},
+              {"rows", g.detector.rows},
+              {"pixel_pitch_mm", {g.detector.pitch_u_mm, g.detector.pitch_v_mm}}}},
+            {"views", views}};
+  if (!g.origin.empty()) j["origin"] = g.origin;
+  return j;
 }
 
 void write_geometry(const Geometry& g, const std::filesystem::path& file) {

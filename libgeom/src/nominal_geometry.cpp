@@ -40,6 +40,8 @@ std::vector<NominalView> nominal_views(const ScanDescription& scan) {
 Geometry nominal_geometry(const ScanDescription& scan) {
   Geometry g;
   g.detector = scan.detector;
+  // A matrices scan's geometry is what its matrices are (a refined scan's are refined ones).
+  g.origin = scan.matrices && !scan.matrices->geometry.origin.empty() ? scan.matrices->geometry.origin : "nominal";
   const auto views = nominal_views(scan);
   for (int i = 0; i < static_cast<int>(views.size()); ++i) {
     GeometryView v;

@@ -186,6 +186,33 @@ ProjectionCensus require_projection_files(const ScanDescription& scan, const std
   return census;
 }
 
+ScanDescription relocated_scan(const ScanDescription& scan, const fs::path& file) {
+  ScanDescription out = scan;
+  out.folder = file.has_parent_path() ? file.parent_path() : fs::path(".");
+  const fs::path to = fs::absolute(out.folder).lexically_normal();
+  auto move = [&](std::string& name) {
+    if (name.empty() || fs::path(name).is_absolute()) return;
+    name = fs::absolute(scan.resolve(name)).lexically_normal().lexically_proximate(to).string();
+  };
+  move(out.projections.files_pattern);
+  for (auto* names : {&out.projections.file_names, &out.projections.flat, &out.projections.dark})
+    for (std::string& n : *names) move(n);
+  if (out.panda) move(out.panda->joints_csv);
+  if (out.matrices) move(out.matrices->file);
+  return out;
+}
+
+void state_matrices_intrinsics(ScanDescription& scan) {
+  if (!scan.matrices) return;
+  for (const GeometryView& v : scan.matrices->geometry.views) {
+    if (!v.P) continue;
+    const auto first = v.P->decompose();
+    scan.source_to_detector_mm = std::abs(first.intrinsics.fu_px) * scan.detector.pitch_u_mm;
+    scan.principal_point_px = {first.intrinsics.u0_px, first.intrinsics.v0_px};
+    return;
+  }
+}
+
 void bin_scan(ScanDescription& scan, int factor) {
   if (factor == 1) return;
   const Detector before = scan.detector;

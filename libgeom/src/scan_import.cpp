@@ -80,11 +80,9 @@ ImportedScan import_matrices(const Detector& detector, const std::vector<Project
   scan.folder = folder;
   scan.detector = detector;
   scan.projections = projections;
-  const auto first = matrices.front().decompose();
-  scan.source_to_detector_mm = std::abs(first.intrinsics.fu_px) * detector.pitch_u_mm;
-  scan.principal_point_px = {first.intrinsics.u0_px, first.intrinsics.v0_px};
 
   out.geometry.detector = detector;
+  out.geometry.origin = "nominal";
   for (int i = 0; i < projections.count; ++i) {
     GeometryView v;
     v.index = i;
@@ -93,6 +91,7 @@ ImportedScan import_matrices(const Detector& detector, const std::vector<Project
     out.geometry.views.push_back(v);
   }
   scan.matrices = MatricesPoseSource{fs::path(scan_file).stem().string() + ".matrices.json", out.geometry};
+  state_matrices_intrinsics(scan);
   return out;
 }
 

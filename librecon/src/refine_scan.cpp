@@ -87,6 +87,8 @@ RefineScanSummary refine_scan(const ScanDescription& scan, Geometry geometry, co
     v.rms_px.reset();
   }
   s.refined = std::move(geometry);
+  s.refined.origin = "refined";
+  s.refined.file.clear();
   s.loop_u0_px = probe.nominal_principal_point().x() + s.result.geometry.du_px;
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return s;

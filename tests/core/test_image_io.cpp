@@ -1,6 +1,7 @@
 // Image and volume files: round trips, integer counts kept as counts, real TIFFs from the
 // measured data, and clear errors for missing, truncated or wrongly sized images.
 #include "ctk/core/image_io.hpp"
+#include "ctk/core/slice_preview.hpp"
 #include "ctk/core/volume_file.hpp"
 
 #include <gtest/gtest.h>
@@ -198,6 +199,53 @@ TEST(ImageIo, VolumeOutputs) {
   EXPECT_EQ(png.cols, 5);
   EXPECT_EQ(png.rows, 4);
   EXPECT_EQ(png.pixels[0], std::round(255.0f * 20 / 59));
+}
+
+}  // namespace
+}  // namespace ctk
+
+namespace ctk {
+namespace {
+
+// A volume bright only near its top (high z) and its +x side: the coronal and sagittal pictures
+// show z up, the axial one x to the right; the labelled preview keeps the same orientation.
+TEST(ImageIo, SlicesShowTheTopAtTheTop) {
+  const auto dir = testing::scratch_dir();
+  Volume v(VolumeLayout::centred({20, 16, 12}, Eigen::Vector3d(0.5, 0.5, 0.5)));
+  for (int k = 9; k < 12; ++k)
+    for (int j = 0; j < 16; ++j)
+      for (int i = 14; i < 20; ++i) v.at(i, j, k) = 0.9f;
+  write_slice_png(v, 1, 8, 0.0f, 1.0f, dir / "coronal.png");
+  const Image coronal = read_image(dir / "coronal.png");
+  ASSERT_EQ(coronal.cols, 20);
+  ASSERT_EQ(coronal.rows, 12);
+  EXPECT_EQ(coronal.pixels[19], std::round(0.9f * 255));  // top row, right end: z = 11, x = 19
+  EXPECT_EQ(coronal.pixels[11 * 20 + 19], 0.0f);          // bottom row: z = 0
+  write_slice_png(v, 0, 16, 0.0f, 1.0f, dir / "sagittal.png");
+  const Image sagittal = read_image(dir / "sagittal.png");
+  EXPECT_EQ(sagittal.pixels[0], std::round(0.9f * 255));
+  EXPECT_EQ(sagittal.pixels[11 * 16], 0.0f);
+
+  write_slice_preview(v, 1, 8, 0.0f, 1.0f, "1/mm", dir / "preview.png");
+  const Image preview = read_image(dir / "preview.png");  // first channel of the RGB picture
+  // The bright block (grey 230; the margin is white) lies in the picture's upper third, to the
+  // right; none in its middle third (the bottom third holds the grey bar, whose light end is as
+  // light).
+  double top = 0, middle = 0, bright_x = 0;
+  for (int r = 0; r < preview.rows; ++r)
+    for (int c = 0; c < preview.cols; ++c) {
+      const float g = preview.pixels[static_cast<std::size_t>(r * preview.cols + c)];
+      if (g < 225.0f || g > 235.0f) continue;
+      if (r < preview.rows / 3) {
+        top += 1;
+        bright_x += c;
+      } else if (r < 2 * preview.rows / 3) {
+        middle += 1;
+      }
+    }
+  EXPECT_GT(top, 1000);
+  EXPECT_EQ(middle, 0);
+  EXPECT_GT(bright_x / top, 0.55 * preview.cols);
 }
 
 }  // namespace

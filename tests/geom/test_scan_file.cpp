@@ -348,6 +348,50 @@ TEST(ScanFile, BinningExtension) {
       dir / "binned.json", [](nlohmann::json& k) { k["detector"]["binning"] = 201; }, "detector.binning");
 }
 
+// A scan written elsewhere (a corrected scan beside its report) still finds its files.
+TEST(ScanFile, RelocatedScanFindsTheSameFiles) {
+  const auto dir = testing::scratch_dir();
+  const auto file = write_valid_scan(dir, 6);
+  nlohmann::json j = read_json_file(file);
+  j["projections"]["kind"] = "counts";
+  j["projections"]["flat"] = {"flats/f0.tif", "flats/f1.tif"};
+  j["projections"]["dark"] = "dark.tif";
+  std::filesystem::create_directories(dir / "flats");
+  for (const char* f : {"flats/f0.tif", "flats/f1.tif", "dark.tif"}) testing::write_text(dir / f, "");
+  testing::write_text(file, j.dump(2));
+  const ScanDescription scan = read_scan(file);
+  const std::filesystem::path elsewhere = dir / "out" / "deeper" / "corrected.json";
+  std::filesystem::create_directories(elsewhere.parent_path());
+  write_scan(relocated_scan(scan, elsewhere), elsewhere);
+  const ScanDescription moved = read_scan(elsewhere);
+  auto same = [](const std::filesystem::path& a, const std::filesystem::path& b) {
+    return std::filesystem::weakly_canonical(a) == std::filesystem::weakly_canonical(b);
+  };
+  EXPECT_TRUE(same(moved.projection_path(4), scan.projection_path(4))) << moved.projection_path(4);
+  EXPECT_EQ(moved.projections.files_pattern, "../../proj_%04d.tif");
+  EXPECT_TRUE(same(moved.resolve(moved.projections.flat[1]), dir / "flats/f1.tif"));
+  EXPECT_TRUE(same(moved.resolve(moved.projections.dark[0]), dir / "dark.tif"));
+  EXPECT_TRUE(same(moved.resolve(moved.panda->joints_csv), dir / "joints.csv"));
+}
+
+// The origin of a geometry file's matrices is kept, and a matrices scan's nominal geometry is
+// what its matrices are.
+TEST(GeometryFile, OriginRoundTrips) {
+  const auto dir = testing::scratch_dir();
+  const ScanDescription scan = read_scan(write_valid_scan(dir, 4));
+  Geometry g = nominal_geometry(scan);
+  EXPECT_EQ(g.origin, "nominal");
+  g.origin = "refined";
+  write_geometry(g, dir / "refined.json");
+  const Geometry back = read_geometry(dir / "refined.json");
+  EXPECT_EQ(back.origin, "refined");
+  EXPECT_EQ(back.description(), "refined (" + (dir / "refined.json").string() + ")");
+  nlohmann::json j = read_json_file(dir / "scan.json");
+  j["pose_source"] = {{"kind", "matrices"}, {"file", "refined.json"}};
+  testing::write_text(dir / "scan_refined.json", j.dump(2));
+  EXPECT_EQ(nominal_geometry(read_scan(dir / "scan_refined.json")).origin, "refined");
+}
+
 TEST(ScanFile, HolderWallExtension) {
   const auto file = write_valid_scan(testing::scratch_dir());
   const ScanDescription scan = read_scan(file);

@@ -35,7 +35,8 @@ Image binned_image(const Image& image, int factor);
 /// The grey level previews map to white: the 99.9th percentile of the voxels (a few hot voxels
 /// must not darken the picture), at least 1e-6.
 float preview_ceiling(const Volume& volume);
-/// Slice `index` across `axis` (0: x, 1: y, 2: z), grey levels linear from `low` to `high`.
+/// Slice `index` across `axis` (0: x, 1: y, 2: z), one pixel per voxel, grey levels linear from `low`
+/// to `high`; coronal and sagittal slices (axes 0 and 1) with z up. Labelled previews: slice_preview.hpp.
 void write_slice_png(const Volume& volume, int axis, int index, float low, float high, const std::filesystem::path& file);
 
 }  // namespace ctk

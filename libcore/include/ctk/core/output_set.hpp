@@ -38,6 +38,8 @@ class OutputSet {
   static OutputSet* active();
   /// Called by the atomic writers: `temporary` is complete and waits to become `target`.
   void add(std::filesystem::path temporary, std::filesystem::path target);
+  /// Where `target`'s content is now: its temporary while it waits in this set, else `target`.
+  std::filesystem::path current(const std::filesystem::path& target);
 
   /// While one lives, atomic writes of this process are renamed at once, not held for the set (a
   /// solver's saved state, which must outlive an interrupted run).

@@ -28,6 +28,12 @@ struct Geometry {
   Detector detector;
   std::vector<GeometryView> views;
   std::filesystem::path file;  // what read_geometry read it from; empty for one made in memory
+  /// Where the matrices come from (optional key `origin`, an extension of ctk-geometry/1):
+  /// "nominal" (the setup's prediction or numbers imported), "calibrated" (fitted to the helix
+  /// spheres), "refined" (the markerless loop); empty when a file does not say.
+  std::string origin;
+  /// "refined (run/refine.geometry.json)": what a run names the geometry it uses by.
+  std::string description() const;
 
   std::vector<int> ok_views() const;  // indices into views
   /// The file for error messages: `file`, or "geometry" for one made in memory.

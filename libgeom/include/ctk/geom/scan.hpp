@@ -79,6 +79,14 @@ struct ScanDescription {
   std::filesystem::path projection_path(int view) const { return resolve(projections.file_name(view)); }
 };
 
+/// The same scan written at `file`: every relative name (projections, flats, darks, joints,
+/// matrices) rewritten so that it finds the same file from the new folder.
+ScanDescription relocated_scan(const ScanDescription& scan, const std::filesystem::path& file);
+
+/// A matrices scan's summary intrinsics (source-to-detector distance, principal point:
+/// informative only) set to what its first view with a matrix encodes.
+void state_matrices_intrinsics(ScanDescription& scan);
+
 /// Bins the scan's detector by a further `factor` (b x b pixels become one): detector, principal
 /// point, distortion and a matrices pose source follow. Throws std::invalid_argument when the factor
 /// does not fit the detector.

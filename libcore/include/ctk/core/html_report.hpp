@@ -1,0 +1,30 @@
+#pragma once
+// One self-contained HTML page per run, to open in any browser and pass on: what the run did in a
+// line, its numbers and per-view tables rendered from its JSON report, its pictures embedded (PNG
+// as data URIs, so the page needs no file beside it), and the build and command line that made it.
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ctk {
+
+struct HtmlReport {
+  std::string title;  // "ctk calibrate"
+  std::string brief;  // the run's one-line summary
+  /// Rendered section by section: top-level numbers and texts in one table, each object as a
+  /// section, lists of objects (per-view records) as tables, `provenance` last.
+  nlohmann::json report;
+  /// Caption and PNG file. A file still waiting in the active OutputSet is read where it waits.
+  std::vector<std::pair<std::string, std::filesystem::path>> pictures;
+};
+
+/// The page as text (the pictures read and encoded). Throws std::runtime_error naming a picture
+/// that cannot be read.
+std::string html_report_text(const HtmlReport& report);
+
+/// Written atomically (waiting in the active OutputSet like every output).
+void write_html_report(const HtmlReport& report, const std::filesystem::path& file);
+
+}  // namespace ctk
