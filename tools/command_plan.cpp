@@ -127,7 +127,8 @@ void print_view(const PlannedViewRecord& v, int wanted, int& calibrated) {
   std::fprintf(stderr, "\n");
 }
 
-void report_plan(const PlanningResult& r, const fs::path& folder) {
+// `pictures`: those the run drew for this trajectory (the planner's map; none for the others).
+void report_plan(const PlanningResult& r, const fs::path& folder, const std::vector<fs::path>& pictures = {}) {
   double worst = 0, sum = 0;
   for (double s : r.step_seconds) {
     worst = std::max(worst, s);
@@ -141,8 +142,7 @@ void report_plan(const PlanningResult& r, const fs::path& folder) {
   brief << "; absorbers: "
         << (r.segmentation.voxels > 0 ? std::to_string(r.segmentation.voxels) + " coarse voxels" : r.segmentation.note);
   std::cout << brief.str() << "\n";
-  write_run_page("plan", brief.str(), read_json_file(folder / "trajectory.json"), {folder / "plan-map.png"},
-                 folder / "plan.html");
+  write_run_page("plan", brief.str(), read_json_file(folder / "trajectory.json"), pictures, folder / "plan.html");
 }
 
 // The truth of the sample at the layout's voxels (2 x 2 x 2 points per voxel).
@@ -358,7 +358,7 @@ void run_plan(const PlanCommandOptions& o) {
     write_planned_scan(r, setup, o.out);
     write_plan_map_png(r, o.out / "plan-map.png");
     write_volume(r.coarse, o.out / "coarse.nrrd");
-    report_plan(r, o.out);
+    report_plan(r, o.out, {o.out / "plan-map.png"});
     return;
   }
   RunFiles files;
@@ -378,7 +378,7 @@ void run_plan(const PlanCommandOptions& o) {
   write_planned_scan(r, setup, folder);
   write_plan_map_png(r, folder / "plan-map.png");
   write_volume(r.coarse, folder / "coarse.nrrd");
-  report_plan(r, folder);
+  report_plan(r, folder, {folder / "plan-map.png"});
   if (o.compare) {
     acquire_others(o, lab.simulation(), setup, r.calibrated());
     compare(o, lab.simulation());

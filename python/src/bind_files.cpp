@@ -12,7 +12,9 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "ctk/core/nexus_tomo.hpp"
 #include "ctk/core/volume_file.hpp"
+#include "ctk/geom/nikon_xtekct.hpp"
 #include "ctk/geom/astra.hpp"
 #include "ctk/geom/rtk_geometry.hpp"
 #include "ctk/geom/geometry_file.hpp"
@@ -75,6 +77,54 @@ py::array_t<double> read_rtk(const fs::path& file, const std::array<int, 2>& det
   std::vector<ProjectionMatrix> out;
   for (const RtkProjection& v : g.views) out.push_back(from_rtk(v, d, sense));
   return matrices_to_numpy(out);
+}
+
+py::object optional_mm(const std::optional<double>& v) { return v ? py::object(py::float_(*v)) : py::object(py::none()); }
+
+// Every frame as (frames, rows, cols) float32, read with the GIL released, and what the file says.
+py::dict read_nxtomo_file(const fs::path& file, const std::string& entry) {
+  const NxTomo scan = read_nxtomo(file, entry);
+  py::array_t<float> frames(std::vector<py::ssize_t>{scan.frames, scan.rows, scan.cols});
+  float* out = frames.mutable_data();
+  {
+    py::gil_scoped_release free;
+    const std::size_t size = static_cast<std::size_t>(scan.rows) * static_cast<std::size_t>(scan.cols);
+    for (int f = 0; f < scan.frames; ++f) {
+      const Image image = read_nxtomo_frame(scan, f);
+      std::copy(image.pixels.begin(), image.pixels.end(), out + static_cast<std::size_t>(f) * size);
+    }
+  }
+  py::array_t<int> keys(static_cast<py::ssize_t>(scan.frames));
+  for (int f = 0; f < scan.frames; ++f) keys.mutable_at(f) = static_cast<int>(scan.kind[static_cast<std::size_t>(f)]);
+  py::dict d;
+  d["entry"] = scan.entry;
+  d["frames"] = frames;
+  d["image_key"] = keys;
+  d["rotation_angle_deg"] =
+      py::array_t<double>(static_cast<py::ssize_t>(scan.rotation_angle_deg.size()), scan.rotation_angle_deg.data());
+  d["x_pixel_size_mm"] = optional_mm(scan.x_pixel_size_mm);
+  d["y_pixel_size_mm"] = optional_mm(scan.y_pixel_size_mm);
+  d["sample_to_detector_mm"] = optional_mm(scan.sample_to_detector_mm);
+  d["source_to_sample_mm"] = optional_mm(scan.source_to_sample_mm);
+  d["warnings"] = scan.warnings;
+  return d;
+}
+
+py::dict read_xtekct_file(const fs::path& file, int sense) {
+  const NikonScan scan = read_xtekct(file);
+  if (sense != 1 && sense != -1) throw py::value_error("sense: expected +1 or -1");
+  std::vector<std::string> files;
+  for (const fs::path& f : nikon_projection_files(scan)) files.push_back(f.string());
+  py::dict d;
+  d["matrices"] = matrices_to_numpy(nikon_matrices(scan, sense));
+  d["files"] = files;
+  d["detector_shape"] = py::make_tuple(scan.detector.rows, scan.detector.cols);
+  d["pixel_mm"] = py::make_tuple(scan.detector.pitch_u_mm, scan.detector.pitch_v_mm);
+  d["white_level"] = scan.white_level;
+  d["source_to_object_mm"] = scan.source_to_object_mm;
+  d["source_to_detector_mm"] = scan.source_to_detector_mm;
+  d["warnings"] = scan.warnings;
+  return d;
 }
 
 void write_rtk(const DoubleArray& matrices, const fs::path& file, const std::array<int, 2>& detector_shape,
@@ -167,6 +217,15 @@ void bind_files(py::module_& m) {
         "RTK's geometry XML as (views, 3, 4) matrices for a detector of detector_shape (rows, cols) and pixel_mm (u, v). "
         "rows: 'as-stored' (RTK indexed the images as stored) or 'flipped' (vertically); default: what a file written by ctk "
         "names, else 'as-stored' (docs/geometry.md). InputError names the file and the element.");
+  m.def("read_nxtomo", &read_nxtomo_file, py::arg("file"), py::arg("entry") = "",
+        "An HDF5/NeXus NXtomo file as a dict: frames (frames, rows, cols) float32, image_key per frame (0 projection, 1 flat, "
+        "2 dark, 3 invalid), rotation_angle_deg, the pixel sizes and distances in mm (None where the file has none), "
+        "entry and warnings. entry: the NXentry (default: the first whose definition is NXtomo). InputError names the "
+        "file and the dataset.");
+  m.def("read_xtekct", &read_xtekct_file, py::arg("file"), py::arg("sense") = 1,
+        "A Nikon .xtekct scan as a dict: matrices (views, 3, 4) placed as CIL's reader documents (sense -1: the sample "
+        "turning the other way), the projection files in natural order, detector_shape (rows, cols), pixel_mm (u, v), "
+        "white_level, the distances and warnings. InputError names the file and the key.");
   m.def("write_rtk_geometry", &write_rtk, py::arg("matrices"), py::arg("file"), py::arg("detector_shape"), py::arg("pixel_mm"),
         py::arg("rows") = "",
         "(views, 3, 4) matrices as RTK's geometry XML (version 3), atomically, under the pixel map rows ('as-stored', "

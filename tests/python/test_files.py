@@ -162,3 +162,24 @@ def test_an_import_never_writes_over_its_inputs(simulated):
         ctk.import_scan(simulated / "other.json", np.concatenate([P, P]), [image], (64, 64), (6.75, 6.75))
     with pytest.raises(ValueError, match="RefineScanOptions.coarsening"):
         ctk.refine(simulated / "scan.json", coarsening=0.5)
+
+
+def test_other_tools_scans_read_as_the_command_line_imports_them(tmp_path, ctk_command):
+    import os
+    run([os.environ["CTK_VENDOR_SCANS"], "write", str(tmp_path)])
+    nx = ctk.read_nxtomo(tmp_path / "nxtomo" / "scan.nx")
+    assert nx["frames"].shape == (96, 80, 96) and nx["frames"].dtype == np.float32
+    assert [int((nx["image_key"] == k).sum()) for k in range(4)] == [90, 3, 2, 1]
+    assert nx["x_pixel_size_mm"] == pytest.approx(0.8) and nx["source_to_sample_mm"] == pytest.approx(200)
+    run([ctk_command, "import", "nxtomo", "--nexus", str(tmp_path / "nxtomo" / "scan.nx"), "--out", str(tmp_path / "nx.json")])
+    first = int(np.flatnonzero(nx["image_key"] == 0)[0])
+    assert np.array_equal(ctk.read_image(tmp_path / "nx.frames" / "proj_00000.tif"), nx["frames"][first])
+
+    nikon = ctk.read_xtekct(tmp_path / "nikon" / "ball.xtekct")
+    assert nikon["matrices"].shape == (90, 3, 4) and nikon["detector_shape"] == (80, 96)
+    assert [pathlib.Path(f).name for f in nikon["files"][:2]] == ["ball_0001.tif", "ball_0002.tif"]
+    run([ctk_command, "import", "nikon", "--xtekct", str(tmp_path / "nikon" / "ball.xtekct"), "--out", str(tmp_path / "nk.json")])
+    _, imported = ctk.geometry_matrices(ctk.read_geometry(tmp_path / "nk.matrices.json"))
+    assert np.allclose(imported, nikon["matrices"], rtol=1e-12, atol=1e-9)
+    with pytest.raises(ctk.InputError, match="not an HDF5 file"):
+        ctk.read_nxtomo(tmp_path / "nk.json")
