@@ -23,6 +23,7 @@ packages=(
   libhwy-dev             # SIMD with runtime dispatch (Highway)
   libopenmpi-dev openmpi-bin   # runs spread over ranks (mpirun -np N ctk reconstruct|calibrate)
   clang-format           # tests/format: the sources as .clang-format says
+  clang-tidy             # tests/tidy: the base layers checked by .clang-tidy
   python3                # benchmarks/yardstick.py: the benchmark checked from outside (standard library only)
   python3-dev pybind11-dev python3-numpy   # the Python module (import ctk)
   python3-scipy python3-pytest python3-matplotlib   # its tests (scipy's solvers on the operator) and examples

@@ -6,3 +6,11 @@ bash scripts/setup.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DCTK_BUILD_TESTS=ON -DCTK_WARNINGS_AS_ERRORS=ON >/dev/null
 cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure -j"$(nproc)"
+# The base layers' tests again under AddressSanitizer and UndefinedBehaviorSanitizer, any finding
+# fatal (a separate build: -O1, no benchmarks, no Python, no MPI; about 2.5 minutes on 2 cores).
+cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DCTK_SANITIZE=ON \
+      -DCTK_BUILD_BENCHMARKS=OFF -DCTK_BUILD_PYTHON=OFF -DCTK_WITH_MPI=OFF -DCTK_WARNINGS_AS_ERRORS=ON >/dev/null
+cmake --build build-sanitize --target test_core test_geom -j"$(nproc)"
+build-sanitize/tests/test_core --gtest_brief=1
+build-sanitize/tests/test_geom --gtest_brief=1
+echo "sanitizers: test_core and test_geom clean under AddressSanitizer and UndefinedBehaviorSanitizer"

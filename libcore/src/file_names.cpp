@@ -55,6 +55,7 @@ std::vector<fs::path> matching_files(const fs::path& folder, const std::string& 
   }
   std::sort(names.begin(), names.end(), natural_less);
   std::vector<fs::path> out;
+  out.reserve(names.size());
   for (const std::string& n : names) out.push_back(folder / n);
   return out;
 }

@@ -65,6 +65,7 @@ class MpiWorld final : public Communicator {
     MPI_Allgatherv(text.data(), length, MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR, MPI_COMM_WORLD);
     bytes_sent_ += text.size() + sizeof(int);
     std::vector<std::string> out;
+    out.reserve(static_cast<std::size_t>(size_));
     for (int r = 0; r < size_; ++r)
       out.push_back(all.substr(static_cast<std::size_t>(offsets[static_cast<std::size_t>(r)]),
                                static_cast<std::size_t>(lengths[static_cast<std::size_t>(r)])));
@@ -100,7 +101,8 @@ class MpiWorld final : public Communicator {
   // Point to point in pieces: a slab may have more values than an MPI count holds.
   void send(int to, std::span<const float> values) const override {
     for (std::size_t begin = 0; begin < values.size(); begin += kPiece)
-      MPI_Send(values.data() + begin, static_cast<int>(std::min(kPiece, values.size() - begin)), MPI_FLOAT, to, 0, MPI_COMM_WORLD);
+      MPI_Send(values.data() + begin, static_cast<int>(std::min(kPiece, values.size() - begin)), MPI_FLOAT, to, 0,
+               MPI_COMM_WORLD);
     bytes_sent_ += values.size_bytes();
   }
   void receive(int from, std::span<float> values) const override {

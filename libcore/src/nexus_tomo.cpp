@@ -163,7 +163,7 @@ std::string find_source(const Reader& r, const std::string& instrument) {
       H5O_info_t object{};
       if (H5Oget_info_by_name(group.get(), name.c_str(), &object, H5P_DEFAULT) < 0 || object.type != H5O_TYPE_GROUP) continue;
       const Handle child(H5Gopen2(group.get(), name.c_str(), H5P_DEFAULT), H5Gclose);
-      if (child.valid() && string_attribute(child.get(), "NX_class") == "NXsource") return instrument + "/" + name;
+      if (child.valid() && string_attribute(child.get(), "NX_class") == "NXsource") return instrument + "/" += name;
     }
   return instrument + "/source";
 }

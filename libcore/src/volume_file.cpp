@@ -63,7 +63,9 @@ std::vector<fs::path> volume_files(const fs::path& file) {
 }
 
 void write_volume(const Volume& volume, const fs::path& file) {
-  write_volume(VolumeSlabs{volume.layout, {volume.layout.size[2]}, [&](int) { return std::span<const float>(volume.data.data(), volume.data.size()); }},
+  write_volume(VolumeSlabs{volume.layout,
+                           {volume.layout.size[2]},
+                           [&](int) { return std::span<const float>(volume.data.data(), volume.data.size()); }},
                file);
 }
 
@@ -71,7 +73,8 @@ void write_volume(const VolumeSlabs& volume, const fs::path& file) {
   int planes = 0;
   for (int p : volume.planes) planes += p;
   if (planes != volume.layout.size[2] || std::any_of(volume.planes.begin(), volume.planes.end(), [](int p) { return p < 0; }))
-    throw std::invalid_argument("write_volume: the slabs' planes do not add up to the volume's " + std::to_string(volume.layout.size[2]));
+    throw std::invalid_argument("write_volume: the slabs' planes do not add up to the volume's " +
+                                std::to_string(volume.layout.size[2]));
   switch (volume_format(file)) {
     case VolumeFormat::nrrd:
       return volume_formats::write_nrrd(volume, file);

@@ -17,22 +17,20 @@ ConeVec to_cone_vec(const ProjectionMatrix& P, const Detector& detector, double 
   const Eigen::Vector2d c = detector.centre_px();
   const Eigen::Vector3d d = s + lambda * Minv * Eigen::Vector3d(c.x(), c.y(), 1.0);
   const Eigen::Vector3d u = lambda * Minv.col(0), v = lambda * Minv.col(1);
+  return make_cone_vec(s, d, u, v, mm_per_unit);
+}
+
+ConeVec make_cone_vec(const Eigen::Vector3d& source, const Eigen::Vector3d& detector_centre, const Eigen::Vector3d& u,
+                      const Eigen::Vector3d& v, double mm_per_unit) {
   ConeVec out{};
-  for (int i = 0; i < 3; ++i) {
-    out[static_cast<std::size_t>(i)] = s[i] / mm_per_unit;
-    out[static_cast<std::size_t>(3 + i)] = d[i] / mm_per_unit;
-    out[static_cast<std::size_t>(6 + i)] = u[i] / mm_per_unit;
-    out[static_cast<std::size_t>(9 + i)] = v[i] / mm_per_unit;
-  }
+  const Eigen::Vector3d* parts[4] = {&source, &detector_centre, &u, &v};
+  for (std::size_t p = 0; p < 4; ++p)
+    for (Eigen::Index i = 0; i < 3; ++i) out[3 * p + static_cast<std::size_t>(i)] = (*parts[p])[i] / mm_per_unit;
   return out;
 }
 
 ProjectionMatrix from_cone_vec(const ConeVec& vec, const Detector& detector, double mm_per_unit) {
-  auto at = [&](int i) -> Eigen::Vector3d {
-    return Eigen::Vector3d(vec[static_cast<std::size_t>(i)], vec[static_cast<std::size_t>(i + 1)],
-                           vec[static_cast<std::size_t>(i + 2)]) *
-           mm_per_unit;
-  };
+  auto at = [&](std::size_t i) -> Eigen::Vector3d { return Eigen::Vector3d(vec[i], vec[i + 1], vec[i + 2]) * mm_per_unit; };
   const Eigen::Vector3d s = at(0), d = at(3), u = at(6), v = at(9);
   const Eigen::Vector2d c = detector.centre_px();
   const Eigen::Vector3d o = d - c.x() * u - c.y() * v;  // centre of pixel (0, 0)

@@ -68,9 +68,8 @@ JointLog JointLog::read(const std::filesystem::path& path, int view_count) {
     if (log.row_of_view_[static_cast<std::size_t>(view)] >= 0)
       throw InputError(file, where, "view " + std::to_string(view) + " appears twice");
     panda::Joints q{};
-    for (int j = 0; j < panda::kJointCount; ++j)
-      q[static_cast<std::size_t>(j)] =
-          parse_number(cells[static_cast<std::size_t>(j + 1)], file, where + ", column q" + std::to_string(j + 1));
+    for (std::size_t j = 0; j < q.size(); ++j)
+      q[j] = parse_number(cells[j + 1], file, where + ", column q" + std::to_string(j + 1));
     log.add(view, q);
   }
   return log;

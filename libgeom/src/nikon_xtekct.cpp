@@ -141,14 +141,7 @@ std::vector<ProjectionMatrix> nikon_matrices(const NikonScan& s, int sense) {
     const Eigen::Matrix3d to_volume = (axis_frame * about(Eigen::Vector3d::UnitZ(), angle)).transpose();
     const Eigen::Vector3d src = to_volume * (source - axis_point), det = to_volume * (detector_centre - axis_point),
                           u = to_volume * column_step, v = to_volume * row_step;
-    ConeVec c{};
-    for (int i = 0; i < 3; ++i) {
-      c[static_cast<std::size_t>(i)] = src[i];
-      c[static_cast<std::size_t>(3 + i)] = det[i];
-      c[static_cast<std::size_t>(6 + i)] = u[i];
-      c[static_cast<std::size_t>(9 + i)] = v[i];
-    }
-    out.push_back(from_cone_vec(c, s.detector));
+    out.push_back(from_cone_vec(make_cone_vec(src, det, u, v), s.detector));
   }
   return out;
 }

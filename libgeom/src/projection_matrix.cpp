@@ -92,15 +92,15 @@ ProjectionMatrix ProjectionMatrix::then(const Rigid& T) const { return Projectio
 
 std::array<double, 12> ProjectionMatrix::row_major() const {
   std::array<double, 12> p{};
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) p[static_cast<std::size_t>(4 * r + c)] = P_(r, c);
+  for (Eigen::Index r = 0; r < 3; ++r)
+    for (Eigen::Index c = 0; c < 4; ++c) p[static_cast<std::size_t>(4 * r + c)] = P_(r, c);
   return p;
 }
 
 ProjectionMatrix ProjectionMatrix::from_row_major(const std::array<double, 12>& p) {
   Matrix34d P;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) P(r, c) = p[static_cast<std::size_t>(4 * r + c)];
+  for (Eigen::Index r = 0; r < 3; ++r)
+    for (Eigen::Index c = 0; c < 4; ++c) P(r, c) = p[static_cast<std::size_t>(4 * r + c)];
   return ProjectionMatrix(P);
 }
 

@@ -172,7 +172,7 @@ ProjectionCensus take_projection_census(const ScanDescription& scan) {
 }
 
 ProjectionCensus require_projection_files(const ScanDescription& scan, const std::string& file, const std::string& key) {
-  const ProjectionCensus census = take_projection_census(scan);
+  ProjectionCensus census = take_projection_census(scan);
   const int count = scan.projections.count;
   if (census.first_present.empty())
     throw InputError(file, key,

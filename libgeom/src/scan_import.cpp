@@ -26,14 +26,7 @@ std::vector<ConeVec> circular_cone_vecs(const CircularOrbit& orbit) {
     const Eigen::Vector3d s = sod * towards_source;
     const Eigen::Vector3d d = -(sdd - sod) * towards_source + offset_mm.x() * e_u + offset_mm.y() * e_v;
     const Eigen::Vector3d u = det.pitch_u_mm * e_u, v = det.pitch_v_mm * e_v;
-    ConeVec c{};
-    for (int i = 0; i < 3; ++i) {
-      c[static_cast<std::size_t>(i)] = s[i];
-      c[static_cast<std::size_t>(3 + i)] = d[i];
-      c[static_cast<std::size_t>(6 + i)] = u[i];
-      c[static_cast<std::size_t>(9 + i)] = v[i];
-    }
-    vecs.push_back(c);
+    vecs.push_back(make_cone_vec(s, d, u, v));
   }
   return vecs;
 }

@@ -12,6 +12,11 @@ namespace ctk {
 
 using ConeVec = std::array<double, 12>;
 
+/// The 12 numbers from their four vectors (source, detector centre, column step, row step), each
+/// divided by `mm_per_unit`.
+ConeVec make_cone_vec(const Eigen::Vector3d& source, const Eigen::Vector3d& detector_centre, const Eigen::Vector3d& u,
+                      const Eigen::Vector3d& v, double mm_per_unit = 1.0);
+
 /// Places the detector plane so that one column step is `detector.pitch_u_mm` long (for a
 /// matrix composed from the setup this is the physical detector).
 ConeVec to_cone_vec(const ProjectionMatrix& P, const Detector& detector, double mm_per_unit = 1.0);
