@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "ctk/core/cancellation.hpp"
 #include "ctk/core/error.hpp"
 #include "slab_lines.hpp"
 #include "ray_table.hpp"
@@ -143,6 +144,7 @@ void JosephProjector::forward(ConstVolumeSpan x, const std::vector<ProjectionMat
     std::vector<float> out(table.pb_mid.size());
 #pragma omp for schedule(dynamic, 1)
     for (int i = 0; i < item_count; ++i) {
+      if (stop_requested()) continue;  // asked to stop from outside: the rest is skipped
       const detail::LineRange& item = items[static_cast<std::size_t>(i)];
       const int v = item.view;
       const auto& path = paths.path[static_cast<std::size_t>(v)];
@@ -154,6 +156,7 @@ void JosephProjector::forward(ConstVolumeSpan x, const std::vector<ProjectionMat
           if (float* pixel = pixel_of(y, v, path, item.line_begin + row, lane)) *pixel = out[table.entry(0, row, lane)];
     }
   }
+  throw_if_stop_requested();
 }
 
 namespace {
@@ -281,6 +284,7 @@ void JosephProjector::back(ConstStackSpan y, const std::vector<ProjectionMatrix>
         const int slabs = busy ? std::min(n, 4 * n_threads) : 0;
 #pragma omp for schedule(dynamic, 1)
         for (int task = 0; task < slabs + (last ? fills : 0); ++task) {
+          if (stop_requested()) continue;  // every thread still passes the barriers, doing nothing
           if (task < slabs)
             detail::back_rays(table, axis, slab_edge(task, slabs, n, axis), slab_edge(task + 1, slabs, n, axis), x.data);
           else
@@ -289,6 +293,7 @@ void JosephProjector::back(ConstStackSpan y, const std::vector<ProjectionMatrix>
       }
     }
   }
+  throw_if_stop_requested();
 }
 
 }  // namespace ctk

@@ -86,7 +86,7 @@ def wls_cg(operator: Operator, b: np.ndarray, *, weights: Optional[np.ndarray] =
     discrete gradient ('gradient'). One forward and one back projection per iteration.
 
     callback(log) is called after every iteration with its log entry; returning False stops the
-    solve. Ctrl-C (KeyboardInterrupt) stops it after the iteration under way. Progress goes to
+    solve. Ctrl-C (KeyboardInterrupt) stops it within the iteration under way. Progress goes to
     the 'ctk' logger at INFO level."""
     x, report = _ctk._wls_cg(operator, b, weights, x0, iterations, tolerance, lam, regulariser,
                              _iteration_hook("wls-cg", callback))
@@ -302,7 +302,7 @@ def reconstruct(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] =
     (OS-SQS only): an edge-preserving Huber penalty weighted by lambda_ instead of the quadratic one.
     size (z, y, x) voxels and voxel_mm default to the holder (or the field of view) at a detector
     pixel seen at the holder origin. progress(done, total) while reading and while iterating;
-    Ctrl-C stops after the current iteration (KeyboardInterrupt)."""
+    Ctrl-C stops it within the current iteration (KeyboardInterrupt)."""
     d = _ctk._reconstruct(os.fspath(scan), None if geometry is None else os.fspath(geometry), method, iterations, subsets,
                           lambda_, regulariser, huber_delta, tolerance, weighted, undistort, None if size is None else tuple(size), voxel_mm,
                           progress)

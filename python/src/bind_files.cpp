@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "interruptible.hpp"
 #include "ctk/core/nexus_tomo.hpp"
 #include "ctk/core/volume_file.hpp"
 #include "ctk/geom/nikon_xtekct.hpp"
@@ -86,14 +87,14 @@ py::dict read_nxtomo_file(const fs::path& file, const std::string& entry) {
   const NxTomo scan = read_nxtomo(file, entry);
   py::array_t<float> frames(std::vector<py::ssize_t>{scan.frames, scan.rows, scan.cols});
   float* out = frames.mutable_data();
-  {
-    py::gil_scoped_release free;
+  interruptible([&] {
     const std::size_t size = static_cast<std::size_t>(scan.rows) * static_cast<std::size_t>(scan.cols);
     for (int f = 0; f < scan.frames; ++f) {
+      throw_if_stop_requested();
       const Image image = read_nxtomo_frame(scan, f);
       std::copy(image.pixels.begin(), image.pixels.end(), out + static_cast<std::size_t>(f) * size);
     }
-  }
+  });
   py::array_t<int> keys(static_cast<py::ssize_t>(scan.frames));
   for (int f = 0; f < scan.frames; ++f) keys.mutable_at(f) = static_cast<int>(scan.kind[static_cast<std::size_t>(f)]);
   py::dict d;

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "bindings.hpp"
+#include "interruptible.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/core/image_io.hpp"
 #include "ctk/recon/measurements.hpp"
@@ -26,10 +27,7 @@ py::dict load(const fs::path& scan_file, const std::optional<fs::path>& geometry
   const ScanDescription scan = read_scan(scan_file);
   const Geometry geometry = geometry_or_nominal(scan, scan_file, geometry_file.value_or(fs::path()));
   Measurements m;
-  {
-    py::gil_scoped_release free;
-    m = load_measurements(scan, geometry, {statistical_weights, undistort});
-  }
+  interruptible([&] { m = load_measurements(scan, geometry, {statistical_weights, undistort}); });
   py::dict d;
   d["view_indices"] = m.view_indices;
   d["matrices"] = matrices_to_numpy(m.matrices);

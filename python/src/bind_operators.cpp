@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "interruptible.hpp"
 #include "ctk/proj/binned_projection.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/proj/weighted_projection.hpp"
@@ -48,10 +49,7 @@ py::array_t<float> forward(const ProjectionOperator& A, const FloatArray& volume
   const StackShape r = A.range();
   py::array_t<float> y = output_array(out, stack_shape(r), "the projections", "(views, rows, cols)");
   const StackSpan span{r.views, r.rows, r.cols, y.mutable_data()};
-  {
-    py::gil_scoped_release free;
-    A.apply(x, span);
-  }
+  interruptible([&] { A.apply(x, span); });
   return y;
 }
 
@@ -60,10 +58,7 @@ py::array_t<float> adjoint(const ProjectionOperator& A, const FloatArray& projec
   require_shape(projections, stack_shape(r), "the projections", "(views, rows, cols)");
   py::array_t<float> x = output_array(out, volume_shape(A.domain()), "the volume", "(z, y, x)");
   const ConstStackSpan y{r.views, r.rows, r.cols, projections.data()};
-  {
-    py::gil_scoped_release free;
-    A.apply_adjoint(y, VolumeSpan{A.domain(), x.mutable_data()});
-  }
+  interruptible([&] { A.apply_adjoint(y, VolumeSpan{A.domain(), x.mutable_data()}); });
   return x;
 }
 

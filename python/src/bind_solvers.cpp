@@ -1,6 +1,6 @@
 // The solvers on any operator: each iteration reported to a Python callable that may stop the
-// solve; Ctrl-C (KeyboardInterrupt) stops it after the iteration under way, the GIL released
-// while it computes.
+// solve; Ctrl-C (KeyboardInterrupt) stops it within the iteration under way (interruptible.hpp),
+// the GIL released while it computes.
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -10,6 +10,7 @@
 #include <string>
 
 #include "bindings.hpp"
+#include "interruptible.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/fdk.hpp"
 #include "ctk/recon/ordered_subsets.hpp"
@@ -98,10 +99,8 @@ py::tuple wls_cg(const ProjectionOperator& A, const FloatArray& b, const py::obj
   Volume x = start_volume(A, x0);
   SolverControl control(callback);
   SolverReport report;
-  {
-    py::gil_scoped_release free;
-    report = solve_wls_cg(A, data, w ? &*w : nullptr, x, o, control.on_iteration(), control.checkpointing());
-  }
+  interruptible(
+      [&] { report = solve_wls_cg(A, data, w ? &*w : nullptr, x, o, control.on_iteration(), control.checkpointing()); });
   py::object r = control.finish(report);
   return py::make_tuple(to_numpy(std::move(x)), r);
 }
@@ -114,10 +113,7 @@ py::tuple sirt(const ProjectionOperator& A, const FloatArray& b, const py::objec
   Volume x = start_volume(A, x0);
   SolverControl control(callback);
   SolverReport report;
-  {
-    py::gil_scoped_release free;
-    report = solve_sirt(A, data, x, o, control.on_iteration(), control.checkpointing());
-  }
+  interruptible([&] { report = solve_sirt(A, data, x, o, control.on_iteration(), control.checkpointing()); });
   py::object r = control.finish(report);
   return py::make_tuple(to_numpy(std::move(x)), r);
 }
@@ -148,11 +144,10 @@ py::tuple os_sqs(const ProjectionOperator& A, const FloatArray& b, const py::obj
   Volume x = start_volume(A, x0);
   SolverControl control(callback);
   SolverReport report;
-  {
-    py::gil_scoped_release free;
+  interruptible([&] {
     report =
         solve_os_sqs(A, data, w ? &*w : nullptr, x, groups, o, control.on_iteration(), control.checkpointing()->stop_requested);
-  }
+  });
   py::object r = control.finish(report);
   return py::make_tuple(to_numpy(std::move(x)), r);
 }
@@ -161,12 +156,11 @@ py::array_t<float> fdk(const JosephOperator& A, const FloatArray& projections, c
   if (window != "hann" && window != "ram-lak") throw py::value_error("window must be 'hann' or 'ram-lak', not '" + window + "'");
   ProjectionStack filtered = data_stack(A, projections, "the projections");  // filtered in place: a copy
   Volume x(A.domain());
-  {
-    py::gil_scoped_release free;
+  interruptible([&] {
     // FDK's filter scale is the pixel pitch times the focal length in pixels: any pitch gives the same.
     fdk_reconstruct(A.views(), filtered, {filtered.cols, filtered.rows, 1.0, 1.0}, x,
                     window == "hann" ? RampWindow::hann : RampWindow::ram_lak);
-  }
+  });
   return to_numpy(std::move(x));
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "interruptible.hpp"
 #include "ctk/calib/calibration_run.hpp"
 #include "ctk/calib/diagnosis_run.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
@@ -90,8 +91,7 @@ py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geomet
   };
   std::optional<RefineScanSummary> s;
   try {
-    py::gil_scoped_release free;
-    s = refine_scan(scan, geometry, o, say);
+    interruptible([&] { s = refine_scan(scan, geometry, o, say); });
   } catch (const Stopped&) {
   }
   bridge.raise_if_stopped();
@@ -126,10 +126,7 @@ py::dict calibrate(const fs::path& scan_file, int min_spheres, double max_rms_px
   BatchControl control;
   control.stop_requested = [&] { return bridge.stop_requested(); };
   std::optional<CalibrationRun> run;
-  {
-    py::gil_scoped_release free;
-    run = run_calibration(scan, o, bridge.progress(progress), &control);
-  }
+  interruptible([&] { run = run_calibration(scan, o, bridge.progress(progress), &control); });
   bridge.raise_if_stopped();
   py::dict d;
   d["geometry"] = to_python(geometry_to_json(run->calibration.geometry));
@@ -148,10 +145,7 @@ py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, cons
   const Geometry geometry = geometry_for_scan(scan, read_geometry(geometry_file));
   PythonBridge bridge;
   std::optional<DiagnosisRun> run;
-  {
-    py::gil_scoped_release free;
-    run = run_diagnosis(scan, geometry, o, {}, bridge.log(log));
-  }
+  interruptible([&] { run = run_diagnosis(scan, geometry, o, {}, bridge.log(log)); });
   bridge.raise_if_stopped();
   py::dict d;
   d["report"] = to_python(run->report());
@@ -187,10 +181,7 @@ py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& g
   hooks.iterating = bridge.progress(progress);
   hooks.stop_requested = [&] { return bridge.stop_requested(); };
   std::optional<ReconstructionRun> run;
-  {
-    py::gil_scoped_release free;
-    run = run_reconstruction(scan, geometry, o, hooks);
-  }
+  interruptible([&] { run = run_reconstruction(scan, geometry, o, hooks); });
   bridge.raise_if_stopped();
   py::dict d;
   d["report"] = to_python(run->report());
@@ -235,10 +226,7 @@ py::dict simulate(const fs::path& out, const std::vector<std::string>& phantoms,
                                            Detector{r.cols, r.rows, pitch_mm, pitch_mm});
   PythonBridge bridge;
   std::optional<SimulationRun> run;
-  {
-    py::gil_scoped_release free;
-    run = run_simulation(r, out, bridge.progress(progress), bridge.log(log));
-  }
+  interruptible([&] { run = run_simulation(r, out, bridge.progress(progress), bridge.log(log)); });
   bridge.raise_if_stopped();
   py::dict d;
   d["scan_file"] = run->scan_file;

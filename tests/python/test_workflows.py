@@ -72,3 +72,19 @@ def test_simulate_from_python_writes_the_command_lines_scan(tmp_path, ctk_comman
     with pytest.raises(ctk.InputError, match="did not write"):
         ctk.simulate(tmp_path / "measured", views=2, detector_shape=(16, 16), pitch_mm=20)
     assert (tmp_path / "measured" / "scan.json").read_text() == "{}"
+
+
+def test_ctrl_c_stops_a_simulation_within_a_second_and_nothing_is_written(tmp_path):
+    import os
+    import signal
+    import threading
+    import time
+    out = tmp_path / "scan"
+    timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        ctk.simulate(out, views=360)  # some 20 s of work
+    timer.join()
+    assert time.perf_counter() - start < 2.0
+    assert not out.exists() and list(tmp_path.iterdir()) == []  # no half scan, no staging folder left

@@ -1,9 +1,12 @@
 #pragma once
 // OpenMP loops whose body may throw: an exception escaping an OpenMP region ends the program,
-// so the first one is kept, the remaining iterations are skipped, and it is rethrown after.
+// so the first one is kept, the remaining iterations are skipped, and it is rethrown after. A stop
+// requested from outside (cancellation.hpp) skips the remaining iterations too, and throws Cancelled.
 #include <atomic>
 #include <exception>
 #include <mutex>
+
+#include "ctk/core/cancellation.hpp"
 
 namespace ctk {
 
@@ -14,7 +17,7 @@ void parallel_for_dynamic(int count, Body&& body) {
   std::atomic<bool> failed{false};
 #pragma omp parallel for schedule(dynamic)
   for (int i = 0; i < count; ++i) {
-    if (failed.load(std::memory_order_relaxed)) continue;
+    if (failed.load(std::memory_order_relaxed) || stop_requested()) continue;
     try {
       body(i);
     } catch (...) {
@@ -24,6 +27,7 @@ void parallel_for_dynamic(int count, Body&& body) {
     }
   }
   if (error) std::rethrow_exception(error);
+  throw_if_stop_requested();
 }
 
 }  // namespace ctk
