@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cmath>
+#include <utility>
 
 #include "ctk/core/error.hpp"
 #include "hdf5_handle.hpp"
@@ -119,16 +120,25 @@ double mm_per(const std::string& unit) {
   return 0;
 }
 
-// The first group at the root whose `definition` says NXtomo.
-std::string find_entry(const Reader& r, const fs::path& file) {
+// The names of the links in a group (its members), in name order; none when it cannot be listed.
+std::vector<std::string> member_names(hid_t group) {
+  std::vector<std::string> names;
   H5G_info_t info{};
-  if (H5Gget_info(r.file(), &info) < 0) throw InputError(file.string(), "", "cannot list the root group");
+  if (H5Gget_info(group, &info) < 0) return names;
   for (hsize_t i = 0; i < info.nlinks; ++i) {
-    const ssize_t n = H5Lget_name_by_idx(r.file(), "/", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
+    const ssize_t n = H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
     if (n <= 0) continue;
     std::string name(static_cast<std::size_t>(n) + 1, '\0');
-    H5Lget_name_by_idx(r.file(), "/", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size(), H5P_DEFAULT);
+    H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size(), H5P_DEFAULT);
     name.resize(static_cast<std::size_t>(n));
+    names.push_back(std::move(name));
+  }
+  return names;
+}
+
+// The first group at the root whose `definition` says NXtomo.
+std::string find_entry(const Reader& r, const fs::path& file) {
+  for (const std::string& name : member_names(r.file())) {
     const std::string definition = "/" + name + "/definition";
     if (r.has(definition) && r.string(definition) == "NXtomo") return "/" + name;
   }
@@ -151,15 +161,9 @@ std::optional<double> length_mm(const Reader& r, const std::string& path, NxTomo
 
 // The NXsource group of the instrument (any name; "source" when no NX_class says so).
 std::string find_source(const Reader& r, const std::string& instrument) {
-  H5G_info_t info{};
   const Handle group(H5Gopen2(r.file(), instrument.c_str(), H5P_DEFAULT), H5Gclose);
-  if (group.valid() && H5Gget_info(group.get(), &info) >= 0)
-    for (hsize_t i = 0; i < info.nlinks; ++i) {
-      const ssize_t n = H5Lget_name_by_idx(group.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
-      if (n <= 0) continue;
-      std::string name(static_cast<std::size_t>(n) + 1, '\0');
-      H5Lget_name_by_idx(group.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size(), H5P_DEFAULT);
-      name.resize(static_cast<std::size_t>(n));
+  if (group.valid())
+    for (const std::string& name : member_names(group.get())) {
       H5O_info_t object{};
       if (H5Oget_info_by_name(group.get(), name.c_str(), &object, H5P_DEFAULT) < 0 || object.type != H5O_TYPE_GROUP) continue;
       const Handle child(H5Gopen2(group.get(), name.c_str(), H5P_DEFAULT), H5Gclose);
