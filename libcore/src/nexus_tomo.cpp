@@ -250,19 +250,35 @@ NxTomo read_nxtomo(const fs::path& file, const std::string& entry_name) {
   return scan;
 }
 
-Image read_nxtomo_frame(const NxTomo& scan, int frame) {
-  const Reader r(scan.file);
-  if (frame < 0 || frame >= scan.frames) r.fail(scan.data_path, "has no frame " + std::to_string(frame));
-  const Handle d(H5Dopen2(r.file(), scan.data_path.c_str(), H5P_DEFAULT), H5Dclose);
-  const Handle space(H5Dget_space(d.get()), H5Sclose);
+struct NxTomoFrames::Open {
+  explicit Open(const NxTomo& scan)
+      : file(scan.file),
+        data(H5Dopen2(file.file(), scan.data_path.c_str(), H5P_DEFAULT), H5Dclose),
+        space(H5Dget_space(data.get()), H5Sclose),
+        memory(
+            H5Screate_simple(
+                3, std::array<hsize_t, 3>{1, static_cast<hsize_t>(scan.rows), static_cast<hsize_t>(scan.cols)}.data(), nullptr),
+            H5Sclose) {
+    if (!data.valid() || !space.valid()) file.fail(scan.data_path, "cannot be opened");
+  }
+  Reader file;
+  Handle data, space, memory;
+};
+
+NxTomoFrames::NxTomoFrames(const NxTomo& scan) : scan_(scan), open_(std::make_unique<Open>(scan)) {}
+
+NxTomoFrames::~NxTomoFrames() = default;
+
+Image NxTomoFrames::read(int frame) const {
+  const NxTomo& scan = scan_;
+  if (frame < 0 || frame >= scan.frames) open_->file.fail(scan.data_path, "has no frame " + std::to_string(frame));
   const std::array<hsize_t, 3> start{static_cast<hsize_t>(frame), 0, 0},
       count{1, static_cast<hsize_t>(scan.rows), static_cast<hsize_t>(scan.cols)};
   Image image{scan.cols, scan.rows,
               std::vector<float>(static_cast<std::size_t>(scan.rows) * static_cast<std::size_t>(scan.cols))};
-  const Handle memory(H5Screate_simple(3, count.data(), nullptr), H5Sclose);
-  if (!d.valid() || H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr) < 0 ||
-      H5Dread(d.get(), H5T_NATIVE_FLOAT, memory.get(), space.get(), H5P_DEFAULT, image.pixels.data()) < 0)
-    r.fail(scan.data_path, "cannot read frame " + std::to_string(frame));
+  if (H5Sselect_hyperslab(open_->space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr) < 0 ||
+      H5Dread(open_->data.get(), H5T_NATIVE_FLOAT, open_->memory.get(), open_->space.get(), H5P_DEFAULT, image.pixels.data()) < 0)
+    open_->file.fail(scan.data_path, "cannot read frame " + std::to_string(frame));
   return image;
 }
 

@@ -81,8 +81,9 @@ ImportedScan import_nxtomo(const NxTomo& scan, const NxTomoPlan& plan, const fs:
   const fs::path folder = fs::absolute(scan_file).parent_path() / (fs::path(scan_file).stem().string() + ".frames");
   const int total = static_cast<int>(plan.projections.size() + plan.flats.size() + plan.darks.size());
   int written = 0;
+  const NxTomoFrames frames(scan);
   auto copy = [&](int frame, const std::string& name) {
-    const Image image = read_nxtomo_frame(scan, frame);
+    const Image image = frames.read(frame);
     const fs::path file = folder / name;
     if (scan.integer_data && fits_16_bits(image))
       write_image_uint16(image, file);

@@ -89,9 +89,10 @@ py::dict read_nxtomo_file(const fs::path& file, const std::string& entry) {
   float* out = frames.mutable_data();
   interruptible([&] {
     const std::size_t size = static_cast<std::size_t>(scan.rows) * static_cast<std::size_t>(scan.cols);
+    const NxTomoFrames reader(scan);
     for (int f = 0; f < scan.frames; ++f) {
       throw_if_stop_requested();
-      const Image image = read_nxtomo_frame(scan, f);
+      const Image image = reader.read(f);
       std::copy(image.pixels.begin(), image.pixels.end(), out + static_cast<std::size_t>(f) * size);
     }
   });

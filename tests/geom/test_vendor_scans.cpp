@@ -66,7 +66,8 @@ TEST(NxTomo, ReadsKeysAnglesAndLengthsInMillimetres) {
   EXPECT_NEAR(*scan.y_pixel_size_mm, 0.8, 1e-9);          // stored in um
   EXPECT_NEAR(*scan.sample_to_detector_mm, 200.0, 1e-9);  // stored in cm
   EXPECT_NEAR(*scan.source_to_sample_mm, 200.0, 1e-12);   // stored negative (upstream), in mm
-  for (int f : {0, 5, 17}) EXPECT_EQ(read_nxtomo_frame(scan, f).pixels, content.frames[static_cast<std::size_t>(f)]);
+  const NxTomoFrames frames(scan);
+  for (int f : {0, 5, 17}) EXPECT_EQ(frames.read(f).pixels, content.frames[static_cast<std::size_t>(f)]);
 }
 
 TEST(NxTomo, ImportedMatricesProjectWhereNeXusPlacesTheBeam) {

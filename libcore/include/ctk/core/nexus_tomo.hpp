@@ -4,6 +4,7 @@
 // projections from flats and darks, a rotation angle per frame, and the detector's pixel size and
 // distances where the file gives them, converted to mm from their `units` attributes.
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,7 +38,21 @@ struct NxTomo {
 /// or malformed (the frames' dataset must be 3-D, the keys and angles one per frame).
 NxTomo read_nxtomo(const std::filesystem::path& file, const std::string& entry = {});
 
-/// One frame as float (integer counts exact up to 2^24).
-Image read_nxtomo_frame(const NxTomo& scan, int frame);
+/// The frames of a described file, read one at a time with the file and its dataset kept open
+/// (a scan of thousands of frames opens them once).
+class NxTomoFrames {
+ public:
+  explicit NxTomoFrames(const NxTomo& scan);
+  ~NxTomoFrames();
+  NxTomoFrames(const NxTomoFrames&) = delete;
+  NxTomoFrames& operator=(const NxTomoFrames&) = delete;
+  /// One frame as float (integer counts exact up to 2^24). Throws InputError naming the dataset.
+  Image read(int frame) const;
+
+ private:
+  struct Open;
+  const NxTomo& scan_;
+  std::unique_ptr<Open> open_;
+};
 
 }  // namespace ctk
