@@ -17,7 +17,7 @@ import statistics
 import subprocess
 import tempfile
 
-from diagnosis_population import calibration_figures, cpu_name
+from diagnosis_population import calibration_figures, cpu_name, cpu_slug
 
 SCANS = {
     "cap": ["--trajectory", "cap", "--views", "120", "--cap-deg", "5", "90"],
@@ -68,7 +68,7 @@ def main():
                       flush=True)
     cpu = cpu_name()
     out = pathlib.Path(a.out) if a.out else pathlib.Path(__file__).parent / "results" / (
-        "calibration_speed-" + "".join(ch if ch.isalnum() else "-" for ch in cpu.lower()).strip("-") + ".json")
+        "calibration_speed-" + cpu_slug() + ".json")
     out.write_text(json.dumps({"benchmark": "ctk calibrate, views/s as it reports them, 2 builds alternately", "cpu": cpu,
                                "repeat": a.repeat, "rows": rows}, indent=1) + "\n")
     print(f"written {out}")

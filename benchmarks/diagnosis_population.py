@@ -251,6 +251,11 @@ def cpu_name():
         " avx512" if "avx512f" in fields.get("flags", "") else "")
 
 
+def cpu_slug():
+    """cpu_name() as a file name's part: lower case, every other character a hyphen."""
+    return "".join(ch if ch.isalnum() else "-" for ch in cpu_name().lower()).strip("-")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--ctk", required=True)
@@ -364,7 +369,7 @@ def main():
         for truth, row in table.items():
             print(f"  {truth:40s} " + "; ".join(f"{k}: {n}" for k, n in sorted(row.items())))
     out = pathlib.Path(a.out) if a.out else pathlib.Path(__file__).resolve().parent / "results" / (
-        f"diagnosis_population-{a.slice}-" + "".join(ch if ch.isalnum() else "-" for ch in cpu_name().lower()).strip("-") + ".json")
+        f"diagnosis_population-{a.slice}-" + cpu_slug() + ".json")
     if a.out or not a.match:  # a part of the population is not stored as the population's result
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(json.dumps(dict(summary, results=results), indent=2) + "\n")

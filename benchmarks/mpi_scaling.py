@@ -32,7 +32,7 @@ import statistics
 import subprocess
 import tempfile
 
-from diagnosis_population import cpu_name
+from diagnosis_population import cpu_name, cpu_slug
 
 GIB = 1 << 30
 SOD_MM, SDD_MM = 1360.0, 2150.0  # ctk simulate's reference setup
@@ -183,7 +183,7 @@ def main():
               f"{r['picked']}")
     cpu = cpu_name()
     out = pathlib.Path(a.out) if a.out else pathlib.Path(__file__).parent / "results" / (
-        "mpi_scaling-" + "".join(ch if ch.isalnum() else "-" for ch in cpu.lower()).strip("-") + ".json")
+        "mpi_scaling-" + cpu_slug() + ".json")
     measured["slabs"] = slab_runs
     out.write_text(json.dumps({"benchmark": "mpi_scaling", "cpu": cpu, "measured": measured,
                                "model": {"node_cores": a.node_cores, "node_memory_gib": a.node_memory_gib,

@@ -20,7 +20,7 @@ import pathlib
 import subprocess
 import tempfile
 
-from diagnosis_population import calibration_figures, cpu_name, project
+from diagnosis_population import calibration_figures, cpu_name, cpu_slug, project
 
 COMMON = ["--phantom", "helix-holder", "--cols", "720", "--rows", "720", "--pitch", "0.6", "--trajectory", "cap",
           "--robot-noise-mm", "0.2", "--robot-noise-deg", "0.1", "--base-translation-mm", "1.5", "-2.0", "0.8",
@@ -122,7 +122,7 @@ def main():
             print(scan_name, name, summary[scan_name][name])
     cpu = cpu_name()
     out = pathlib.Path(a.out) if a.out else pathlib.Path(__file__).parent / "results" / (
-        "near_axis_calibration-" + "".join(ch if ch.isalnum() else "-" for ch in cpu.lower()).strip("-") + ".json")
+        "near_axis_calibration-" + cpu_slug() + ".json")
     out.write_text(json.dumps({"benchmark": "calibration near the holder axis, the wall with its ends, without them, or none",
                                "cpu": cpu, "scans": {k: COMMON + v for k, v in SCANS.items()}, "summary": summary,
                                "rows": rows}, indent=1))

@@ -14,9 +14,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
+CG_NAMES = {"wls-cg": "WLS-CG", "wls-cg-diagonal": "WLS-CG, diagonal preconditioner", "wls-cg-fdk-start": "WLS-CG from FDK"}
+CG_STYLES = {"wls-cg": "k-o", "wls-cg-diagonal": "k--", "wls-cg-fdk-start": "k:"}
+
+
 def label(method):
-    if method["method"] == "wls-cg":
-        return "WLS-CG"
+    if method["method"] in CG_NAMES:
+        return CG_NAMES[method["method"]]
     name = "OS-SQS" if method["method"] == "os-sqs" else "OS-SQS without x >= 0"
     return f"{name}, {method['subsets']} subsets"
 
@@ -32,7 +36,7 @@ def main():
             r = json.load(f)
         p = r["problem"]
         for m in r["methods"]:
-            style = "k-o" if m["method"] == "wls-cg" else ("--" if m["method"] != "os-sqs" else "-o")
+            style = CG_STYLES.get(m["method"], "-o" if m["method"] == "os-sqs" else "--")
             ax.plot(m["seconds"], [1e3 * v for v in m["rmse"]], style, markersize=3, label=label(m))
         ax.axhline(1e3 * r["target_rmse"], color="grey", linestyle=":", label="30 WLS-CG iterations")
         ax.set_xlabel("wall time (s)")

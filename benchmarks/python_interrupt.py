@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 import ctk
-from diagnosis_population import cpu_name
+from diagnosis_population import cpu_name, cpu_slug
 
 
 def timed(call):
@@ -63,7 +63,7 @@ def main():
             print(f"{name:22s} whole {whole:6.2f} s, Ctrl-C at {fraction * whole:5.2f} s: stopped {d * 1000:7.1f} ms later")
         result["calls"][name] = {"uninterrupted_seconds": whole, "interrupted": rows}
     out = pathlib.Path(__file__).parent / "results" / (
-        "python_interrupt-" + "".join(ch if ch.isalnum() else "-" for ch in cpu_name().lower()).strip("-") + ".json")
+        "python_interrupt-" + cpu_slug() + ".json")
     out.write_text(json.dumps(result, indent=2) + "\n")
     print("written", out)
 

@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 import ctk
-from diagnosis_population import cpu_name
+from diagnosis_population import cpu_name, cpu_slug
 
 
 def overhead(trajectory, scale, repeat):
@@ -71,7 +71,7 @@ def main():
     result = {"benchmark": "python_overhead", "cpu": cpu_name(), "machine": platform.machine(), "scale": o.scale,
               "repeat": o.repeat, "forward": runs, "memory": memory, "ctk_version": ctk.__version__}
     out = o.out or pathlib.Path(__file__).parent / "results" / (
-        "python_overhead-" + "".join(ch if ch.isalnum() else "-" for ch in cpu_name().lower()).strip("-") + ".json")
+        "python_overhead-" + cpu_slug() + ".json")
     out.write_text(json.dumps(result, indent=2) + "\n")
     print(f"wrote {out}")
 

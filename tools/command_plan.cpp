@@ -16,6 +16,7 @@
 #include "ctk/geom/scan.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
+#include "ctk/phantoms/render.hpp"
 #include "ctk/plan/simulated_acquisition.hpp"
 #include "ctk/plan/plan_pictures.hpp"
 #include "ctk/plan/planned_scan.hpp"
@@ -143,24 +144,6 @@ void report_plan(const PlanningResult& r, const fs::path& folder, const std::vec
         << (r.segmentation.voxels > 0 ? std::to_string(r.segmentation.voxels) + " coarse voxels" : r.segmentation.note);
   std::cout << brief.str() << "\n";
   write_run_page("plan", brief.str(), read_json_file(folder / "trajectory.json"), pictures, folder / "plan.html");
-}
-
-// The truth of the sample at the layout's voxels (2 x 2 x 2 points per voxel).
-Volume voxelised(const Phantom& phantom, const VolumeLayout& layout) {
-  Volume v(layout);
-  const auto& n = layout.size;
-  parallel_for_dynamic(n[2], [&](int k) {
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i) {
-        double sum = 0;
-        for (int s = 0; s < 8; ++s) {
-          const Eigen::Vector3d offset((s & 1) ? 0.25 : -0.25, (s & 2) ? 0.25 : -0.25, (s & 4) ? 0.25 : -0.25);
-          sum += phantom.attenuation_at(layout.centre_of(i, j, k) + offset.cwiseProduct(layout.voxel_mm));
-        }
-        v.at(i, j, k) = static_cast<float>(sum / 8);
-      }
-  });
-  return v;
 }
 
 // The comparison's volume holds everything in the beam: the holder's tube (118 mm tall) and the

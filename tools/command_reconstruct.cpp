@@ -42,6 +42,7 @@ struct ReconstructOptions {
   int subsets = 0;     // OS-SQS: 0 chosen from the views
   double lambda = 0, tolerance = 1e-4, huber_delta = 0;
   std::string regulariser = "identity";
+  std::string preconditioner = "none";
   bool unweighted = false;
   bool as_measured = false;
   std::vector<int> size;
@@ -60,6 +61,7 @@ ReconstructionOptions library_options(const ReconstructOptions& o) {
   r.tolerance = o.tolerance;
   r.regulariser = regulariser_from_string(o.regulariser);
   r.huber_delta = o.huber_delta;
+  r.preconditioner = cg_preconditioner_from_string(o.preconditioner);
   r.statistical_weights = !o.unweighted;
   r.undistort = !o.as_measured;
   for (std::size_t a = 0; a < 3 && !o.size.empty(); ++a) r.size[a] = o.size[std::min(a, o.size.size() - 1)];
@@ -289,6 +291,11 @@ void register_reconstruct(CLI::App& app) {
                   "os-sqs: an edge-preserving Huber penalty of neighbour differences (weight --lambda) instead of the "
                   "quadratic one; differences below delta (attenuation per mm) are smoothed, edges above it kept")
       ->check(positive_number);
+  cmd->add_option("--preconditioner", o->preconditioner,
+                  "wls-cg: none, or diagonal (the separable curvature A'WA1 + lambda c; one more projection pair and one "
+                  "more volume)")
+      ->check(CLI::IsMember({"none", "diagonal"}))
+      ->capture_default_str();
   cmd->add_option("--tolerance", o->tolerance, "Stop when the gradient has fallen by this factor (0 <= tolerance < 1)")
       ->check(fraction_below_one)
       ->capture_default_str();

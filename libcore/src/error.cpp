@@ -12,11 +12,24 @@ static std::string compose_message(const std::string& file, const std::string& w
 
 std::string json_key(const std::string& path) { return "key '" + path + "'"; }
 
-void require_option(bool ok, const char* field, const char* expected, double value) {
+namespace {
+
+template <typename Value>
+void require_option_of(bool ok, const char* field, const char* expected, const Value& value) {
   if (ok) return;
   std::ostringstream message;
   message << field << ": expected " << expected << ", got " << value;
   throw std::invalid_argument(message.str());
+}
+
+}  // namespace
+
+void require_option(bool ok, const char* field, const char* expected, double value) {
+  require_option_of(ok, field, expected, value);
+}
+
+void require_choice(bool ok, const char* field, const char* expected, const char* value) {
+  require_option_of(ok, field, expected, value);
 }
 
 InputError::InputError(std::string file, std::string where, const std::string& what)

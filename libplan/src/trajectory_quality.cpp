@@ -59,6 +59,8 @@ TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const
   std::size_t edges = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const int di = axis == 0, dj = axis == 1, dk = axis == 2;
+    double along = 0;
+    std::size_t along_edges = 0;
     for (int k = dk; k < n[2]; ++k)
       for (int j = dj; j < n[1]; ++j)
         for (int i = di; i < n[0]; ++i) {
@@ -66,10 +68,14 @@ TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const
           if (std::abs(t1 - t0) < 1e-6f) continue;
           if (!region.contains(x.layout.centre_of(i, j, k)) || !region.contains(x.layout.centre_of(i - di, j - dj, k - dk)))
             continue;
-          all_gradient += std::abs(x.at(i, j, k) - x.at(i - di, j - dj, k - dk)) / x.layout.voxel_mm[axis];
+          const double g = std::abs(x.at(i, j, k) - x.at(i - di, j - dj, k - dk)) / x.layout.voxel_mm[axis];
+          all_gradient += g;
+          along += g;
           all_truth += std::abs(t1 - t0) / x.layout.voxel_mm[axis];
           ++edges;
+          ++along_edges;
         }
+    if (along_edges) q.edge_gradient_along_per_mm2[static_cast<std::size_t>(axis)] = along / static_cast<double>(along_edges);
   }
   if (edges) {
     q.edge_gradient_per_mm2 = all_gradient / static_cast<double>(edges);

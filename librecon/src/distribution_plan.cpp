@@ -31,8 +31,9 @@ namespace {
 std::size_t scalars_per_iteration(const SolverShape& s, bool slabs) {
   const bool penalty = s.lambda > 0;
   switch (s.method) {
-    case ReconstructionMethod::wls_cg:  // the step's curvature and the data term; the gradient's norm and penalties over slabs
-      return 2 + (slabs ? 1 + (penalty ? 2 : 0) : 0);
+    case ReconstructionMethod::wls_cg:  // the step's curvature and the data term; over slabs the gradient's norm (and
+                                        // its preconditioned square), the penalties
+      return 2 + (slabs ? 1 + (s.preconditioned ? 1 : 0) + (penalty ? 2 : 0) : 0);
     case ReconstructionMethod::sirt:  // the data term
       return 1;
     case ReconstructionMethod::os_sqs:  // the epoch's data term; its penalty over slabs
@@ -77,7 +78,7 @@ DistributionPlan plan_distribution(const SolverShape& solver, const VolumeLayout
   p.ranks = ranks;
   const int view_count = static_cast<int>(views.size());
   p.views_per_rank = (view_count + ranks - 1) / ranks;
-  p.views_memory = plan_memory(solver.method, layout, p.views_per_rank, rows, cols, solver.weighted);
+  p.views_memory = plan_memory(solver, layout, p.views_per_rank, rows, cols);
   if (ranks == 1) return p;
   if (solver.method == ReconstructionMethod::fdk)
     throw std::invalid_argument("fdk runs on one process (it reads and filters each view once): start it without mpirun");
@@ -97,7 +98,7 @@ DistributionPlan plan_distribution(const SolverShape& solver, const VolumeLayout
       owned = std::max(owned, p.rows->owned_height(q));
       reach = std::max(reach, p.rows->footprint_height(q));
     }
-    p.slabs_memory = plan_memory(solver.method, slab_layout(layout, 0, ranks), view_count, owned, cols, solver.weighted);
+    p.slabs_memory = plan_memory(solver, slab_layout(layout, 0, ranks), view_count, owned, cols);
     // The projection of the slab onto the rows it reaches, while a projection is exchanged.
     p.slabs_memory.other_bytes +=
         static_cast<std::size_t>(view_count) * static_cast<std::size_t>(reach) * static_cast<std::size_t>(cols) * sizeof(float);

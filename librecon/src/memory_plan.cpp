@@ -46,14 +46,15 @@ std::string MemoryPlan::describe() const {
   return out.str();
 }
 
-MemoryPlan plan_memory(ReconstructionMethod method, const VolumeLayout& layout, int views, int rows, int cols, bool weighted) {
+MemoryPlan plan_memory(const SolverShape& solver, const VolumeLayout& layout, int views, int rows, int cols) {
+  const bool weighted = solver.weighted;
   MemoryPlan plan;
   plan.volume_bytes = layout.voxel_count() * sizeof(float);
   plan.stack_bytes =
       static_cast<std::size_t>(views) * static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols) * sizeof(float);
-  switch (method) {
+  switch (solver.method) {
     case ReconstructionMethod::wls_cg:
-      plan.volumes = 4;
+      plan.volumes = 4 + (solver.preconditioned ? 1 : 0);
       plan.stacks = 3 + (weighted ? 1 : 0);
       break;
     case ReconstructionMethod::os_sqs:

@@ -8,25 +8,12 @@
 
 #include "ctk/core/error.hpp"
 #include "ctk/recon/huber_penalty.hpp"
+#include "ctk/recon/separable_curvature.hpp"
 #include "vector_ops.hpp"
 
 namespace ctk {
 
 namespace {
-
-// Views `views` of `all`, in that order, into `out` (reshaped).
-void gather_views(const ProjectionStack& all, const std::vector<int>& views, ProjectionStack& out) {
-  const std::size_t pixels = static_cast<std::size_t>(all.rows) * static_cast<std::size_t>(all.cols);
-  out.views = static_cast<int>(views.size());
-  out.rows = all.rows;
-  out.cols = all.cols;
-  out.data.resize(static_cast<std::size_t>(out.views) * pixels);  // shrinking keeps the allocation
-  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(views.size());
-#pragma omp parallel for schedule(static)
-  for (std::ptrdiff_t k = 0; k < n; ++k)
-    std::copy_n(all.data.data() + static_cast<std::size_t>(views[static_cast<std::size_t>(k)]) * pixels, pixels,
-                out.data.data() + static_cast<std::size_t>(k) * pixels);
-}
 
 // Throws unless `subsets` hold every view of 0 .. views-1 exactly once, and each subset holds a
 // view on some rank (on an operator spread over ranks, a rank's part of a subset may be empty).
@@ -83,24 +70,16 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
   for (const auto& s : subsets) parts.push_back(A.subset(s));
   ProjectionStack b_part, w_part, r_part;  // one subset's data, weights and residual
   const auto load_part = [&](int s) {
-    gather_views(b, subsets[static_cast<std::size_t>(s)], b_part);
-    if (weights) gather_views(*weights, subsets[static_cast<std::size_t>(s)], w_part);
+    detail::gather_views(b, subsets[static_cast<std::size_t>(s)], b_part);
+    if (weights) detail::gather_views(*weights, subsets[static_cast<std::size_t>(s)], w_part);
   };
 
   // The surrogate's curvature D = A'W A 1 + lambda c, subset by subset (no full-size stack).
-  Volume D(x.layout), ones(x.layout), g(x.layout);
-  std::fill(ones.data.begin(), ones.data.end(), 1.0f);
-  for (int s = 0; s < M; ++s) {
-    load_part(s);
-    parts[static_cast<std::size_t>(s)]->apply(ones, r_part);
-    if (weights) detail::weighted_copy(r_part.data, w_part.data, r_part.data);
-    parts[static_cast<std::size_t>(s)]->apply_adjoint(r_part, g);
-    detail::axpy(1.0, g.data, D.data);
-  }
-  ones = Volume();
+  const Volume D = separable_data_curvature(A, weights, subsets);
+  Volume g(x.layout);
   const bool huber = o.huber_delta > 0;
   const HuberPenalty penalty{o.lambda, o.huber_delta};
-  const double curvature_of_penalty = huber ? 0.0 : o.lambda * (o.regulariser == Regulariser::identity ? 1.0 : 12.0);
+  const double curvature_of_penalty = huber ? 0.0 : separable_penalty_curvature(o.regulariser, o.lambda);
   Volume huber_curvature = huber ? Volume(x.layout) : Volume();  // follows the volume
 
   // x is the result so far (the last projected step), which the callback sees; with momentum the

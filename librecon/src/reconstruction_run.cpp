@@ -56,6 +56,7 @@ nlohmann::json run_identity(const ReconstructionPlan& plan, const Reconstruction
           {"regulariser", to_string(o.regulariser)},
           {"huber_delta", o.huber_delta},
           {"tolerance", o.tolerance},
+          {"preconditioner", to_string(o.preconditioner)},
           {"volume", {{"size", plan.layout.size}, {"voxel_mm", plan.layout.voxel_mm.x()}}},
           {"views_used", m.view_indices},
           {"data_fingerprint", data}};
@@ -133,6 +134,8 @@ void ReconstructionOptions::validate() const {
   require_option(iterations >= 0, "ReconstructionOptions.iterations", "0 (the method's default) or more", iterations);
   require_option(huber_delta == 0 || (method == ReconstructionMethod::os_sqs && huber_delta > 0 && std::isfinite(huber_delta)),
                  "ReconstructionOptions.huber_delta", "0, or a finite positive number with the os-sqs method", huber_delta);
+  require_choice(preconditioner == CgPreconditioner::none || method == ReconstructionMethod::wls_cg,
+                 "ReconstructionOptions.preconditioner", "none unless the method is wls-cg", to_string(preconditioner));
   require_option(subsets >= 0, "ReconstructionOptions.subsets", "0 (chosen from the views) or more", subsets);
   require_option(lambda >= 0 && std::isfinite(lambda), "ReconstructionOptions.lambda", "a finite number of 0 or more", lambda);
   require_option(tolerance >= 0 && tolerance < 1, "ReconstructionOptions.tolerance", "a number in [0, 1)", tolerance);
@@ -172,6 +175,7 @@ nlohmann::json ReconstructionRun::report() const {
       {"lambda", options.lambda},
       {"regulariser", options.huber_delta > 0 ? "huber" : to_string(options.regulariser)},
       {"huber_delta", options.huber_delta},
+      {"preconditioner", to_string(options.preconditioner)},
       {"volume",
        {{"size", l.size}, {"voxel_mm", l.voxel_mm.x()}, {"origin_mm", {l.origin_mm.x(), l.origin_mm.y(), l.origin_mm.z()}}}},
       {"views_used", views_used},
@@ -230,7 +234,8 @@ ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geomet
     plan.layout = VolumeLayout::centred(size, plan.layout.voxel_mm);
   }
   plan.available_bytes = available_memory_bytes();
-  const SolverShape solver{o.method, o.lambda, o.regulariser, o.huber_delta, plan.weighted};
+  const SolverShape solver{o.method,      o.lambda,      o.regulariser,
+                           o.huber_delta, plan.weighted, o.preconditioner == CgPreconditioner::diagonal};
   const int subsets = o.subsets > 0 ? o.subsets : default_subset_count(plan.views);
   plan.distribution = plan_distribution(solver, plan.layout, ok, scan.detector.rows, scan.detector.cols, subsets, ranks, rank,
                                         plan.available_bytes, o.decomposition);
@@ -346,6 +351,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
       w.tolerance = o.tolerance;
       w.lambda = o.lambda;
       w.regulariser = o.regulariser;
+      w.preconditioner = o.preconditioner;
       run.solver = solve_wls_cg(A, m.line_integrals, plan.weighted ? &m.weights : nullptr, run.volume, w, on_iteration,
                                 spread ? nullptr : &checkpointing);
     }

@@ -1,8 +1,10 @@
 #pragma once
 // Threaded reductions and updates on float arrays, accumulating in double (solver internals).
+#include <algorithm>
 #include <cstddef>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "ctk/core/float_buffer.hpp"
 #include "ctk/proj/projection_operator.hpp"
@@ -59,6 +61,20 @@ inline void weighted_copy(const FloatBuffer& x, const FloatBuffer& w, FloatBuffe
     const std::size_t k = static_cast<std::size_t>(i);
     out[k] = weighted ? w[k] * x[k] : x[k];
   }
+}
+
+/// Views `views` of `all`, in that order, into `out` (reshaped; shrinking keeps the allocation).
+inline void gather_views(const ProjectionStack& all, const std::vector<int>& views, ProjectionStack& out) {
+  const std::size_t pixels = static_cast<std::size_t>(all.rows) * static_cast<std::size_t>(all.cols);
+  out.views = static_cast<int>(views.size());
+  out.rows = all.rows;
+  out.cols = all.cols;
+  out.data.resize(static_cast<std::size_t>(out.views) * pixels);
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(views.size());
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t k = 0; k < n; ++k)
+    std::copy_n(all.data.data() + static_cast<std::size_t>(views[static_cast<std::size_t>(k)]) * pixels, pixels,
+                out.data.data() + static_cast<std::size_t>(k) * pixels);
 }
 
 }  // namespace ctk::detail

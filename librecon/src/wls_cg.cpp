@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "ctk/core/error.hpp"
+#include "ctk/recon/separable_curvature.hpp"
 #include "vector_ops.hpp"
 
 namespace ctk {
@@ -20,7 +21,29 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
+// 1 / (A'WA1 + lambda c) per voxel, 0 where nothing constrains the voxel (its gradient is 0 there).
+FloatBuffer inverse_diagonal(const ProjectionOperator& A, const ProjectionStack* weights, const WlsOptions& o) {
+  Volume D = separable_data_curvature(A, weights);
+  const double c = separable_penalty_curvature(o.regulariser, o.lambda);
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(D.data.size());
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    float& d = D.data[static_cast<std::size_t>(i)];
+    const double total = double(d) + c;
+    d = total > 0 ? static_cast<float>(1.0 / total) : 0.0f;
+  }
+  return std::move(D.data);
+}
+
 }  // namespace
+
+const char* to_string(CgPreconditioner p) { return p == CgPreconditioner::diagonal ? "diagonal" : "none"; }
+
+CgPreconditioner cg_preconditioner_from_string(const std::string& name) {
+  if (name == "none") return CgPreconditioner::none;
+  if (name == "diagonal") return CgPreconditioner::diagonal;
+  throw std::invalid_argument("preconditioner: expected none or diagonal, got '" + name + "'");
+}
 
 void WlsOptions::validate() const {
   require_option(iterations >= 0, "WlsOptions.iterations", "at least 0", iterations);
@@ -53,6 +76,11 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
   static const FloatBuffer unit;
   const FloatBuffer& w = weights ? weights->data : unit;
   auto start = std::chrono::steady_clock::now();
+  // M^-1 (empty: no preconditioner, z = g). Recomputed on a resume: the same operator and weights
+  // give the same diagonal.
+  const bool preconditioned = o.preconditioner == CgPreconditioner::diagonal;
+  const FloatBuffer inverse_M = preconditioned ? inverse_diagonal(A, weights, o) : FloatBuffer();
+  const std::string solver_name = preconditioned ? "wls-cg-diagonal" : "wls-cg";
 
   ProjectionStack scratch(b.views, b.rows, b.cols);  // W r, then A d, then W A d
   Volume gradient(x.layout), direction(x.layout), H_direction(x.layout);
@@ -77,27 +105,30 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
   };
 
   SolverReport report;
-  double gg = 0, g0 = 0;
+  double gz = 0, g0 = 0, g_norm = 0;  // g'M^-1 g, |g| at the start, the latest |g|
   int first = 1;
   if (resume) {
-    check_solver_state(*resume, "wls-cg", {residual.data.size(), gradient.data.size(), direction.data.size()}, 2, x.layout);
+    check_solver_state(*resume, solver_name, {residual.data.size(), gradient.data.size(), direction.data.size()}, 2, x.layout);
     x.data = std::move(resume->x.data);
     residual.data = std::move(resume->vectors[0]);
     gradient.data = std::move(resume->vectors[1]);
     direction.data = std::move(resume->vectors[2]);
-    gg = resume->scalars[0];
+    gz = resume->scalars[0];
     g0 = resume->scalars[1];
     report.iterations = resume->log;
     first = resume->iteration + 1;
+    g_norm = std::sqrt(A.sum_over_domain(dot(gradient.data, gradient.data)));
   } else {
-    gg = A.sum_over_domain(dot(gradient.data, gradient.data));
-    g0 = std::sqrt(gg);
+    const double gg = A.sum_over_domain(dot(gradient.data, gradient.data));
+    g0 = g_norm = std::sqrt(gg);
+    gz = preconditioned ? A.sum_over_domain(detail::weighted_square_sum(gradient.data, inverse_M)) : gg;
     report.iterations.push_back(log_point(0, g0, g0));
-    if (gg == 0) {
+    if (g0 == 0) {
       report.stop_reason = "zero gradient at the start (nothing to fit)";
       return report;
     }
-    for (std::size_t i = 0; i < direction.data.size(); ++i) direction.data[i] = -gradient.data[i];
+    for (std::size_t i = 0; i < direction.data.size(); ++i)
+      direction.data[i] = preconditioned ? -inverse_M[i] * gradient.data[i] : -gradient.data[i];
   }
 
   for (int it = first; it <= o.iterations; ++it) {
@@ -112,35 +143,38 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
       report.stop_reason = "the search direction has no curvature (all views miss the volume?)";
       break;
     }
-    const double alpha = gg / alpha_denominator;
+    const double alpha = gz / alpha_denominator;
     axpy(alpha, direction.data, x.data);
     axpy(alpha, Ad.data, residual.data);
     if (it == o.iterations && !o.gradient_after_last) {
-      report.iterations.push_back(log_point(it, std::sqrt(gg), g0));
+      report.iterations.push_back(log_point(it, g_norm, g0));
       break;
     }
     detail::weighted_copy(Ad.data, w, scratch.data);
     A.apply_adjoint(scratch, H_direction);
     add_regulariser_normal(o.regulariser, o.lambda, direction, H_direction);
     axpy(alpha, H_direction.data, gradient.data);
-    const double gg_new = A.sum_over_domain(dot(gradient.data, gradient.data));
-    report.iterations.push_back(log_point(it, std::sqrt(gg_new), g0));
-    if (std::sqrt(gg_new) <= o.tolerance * g0) {
+    const double gg = A.sum_over_domain(dot(gradient.data, gradient.data));
+    g_norm = std::sqrt(gg);
+    const double gz_new = preconditioned ? A.sum_over_domain(detail::weighted_square_sum(gradient.data, inverse_M)) : gg;
+    report.iterations.push_back(log_point(it, g_norm, g0));
+    if (g_norm <= o.tolerance * g0) {
       report.stop_reason = "gradient fell below the tolerance after " + std::to_string(it) + " iterations";
       return report;
     }
-    const double beta = gg_new / gg;
-    gg = gg_new;
+    const double beta = gz_new / gz;
+    gz = gz_new;
     const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(direction.data.size());
 #pragma omp parallel for schedule(static)
     for (std::ptrdiff_t i = 0; i < n; ++i) {
       const std::size_t k = static_cast<std::size_t>(i);
-      direction.data[k] = static_cast<float>(-gradient.data[k] + beta * direction.data[k]);
+      const double z = preconditioned ? double(inverse_M[k]) * gradient.data[k] : double(gradient.data[k]);
+      direction.data[k] = static_cast<float>(-z + beta * direction.data[k]);
     }
     if (checkpointing) {
       const bool stop = checkpointing->stop_requested && checkpointing->stop_requested();
       if (stop || (checkpointing->every > 0 && it % checkpointing->every == 0 && it < o.iterations))
-        checkpointing->save({"wls-cg", it, report.iterations, x, {&residual.data, &gradient.data, &direction.data}, {gg, g0}});
+        checkpointing->save({solver_name, it, report.iterations, x, {&residual.data, &gradient.data, &direction.data}, {gz, g0}});
       if (stop) {
         report.stop_reason = kStoppedOnRequest;
         return report;

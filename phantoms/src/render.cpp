@@ -6,6 +6,7 @@
 #include <string>
 
 #include "ctk/core/error.hpp"
+#include "ctk/core/parallel.hpp"
 #include "ctk/phantoms/material_attenuation.hpp"
 
 namespace ctk {
@@ -143,6 +144,23 @@ Image render_line_integrals(const Phantom& phantom, const ProjectionMatrix& P, c
     image.pixels[pixel] = static_cast<float>(-std::log(transmitted / static_cast<double>(samples)));
   }
   return image;
+}
+
+Volume voxelised(const Phantom& phantom, const VolumeLayout& layout) {
+  Volume v(layout);
+  const auto& n = layout.size;
+  parallel_for_dynamic(n[2], [&](int k) {
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) {
+        double sum = 0;
+        for (int s = 0; s < 8; ++s) {
+          const Eigen::Vector3d offset((s & 1) ? 0.25 : -0.25, (s & 2) ? 0.25 : -0.25, (s & 4) ? 0.25 : -0.25);
+          sum += phantom.attenuation_at(layout.centre_of(i, j, k) + offset.cwiseProduct(layout.voxel_mm));
+        }
+        v.at(i, j, k) = static_cast<float>(sum / 8);
+      }
+  });
+  return v;
 }
 
 }  // namespace ctk

@@ -79,16 +79,18 @@ def _iteration_hook(method: str, callback: Optional[Callable[[dict], Optional[bo
 
 def wls_cg(operator: Operator, b: np.ndarray, *, weights: Optional[np.ndarray] = None,
            x0: Optional[np.ndarray] = None, iterations: int = 30, tolerance: float = 1e-4,
-           lam: float = 0.0, regulariser: str = "identity",
+           lam: float = 0.0, regulariser: str = "identity", preconditioner: str = "none",
            callback: Optional[Callable[[dict], Optional[bool]]] = None) -> SolveResult:
     """Weighted least squares by conjugate gradients on the normal equations,
     minimise 1/2 ||W^(1/2) (A x - b)||^2 + 1/2 lam ||G x||^2 with G the identity or the
     discrete gradient ('gradient'). One forward and one back projection per iteration.
+    preconditioner 'diagonal': CG preconditioned by the separable curvature A'WA1 + lam c (one
+    more projection pair at the start, one more volume).
 
     callback(log) is called after every iteration with its log entry; returning False stops the
     solve. Ctrl-C (KeyboardInterrupt) stops it within the iteration under way. Progress goes to
     the 'ctk' logger at INFO level."""
-    x, report = _ctk._wls_cg(operator, b, weights, x0, iterations, tolerance, lam, regulariser,
+    x, report = _ctk._wls_cg(operator, b, weights, x0, iterations, tolerance, lam, regulariser, preconditioner,
                              _iteration_hook("wls-cg", callback))
     return SolveResult(x, report["iterations"], report["stop_reason"])
 
@@ -292,7 +294,7 @@ class ReconstructionResult:
 
 def reconstruct(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] = None, *, method: str = "wls-cg",
                 iterations: int = 0, subsets: int = 0, lambda_: float = 0.0, regulariser: str = "identity",
-                huber_delta: float = 0.0, tolerance: float = 1e-4,
+                huber_delta: float = 0.0, tolerance: float = 1e-4, preconditioner: str = "none",
                 weighted: bool = True, undistort: bool = True, size: Optional[tuple[int, int, int]] = None,
                 voxel_mm: float = 0.0, progress: Optional[Callable[[int, int], None]] = None) -> ReconstructionResult:
     """`ctk reconstruct` without files out: the scan's ok views (of `geometry`, or the scan's
@@ -300,11 +302,12 @@ def reconstruct(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] =
     counts unless weighted=False), SIRT or FDK (circular scans) run. iterations 0: 30 for WLS-CG,
     8 epochs of OS-SQS (subsets 0: about 15 views each, at most 24), 100 for SIRT. huber_delta > 0
     (OS-SQS only): an edge-preserving Huber penalty weighted by lambda_ instead of the quadratic one.
+    preconditioner 'diagonal' (WLS-CG only): CG preconditioned by the separable curvature.
     size (z, y, x) voxels and voxel_mm default to the holder (or the field of view) at a detector
     pixel seen at the holder origin. progress(done, total) while reading and while iterating;
     Ctrl-C stops it within the current iteration (KeyboardInterrupt)."""
     d = _ctk._reconstruct(os.fspath(scan), None if geometry is None else os.fspath(geometry), method, iterations, subsets,
-                          lambda_, regulariser, huber_delta, tolerance, weighted, undistort, None if size is None else tuple(size), voxel_mm,
+                          lambda_, regulariser, huber_delta, tolerance, preconditioner, weighted, undistort, None if size is None else tuple(size), voxel_mm,
                           progress)
     _log.info("%s", d["brief"])
     d["origin_mm"] = tuple(d["origin_mm"])

@@ -86,12 +86,14 @@ ProjectionStack data_stack(const ProjectionOperator& A, const FloatArray& b, con
 }
 
 py::tuple wls_cg(const ProjectionOperator& A, const FloatArray& b, const py::object& weights, const py::object& x0,
-                 int iterations, double tolerance, double lam, const std::string& regulariser, const py::object& callback) {
+                 int iterations, double tolerance, double lam, const std::string& regulariser, const std::string& preconditioner,
+                 const py::object& callback) {
   WlsOptions o;
   o.iterations = iterations;
   o.tolerance = tolerance;
   o.lambda = lam;
   o.regulariser = regulariser_from_string(regulariser);  // std::invalid_argument: ValueError
+  o.preconditioner = cg_preconditioner_from_string(preconditioner);
   o.validate();
   const ProjectionStack data = data_stack(A, b, "b");
   std::optional<ProjectionStack> w;
@@ -168,7 +170,7 @@ py::array_t<float> fdk(const JosephOperator& A, const FloatArray& projections, c
 
 void bind_solvers(py::module_& m) {
   m.def("_wls_cg", &wls_cg, py::arg("operator"), py::arg("b"), py::arg("weights"), py::arg("x0"), py::arg("iterations"),
-        py::arg("tolerance"), py::arg("lam"), py::arg("regulariser"), py::arg("callback"));
+        py::arg("tolerance"), py::arg("lam"), py::arg("regulariser"), py::arg("preconditioner"), py::arg("callback"));
   m.def("_sirt", &sirt, py::arg("operator"), py::arg("b"), py::arg("x0"), py::arg("iterations"), py::arg("relaxation"),
         py::arg("non_negative"), py::arg("callback"));
   m.def("_os_sqs", &os_sqs, py::arg("operator"), py::arg("b"), py::arg("weights"), py::arg("x0"), py::arg("epochs"),

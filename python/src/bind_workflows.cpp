@@ -156,8 +156,8 @@ py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, cons
 
 py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& geometry_file, const std::string& method,
                      int iterations, int subsets, double lambda, const std::string& regulariser, double huber_delta,
-                     double tolerance, bool weighted, bool undistort, const std::optional<std::array<int, 3>>& size,
-                     double voxel_mm, const py::object& progress) {
+                     double tolerance, const std::string& preconditioner, bool weighted, bool undistort,
+                     const std::optional<std::array<int, 3>>& size, double voxel_mm, const py::object& progress) {
   ReconstructionOptions o;
   o.method = reconstruction_method(method);  // std::invalid_argument (ValueError) naming the others
   o.subsets = subsets;
@@ -166,6 +166,7 @@ py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& g
   o.regulariser = regulariser_from_string(regulariser);
   o.huber_delta = huber_delta;
   o.tolerance = tolerance;
+  o.preconditioner = cg_preconditioner_from_string(preconditioner);
   o.statistical_weights = weighted;
   o.undistort = undistort;
   if (size) {  // (z, y, x) as numpy orders a volume
@@ -262,7 +263,8 @@ otherwise. Refuses (InputError) an `out` that is one of the inputs. Returns the 
         py::arg("effects"), py::arg("progress"), py::arg("log"));
   m.def("_reconstruct", &reconstruct, py::arg("scan"), py::arg("geometry"), py::arg("method"), py::arg("iterations"),
         py::arg("subsets"), py::arg("lambda_"), py::arg("regulariser"), py::arg("huber_delta"), py::arg("tolerance"),
-        py::arg("weighted"), py::arg("undistort"), py::arg("size"), py::arg("voxel_mm"), py::arg("progress"));
+        py::arg("preconditioner"), py::arg("weighted"), py::arg("undistort"), py::arg("size"), py::arg("voxel_mm"),
+        py::arg("progress"));
   m.def("_refine", &refine, py::arg("scan"), py::arg("geometry"), py::arg("effects"), py::arg("coarsening"),
         py::arg("blur_arc_deg"), py::arg("z"), py::arg("log"));
 }

@@ -1,6 +1,6 @@
 // The comparison's figures against what they must be on volumes made to measure: an exact copy
 // scores no error and the truth's own edge gradient, a brighter copy a proportionally steeper
-// one, a blurred copy a shallower one, and the three-profile figure agrees with the all-lines one
+// one, a blurred copy a shallower one (along the blurred axis only), and the three-profile figure agrees with the all-lines one
 // on a cube (every line through it crosses the same edges). The RMSE outside the absorbers
 // leaves out the absorbers' own level and their face neighbours, and only those.
 #include <gtest/gtest.h>
@@ -59,6 +59,11 @@ TEST(TrajectoryQuality, EdgeGradientsFollowContrastAndSharpness) {
   // (1/2 + 2 x (2 x 3/4 + 6) / 8) / 3 of the truth's.
   const TrajectoryQuality s = trajectory_quality(blurred_along_x(truth), truth, region, through, kNoAbsorber);
   EXPECT_NEAR(s.edge_gradient_per_mm2, 0.1 * (0.5 + 2 * 7.5 / 8) / 3, 1e-6);
+  // Per axis: the x faces alone are halved; along y and z, 7.5 of 8 columns' steps are kept.
+  EXPECT_NEAR(s.edge_gradient_along_per_mm2[0], 0.05, 1e-6);
+  EXPECT_NEAR(s.edge_gradient_along_per_mm2[1], 0.1 * 7.5 / 8, 1e-6);
+  EXPECT_NEAR(s.edge_gradient_along_per_mm2[2], 0.1 * 7.5 / 8, 1e-6);
+  for (double along : same.edge_gradient_along_per_mm2) EXPECT_NEAR(along, 0.1, 1e-6);
   EXPECT_NEAR(s.profile_gradient_per_mm2, 0.1 * (0.5 + 1 + 1) / 3, 1e-6);
 }
 

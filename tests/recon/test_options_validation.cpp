@@ -57,6 +57,14 @@ TEST(OptionsValidation, ReconstructionOptions) {
   huber.method = ReconstructionMethod::os_sqs;
   huber.huber_delta = 0.001;
   EXPECT_NO_THROW(huber.validate());
+  // The diagonal preconditioner only with the method it preconditions.
+  testing::expect_option_refused(
+      huber, [](auto& o) { o.preconditioner = CgPreconditioner::diagonal; }, "ReconstructionOptions.preconditioner");
+  ReconstructionOptions preconditioned;
+  preconditioned.preconditioner = CgPreconditioner::diagonal;
+  EXPECT_NO_THROW(preconditioned.validate());
+  EXPECT_THROW(cg_preconditioner_from_string("jacobi"), std::invalid_argument);
+  EXPECT_EQ(cg_preconditioner_from_string("diagonal"), CgPreconditioner::diagonal);
   EXPECT_THROW(reconstruction_method("art"), std::invalid_argument);
   EXPECT_EQ(reconstruction_method("os-sqs"), ReconstructionMethod::os_sqs);
 }

@@ -73,14 +73,37 @@ double continued_difference(const SmallProblem& p, int stop_after, const Solve& 
 TEST(SolverState, WlsCgContinuedFromItsSavedStateEqualsTheUninterruptedRun) {
   const SmallProblem p;
   const JosephOperator A = p.projection();
+  for (const CgPreconditioner preconditioner : {CgPreconditioner::none, CgPreconditioner::diagonal}) {
+    WlsOptions o;
+    o.iterations = 12;
+    o.tolerance = 0;
+    o.lambda = 0.5;
+    o.regulariser = Regulariser::gradient;
+    o.preconditioner = preconditioner;
+    const double difference = continued_difference(
+        p, 5, [&](Volume& x, const Checkpointing* c) { return solve_wls_cg(A, p.b, &p.weights, x, o, {}, c); });
+    EXPECT_LE(difference, 1e-6) << to_string(preconditioner);
+  }
+}
+
+TEST(SolverState, APlainCgStateDoesNotContinueAPreconditionedRun) {
+  const SmallProblem p;
+  const JosephOperator A = p.projection();
+  const auto file = testing::scratch_dir() / "state";
   WlsOptions o;
-  o.iterations = 12;
-  o.tolerance = 0;
-  o.lambda = 0.5;
-  o.regulariser = Regulariser::gradient;
-  const double difference = continued_difference(
-      p, 5, [&](Volume& x, const Checkpointing* c) { return solve_wls_cg(A, p.b, &p.weights, x, o, {}, c); });
-  EXPECT_LE(difference, 1e-6);
+  o.iterations = 6;
+  int done = 0;
+  Checkpointing first;
+  first.stop_requested = [&] { return ++done == 3; };
+  first.save = [&](const SolverSnapshot& s) { write_solver_state(s, {}, file); };
+  Volume x(p.layout);
+  solve_wls_cg(A, p.b, &p.weights, x, o, {}, &first);
+  nlohmann::json run;
+  SolverState state = read_solver_state(file, run);
+  Checkpointing resume;
+  resume.resume = &state;
+  o.preconditioner = CgPreconditioner::diagonal;
+  EXPECT_THROW(solve_wls_cg(A, p.b, &p.weights, x, o, {}, &resume), std::invalid_argument);
 }
 
 TEST(SolverState, SirtContinuedFromItsSavedStateEqualsTheUninterruptedRun) {

@@ -266,8 +266,10 @@ TEST(Sirt, ConvergesOnNoiseFreeData) {
 
 TEST(MemoryPlan, ThesisSizeFitsIn24GB) {
   // 720^3 volume, 900 views of 720 x 720, weighted CG.
-  const MemoryPlan plan = plan_memory(
-      ReconstructionMethod::wls_cg, VolumeLayout::centred({720, 720, 720}, Eigen::Vector3d::Constant(0.1)), 900, 720, 720, true);
+  SolverShape weighted_cg;
+  weighted_cg.weighted = true;
+  const MemoryPlan plan =
+      plan_memory(weighted_cg, VolumeLayout::centred({720, 720, 720}, Eigen::Vector3d::Constant(0.1)), 900, 720, 720);
   std::cout << "thesis size, WLS-CG: " << plan.describe() << "\n";
   EXPECT_LT(plan.total_bytes(), 24'000'000'000ull);
   EXPECT_EQ(plan.volume_bytes, 720ull * 720 * 720 * 4);

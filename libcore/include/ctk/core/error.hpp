@@ -25,6 +25,8 @@ class InputError : public std::runtime_error {
 /// An options struct checking itself: unless `ok`, throws std::invalid_argument
 /// "<field>: expected <expected>, got <value>" (field as "SirtOptions.relaxation").
 void require_option(bool ok, const char* field, const char* expected, double value);
+/// The same for a named choice ("diagonal").
+void require_choice(bool ok, const char* field, const char* expected, const char* value);
 
 /// Readers open only regular files: a pipe would wait for a writer forever and a device (/dev/zero)
 /// never ends. Throws InputError naming the file when it is missing or not a regular file.

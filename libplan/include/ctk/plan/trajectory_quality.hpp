@@ -30,6 +30,9 @@ struct TrajectoryQuality {
   double truth_profile_gradient_per_mm2 = 0;
   double edge_gradient_per_mm2 = 0;  // the same over every axis-parallel line of the region
   double truth_edge_gradient_per_mm2 = 0;
+  /// The edge gradient over the lines along x, y and z alone: along z it measures the faces
+  /// across the holder axis, which a circle about that axis sees least well.
+  std::array<double, 3> edge_gradient_along_per_mm2{};
   std::vector<LineProfile> profiles;
 };
 

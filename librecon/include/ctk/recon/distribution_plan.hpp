@@ -22,16 +22,6 @@ const char* to_string(Decomposition d);
 /// "auto", "views", "slabs"; std::invalid_argument naming the others.
 Decomposition decomposition_from_string(const std::string& name);
 
-/// What the plan needs of the solver: its method and penalty (slabs hold no neighbour planes, so
-/// a penalty of neighbour differences cannot run on them), and OS-SQS's subsets.
-struct SolverShape {
-  ReconstructionMethod method = ReconstructionMethod::wls_cg;
-  double lambda = 0;
-  Regulariser regulariser = Regulariser::identity;
-  double huber_delta = 0;
-  bool weighted = false;
-};
-
 struct DistributionPlan {
   int ranks = 1;
   Decomposition decomposition = Decomposition::views;  // the one picked

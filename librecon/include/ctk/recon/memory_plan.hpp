@@ -5,6 +5,7 @@
 #include <string>
 
 #include "ctk/core/volume.hpp"
+#include "ctk/recon/regulariser.hpp"
 
 namespace ctk {
 
@@ -24,12 +25,24 @@ struct MemoryPlan {
   std::string describe() const;
 };
 
-/// CG: x, gradient, direction, H direction; b, residual, scratch, and weights when weighted.
+/// What the plan needs of the solver: its method and penalty (slabs hold no neighbour planes, so
+/// a penalty of neighbour differences cannot run on them), and OS-SQS's subsets.
+struct SolverShape {
+  ReconstructionMethod method = ReconstructionMethod::wls_cg;
+  double lambda = 0;
+  Regulariser regulariser = Regulariser::identity;
+  double huber_delta = 0;
+  bool weighted = false;
+  bool preconditioned = false;  // WLS-CG's diagonal preconditioner: one more volume
+};
+
+/// CG: x, gradient, direction, H direction (and the preconditioner); b, residual, scratch, and
+/// weights when weighted.
 /// OS-SQS: x, the extrapolated point, the curvature, the gradient, the Huber penalty's curvature; b,
 /// weights when weighted, and
 /// one subset's data, weights and residual (counted as a stack).
 /// SIRT: x, column sums, update; b, row sums, residual. FDK: the volume and the filtered stack.
-MemoryPlan plan_memory(ReconstructionMethod method, const VolumeLayout& layout, int views, int rows, int cols, bool weighted);
+MemoryPlan plan_memory(const SolverShape& solver, const VolumeLayout& layout, int views, int rows, int cols);
 
 /// Memory available to a new run (MemAvailable in /proc/meminfo; physical memory otherwise).
 std::size_t available_memory_bytes();

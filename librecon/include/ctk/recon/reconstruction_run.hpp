@@ -26,6 +26,7 @@
 #include "ctk/recon/memory_plan.hpp"
 #include "ctk/recon/regulariser.hpp"
 #include "ctk/recon/solver_state.hpp"
+#include "ctk/recon/wls_cg.hpp"
 
 namespace ctk {
 
@@ -35,15 +36,16 @@ struct ReconstructionOptions {
   int subsets = 0;     // OS-SQS: 0 chooses from the view count (default_subset_count)
   double lambda = 0;   // WLS-CG's regularisation weight
   Regulariser regulariser = Regulariser::identity;
-  double huber_delta = 0;            // OS-SQS: > 0 weighs the edge-preserving Huber penalty instead (huber_penalty.hpp)
-  double tolerance = 1e-4;           // WLS-CG stops when the gradient has fallen by this factor
-  bool statistical_weights = true;   // WLS-CG on counts: Poisson weights (line integrals: unit weights)
-  bool undistort = true;             // a declared detector distortion resampled away (MeasurementOptions)
-  std::array<int, 3> size{0, 0, 0};  // voxels; 0: cover the holder, or the field of view
-  double voxel_mm = 0;               // 0: a detector pixel seen at the holder origin
-  Decomposition decomposition = Decomposition::automatic;  // over several ranks (distribution_plan.hpp)
-  void validate() const;                                   // std::invalid_argument naming the field
-  int iteration_count() const;                             // `iterations`, or the method's default
+  double huber_delta = 0;   // OS-SQS: > 0 weighs the edge-preserving Huber penalty instead (huber_penalty.hpp)
+  double tolerance = 1e-4;  // WLS-CG stops when the gradient has fallen by this factor
+  CgPreconditioner preconditioner = CgPreconditioner::none;  // WLS-CG: none or diagonal (wls_cg.hpp)
+  bool statistical_weights = true;                           // WLS-CG on counts: Poisson weights (line integrals: unit weights)
+  bool undistort = true;                                     // a declared detector distortion resampled away (MeasurementOptions)
+  std::array<int, 3> size{0, 0, 0};                          // voxels; 0: cover the holder, or the field of view
+  double voxel_mm = 0;                                       // 0: a detector pixel seen at the holder origin
+  Decomposition decomposition = Decomposition::automatic;    // over several ranks (distribution_plan.hpp)
+  void validate() const;                                     // std::invalid_argument naming the field
+  int iteration_count() const;                               // `iterations`, or the method's default
 };
 
 /// OS-SQS's subsets when none are asked for: about 15 views each, at most 24 (12 to 24 subsets of

@@ -6,6 +6,11 @@
 // a growing Krylov space); the run stops after `iterations` or when the gradient has fallen by
 // `tolerance` relative to the start. With `checkpointing` it saves its state (iterate, residual,
 // gradient, direction) as asked and continues a saved one exactly.
+// Preconditioned by the diagonal D = A'WA1 + lambda c (separable_curvature.hpp), CG runs on
+// D^(-1/2) H D^(-1/2) instead: the same minimiser, with the scale differences between voxels
+// (the weights, the edges of the field of view, voxels seen by few views) taken out, for one more
+// projection pair at the start and one more volume.
+#include <string>
 #include <vector>
 
 #include "ctk/proj/projection_operator.hpp"
@@ -15,11 +20,17 @@
 
 namespace ctk {
 
+enum class CgPreconditioner { none, diagonal };
+const char* to_string(CgPreconditioner p);
+/// "none" or "diagonal"; std::invalid_argument naming them.
+CgPreconditioner cg_preconditioner_from_string(const std::string& name);
+
 struct WlsOptions {
   int iterations = 30;
   double tolerance = 1e-4;
   double lambda = 0;
   Regulariser regulariser = Regulariser::identity;
+  CgPreconditioner preconditioner = CgPreconditioner::none;
   /// false: the gradient after the last iteration is not computed (one back projection less; the
   /// last log entry then repeats the previous relative gradient). For callers that only want x.
   bool gradient_after_last = true;

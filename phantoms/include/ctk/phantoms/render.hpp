@@ -15,6 +15,7 @@
 #include "ctk/phantoms/phantom.hpp"
 #include "ctk/phantoms/xray_spectrum.hpp"
 #include "ctk/core/image_io.hpp"
+#include "ctk/core/volume.hpp"
 
 namespace ctk {
 
@@ -28,5 +29,9 @@ struct RenderOptions {
 /// Line-integral image (cols x rows) of `phantom` for the view P (holder frame -> pixels).
 Image render_line_integrals(const Phantom& phantom, const ProjectionMatrix& P, const Detector& detector,
                             const RenderOptions& options = {});
+
+/// The truth on a voxel grid: each voxel the mean attenuation at 2 x 2 x 2 points inside it (a
+/// face through the voxel counts by the share of points on each side).
+Volume voxelised(const Phantom& phantom, const VolumeLayout& layout);
 
 }  // namespace ctk

@@ -1,0 +1,66 @@
+#pragma once
+// The benchmarks' data: exact projections of an analytic phantom (2 x 2 rays per pixel) with
+// Poisson noise for a given open-beam count, as line integrals and their weights (the detected
+// share of the open beam's counts), and the phantom's voxelised truth.
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "ctk/geom/trajectory.hpp"
+#include "ctk/phantoms/detector_response.hpp"
+#include "ctk/phantoms/render.hpp"
+#include "ctk/core/projection_stack.hpp"
+#include "ctk/geom/projection_matrix.hpp"
+
+namespace ctk::bench {
+
+struct SimulatedViews {
+  ProjectionStack b, w;
+};
+
+/// One view per direction (the beam along it in the phantom's frame), the source `sod_mm` from the
+/// origin and `sdd_mm` from the detector, the detector centred on the beam.
+inline std::vector<ProjectionMatrix> views_along(const std::vector<Eigen::Vector3d>& directions, const Detector& detector,
+                                                 double sod_mm, double sdd_mm) {
+  const Intrinsics K = Intrinsics::from_setup(sdd_mm, detector, detector.centre_px());
+  std::vector<ProjectionMatrix> views;
+  for (const auto& d : directions)
+    views.push_back(ProjectionMatrix::compose(K, make_rigid(rotation_looking_along(d), Eigen::Vector3d(0, 0, sod_mm))));
+  return views;
+}
+
+/// The phantom seen in `views`, noise seeded per view from `seed`.
+inline SimulatedViews simulate_views(const Phantom& phantom, const std::vector<ProjectionMatrix>& views, const Detector& detector,
+                                     double flat_counts, unsigned seed) {
+  SimulatedViews s;
+  const int n = static_cast<int>(views.size());
+  s.b = ProjectionStack(n, detector.rows, detector.cols);
+  s.w = ProjectionStack(n, detector.rows, detector.cols);
+  const CountsModel counts{flat_counts, 0};
+#pragma omp parallel for schedule(dynamic)
+  for (int v = 0; v < n; ++v) {
+    const Image p = render_line_integrals(phantom, views[static_cast<std::size_t>(v)], detector, {2, std::nullopt, std::nullopt});
+    Image I = expected_counts(p, counts);
+    std::mt19937_64 rng(seed + static_cast<unsigned>(v));
+    draw_counts(I, counts, rng);
+    for (std::size_t k = 0; k < I.pixels.size(); ++k) {
+      const double detected = std::max(double(I.pixels[k]), 1.0) / flat_counts;
+      s.b.view(v)[k] = static_cast<float>(-std::log(detected));
+      s.w.view(v)[k] = static_cast<float>(detected);
+    }
+  }
+  return s;
+}
+
+/// Root mean square of x - truth over every voxel.
+inline double rmse(const Volume& x, const Volume& truth) {
+  double sum = 0;
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(x.data.size());
+#pragma omp parallel for reduction(+ : sum)
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+    sum += std::pow(double(x.data[static_cast<std::size_t>(i)]) - truth.data[static_cast<std::size_t>(i)], 2);
+  return std::sqrt(sum / double(n));
+}
+
+}  // namespace ctk::bench
