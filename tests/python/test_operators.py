@@ -71,6 +71,8 @@ def test_shapes_that_do_not_fit_are_refused_with_the_shape_expected(small_projec
         ctk.sirt(A, np.zeros(A.projection_shape, np.float32), relaxation=2.5)
     with pytest.raises(ValueError, match="regulariser"):
         ctk.wls_cg(A, np.zeros(A.projection_shape, np.float32), regulariser="tv")
+    with pytest.raises(ValueError, match="preconditioner"):
+        ctk.wls_cg(A, np.zeros(A.projection_shape, np.float32), preconditioner="jacobi")
 
 
 def test_scipy_lsqr_on_the_adapter_converges(small_projector):
@@ -86,6 +88,9 @@ def test_scipy_lsqr_on_the_adapter_converges(small_projector):
     # And the solver of ctk agrees on the data fit.
     r = ctk.wls_cg(A, b, iterations=60, tolerance=0)
     assert r.iterations[-1]["data_term"] < 1e-3 * r.iterations[0]["data_term"]
+    # Preconditioned by the separable curvature, to the same fit.
+    p = ctk.wls_cg(A, b, iterations=60, tolerance=0, preconditioner="diagonal")
+    assert p.iterations[-1]["data_term"] < 1e-3 * p.iterations[0]["data_term"]
 
 
 def test_a_callback_sees_every_iteration_and_may_stop_the_solve(small_projector):
