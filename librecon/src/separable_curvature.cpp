@@ -8,27 +8,27 @@ namespace ctk {
 
 Volume separable_data_curvature(const ProjectionOperator& A, const ProjectionStack* weights,
                                 const std::vector<std::vector<int>>& subsets) {
-  Volume ones(A.domain()), D(A.domain()), part_curvature(A.domain());
+  Volume ones(A.domain()), D(A.domain());
   std::fill(ones.data.begin(), ones.data.end(), 1.0f);
-  const auto add_part = [&](const ProjectionOperator& part, const std::vector<int>* views) {
-    ProjectionStack A1;
-    part.apply(ones, A1);
+  ProjectionStack A1;
+  if (subsets.empty()) {  // the whole operator at once: back projected straight into D
+    A.apply(ones, A1);
+    if (weights) detail::weighted_copy(A1.data, weights->data, A1.data);
+    A.apply_adjoint(A1, D);
+    return D;
+  }
+  Volume part_curvature(A.domain());
+  ProjectionStack w;
+  for (const auto& views : subsets) {
+    const auto part = A.subset(views);
+    part->apply(ones, A1);
     if (weights) {
-      if (views) {
-        ProjectionStack w;
-        detail::gather_views(*weights, *views, w);
-        detail::weighted_copy(A1.data, w.data, A1.data);
-      } else {
-        detail::weighted_copy(A1.data, weights->data, A1.data);
-      }
+      detail::gather_views(*weights, views, w);
+      detail::weighted_copy(A1.data, w.data, A1.data);
     }
-    part.apply_adjoint(A1, part_curvature);
+    part->apply_adjoint(A1, part_curvature);
     detail::axpy(1.0, part_curvature.data, D.data);
-  };
-  if (subsets.empty())
-    add_part(A, nullptr);
-  else
-    for (const auto& s : subsets) add_part(*A.subset(s), &s);
+  }
   return D;
 }
 
