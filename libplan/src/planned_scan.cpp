@@ -6,23 +6,25 @@
 
 namespace ctk {
 
+nlohmann::json planned_view_to_json(const PlannedViewRecord& v) {
+  nlohmann::json j = {{"request", v.index},
+                      {"scout", v.scout},
+                      {"direction_holder", {v.requested.x(), v.requested.y(), v.requested.z()}},
+                      {"status", v.acquired ? "acquired" : "unreachable"},
+                      {"predicted_damage_mm", v.damage_mm},
+                      {"planning_seconds", v.planning_seconds}};
+  if (!v.reason.empty()) j["reason"] = v.reason;
+  if (v.acquired) {
+    j["projection"] = v.projection_file;
+    j["calibrated"] = v.calibrated;
+    if (v.calibrated) j["calibration_rms_px"] = v.calibration_rms_px;
+  }
+  return j;
+}
+
 nlohmann::json trajectory_to_json(const PlanningResult& r) {
   nlohmann::json views = nlohmann::json::array();
-  for (const PlannedViewRecord& v : r.views) {
-    nlohmann::json j = {{"request", v.index},
-                        {"scout", v.scout},
-                        {"direction_holder", {v.requested.x(), v.requested.y(), v.requested.z()}},
-                        {"status", v.acquired ? "acquired" : "unreachable"},
-                        {"predicted_damage_mm", v.damage_mm},
-                        {"planning_seconds", v.planning_seconds}};
-    if (!v.reason.empty()) j["reason"] = v.reason;
-    if (v.acquired) {
-      j["projection"] = v.projection_file;
-      j["calibrated"] = v.calibrated;
-      if (v.calibrated) j["calibration_rms_px"] = v.calibration_rms_px;
-    }
-    views.push_back(j);
-  }
+  for (const PlannedViewRecord& v : r.views) views.push_back(planned_view_to_json(v));
   double worst = 0, sum = 0;
   for (double s : r.step_seconds) {
     worst = std::max(worst, s);

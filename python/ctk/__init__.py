@@ -44,6 +44,8 @@ from ._ctk import (  # noqa: F401  (re-exported)
     write_volume,
 )
 from . import _ctk
+from ._planning import PlannedTrajectory, PlanResult, plan, plan_lab, read_plan, read_plan_comparison
+from ._reports import read_report
 
 _log = logging.getLogger("ctk")
 
@@ -52,6 +54,7 @@ __all__ = [
     "Measurements", "__version__", "as_linear_operator", "load_measurements", "read_image", "cone_vec_from_matrices", "fdk", "geometry_matrices",
     "matrices_from_cone_vec", "read_cone_vec", "read_diagnosis", "read_geometry", "read_nxtomo", "read_rtk_geometry", "read_scan", "read_xtekct",
     "os_sqs", "sirt", "wls_cg", "write_geometry", "write_rtk_geometry", "write_scan",
+    "PlanResult", "PlannedTrajectory", "plan", "plan_lab", "read_plan", "read_plan_comparison",
 ]
 
 
@@ -342,17 +345,4 @@ def diagnose(scan: str | os.PathLike, geometry: str | os.PathLike, *, repeatabil
 
 def read_diagnosis(file: str | os.PathLike) -> dict:
     """A ctk-diagnosis/1 report (ctk diagnose, ctk refine) as a dict; InputError unless it is one."""
-    with open(file, encoding="utf-8") as f:
-        try:
-            report = json.load(f)
-        except json.JSONDecodeError as e:
-            raise _input_error(str(file), "", f"not JSON: {e}") from None
-    if not isinstance(report, dict) or report.get("format") != "ctk-diagnosis/1":
-        raise _input_error(str(file), "format", 'expected "ctk-diagnosis/1"')
-    return report
-
-
-def _input_error(file: str, key: str, what: str) -> InputError:
-    error = InputError(f"{file}: {key}: {what}" if key else f"{file}: {what}")
-    error.file, error.key = file, key
-    return error
+    return read_report(file, "ctk-diagnosis/1")

@@ -10,5 +10,6 @@ void bind_solvers(pybind11::module_& m);       // WLS-CG, SIRT, FDK
 void bind_measurements(pybind11::module_& m);  // a scan's line integrals, weights, matrices; images
 void bind_workflows(pybind11::module_& m);     // import of a circular scan, the markerless loop
 void bind_benchmarks(pybind11::module_& m);    // the standard problem; C++-side timing
+void bind_planning(pybind11::module_& m);      // view planning, simulated and in a lab
 
 }  // namespace ctk::python

@@ -22,6 +22,8 @@ PYBIND11_MODULE(_ctk, m) {
 
   // InputError: a file the toolkit read is not what it must be; .file and .key say where.
   static py::exception<ctk::InputError> input_error(m, "InputError", PyExc_ValueError);
+  // pybind11's translator type takes the pointer by value.
+  // NOLINTNEXTLINE(performance-unnecessary-value-param)
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -43,4 +45,5 @@ PYBIND11_MODULE(_ctk, m) {
   ctk::python::bind_measurements(m);
   ctk::python::bind_workflows(m);
   ctk::python::bind_benchmarks(m);
+  ctk::python::bind_planning(m);
 }

@@ -10,6 +10,7 @@
 #include "ctk/plan/edge_tangency.hpp"
 #include "ctk/plan/incremental_reconstruction.hpp"
 #include "ctk/plan/plan_trajectory.hpp"
+#include "ctk/plan/simulated_planning_run.hpp"
 #include "ctk/plan/view_planner.hpp"
 
 namespace ctk {
@@ -114,6 +115,71 @@ TEST(OptionsValidation, RenderOptions) {
       "RenderOptions.distortion.k1_per_px2");
   testing::expect_option_refused(
       RenderOptions{}, [](auto& o) { o.spectrum = XraySpectrum{}; }, "RenderOptions.spectrum.bins");
+}
+
+TEST(OptionsValidation, PlanRequests) {
+  EXPECT_NO_THROW(PlanRequest{}.validate());
+  testing::expect_option_refused(
+      PlanRequest{}, [](auto& o) { o.views = 1; }, "PlanRequest.views");
+  testing::expect_option_refused(
+      PlanRequest{}, [](auto& o) { o.coarse_size = 4; }, "PlanRequest.coarse_size");
+  testing::expect_option_refused(
+      PlanRequest{}, [](auto& o) { o.coarse_voxel_mm = 0; }, "PlanRequest.coarse_voxel_mm");
+  // The rest as the loop's own options name them.
+  testing::expect_option_refused(
+      PlanRequest{}, [](auto& o) { o.scout_nside = 0; }, "PlanningOptions.scout_nside");
+  testing::expect_option_refused(
+      PlanRequest{}, [](auto& o) { o.spread_exponent = 0; }, "PlannerOptions.spread_exponent");
+  testing::expect_option_refused(
+      PlanRequest{}, [](auto& o) { o.binning = 0; }, "IncrementalOptions.binning");
+  testing::expect_option_refused(
+      PlanRequest{}, [](auto& o) { o.tangent_width_deg = 0; }, "EdgeTangencyOptions.tangent_width_deg");
+
+  LabPlanRequest lab;
+  lab.lab = "lab";
+  lab.setup = "lab-scan.json";
+  lab.out = "planned";
+  EXPECT_NO_THROW(lab.validate());
+  testing::expect_option_refused(
+      lab, [](auto& o) { o.lab.clear(); }, "LabPlanRequest.lab");
+  testing::expect_option_refused(
+      lab, [](auto& o) { o.setup.clear(); }, "LabPlanRequest.setup");
+  testing::expect_option_refused(
+      lab, [](auto& o) { o.out.clear(); }, "LabPlanRequest.out");
+  testing::expect_option_refused(
+      lab, [](auto& o) { o.sod_mm = 0; }, "LabPlanRequest.sod_mm");
+  testing::expect_option_refused(
+      lab, [](auto& o) { o.timeout_s = 0; }, "LabPlanRequest.timeout_s");
+  testing::expect_option_refused(
+      lab, [](auto& o) { o.plan.views = 0; }, "PlanRequest.views");
+
+  SimulatedPlanRequest simulated;
+  simulated.phantoms = {"sample-1"};
+  EXPECT_NO_THROW(simulated.validate());
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.phantoms.clear(); }, "SimulatedPlanRequest.phantoms");
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.cols = 8; }, "SimulatedPlanRequest.cols");
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.pitch_mm = -1; }, "SimulatedPlanRequest.pitch_mm");
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.sdd_mm = 1000; }, "SimulatedPlanRequest.sdd_mm");
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.kvp = 200; }, "SimulatedPlanRequest.kvp");
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.flat_counts = 0; }, "SimulatedPlanRequest.flat_counts");
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.random_draws = 0; }, "SimulatedPlanRequest.random_draws");
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.comparison.voxel_mm = 0; }, "ComparisonOptions.voxel_mm");
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.comparison.iterations = 0; }, "ComparisonOptions.iterations");
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.comparison.size = -1; }, "ComparisonOptions.size");
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.comparison.lambda = -1; }, "ComparisonOptions.lambda");
+  testing::expect_option_refused(
+      simulated, [](auto& o) { o.comparison.binning = 0; }, "ComparisonOptions.binning");
 }
 
 }  // namespace

@@ -15,5 +15,8 @@ namespace ctk {
 void write_planned_scan(const PlanningResult& result, const PlanningSetup& setup, const std::filesystem::path& folder);
 
 nlohmann::json trajectory_to_json(const PlanningResult& result);
+/// One request as trajectory.json lists it: request, scout, direction_holder, status, reason,
+/// projection, calibrated, calibration_rms_px, predicted_damage_mm, planning_seconds.
+nlohmann::json planned_view_to_json(const PlannedViewRecord& view);
 
 }  // namespace ctk
