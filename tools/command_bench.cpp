@@ -50,6 +50,7 @@ void write_floats(const std::filesystem::path& file, const FloatBuffer& values) 
 std::vector<ProjectionMatrix> reference_subset(const StandardProblem& p, int n) {
   const int n_views = static_cast<int>(p.views.size());
   std::vector<ProjectionMatrix> subset;
+  subset.reserve(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) subset.push_back(p.views[static_cast<std::size_t>(i * n_views / n)]);
   return subset;
 }

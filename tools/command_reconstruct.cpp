@@ -88,6 +88,7 @@ void write_slabs(const Volume& mine, const VolumeLayout& whole, const Communicat
   const auto slice_of = [&](int nx, int ny, int nz) { return Volume(VolumeLayout::centred({nx, ny, nz}, whole.voxel_mm)); };
   Volume axial = slice_of(n[0], n[1], 1), coronal = slice_of(n[0], 1, n[2]), sagittal = slice_of(1, n[1], n[2]);
   std::vector<int> planes;
+  planes.reserve(static_cast<std::size_t>(ranks.size()));
   for (int q = 0; q < ranks.size(); ++q) planes.push_back(slab_planes(n[2], q, ranks.size()).count);
   std::vector<float> received;
   int first_plane = 0;

@@ -38,9 +38,7 @@ int fail(int exit_code) {
   return exit_code;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   // Every view passes through a few image-sized buffers (2 MB at 720 x 720). By default glibc maps
   // each from the kernel and unmaps it when freed, so the pages are faulted in and zeroed again
   // for every view (15 % of a calibration's time); keep such blocks in the heap instead.
@@ -112,4 +110,19 @@ int main(int argc, char** argv) {
     return fail(1);
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // What escapes the run's own handlers (building the command line, the MPI start) still ends
+  // the process with a message and exit 1, never with std::terminate.
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "ctk: error: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "ctk: error of unknown kind\n";
+  }
+  return 1;
 }

@@ -110,7 +110,7 @@ CalibrationJournal::CalibrationJournal(fs::path file, const nlohmann::json& run)
   out_ << nlohmann::json({{"format", kFormat}, {"provenance", provenance()}, {"run", run}}).dump() << "\n" << std::flush;
 }
 
-std::unique_ptr<CalibrationJournal> CalibrationJournal::resume(fs::path file, const nlohmann::json& run) {
+std::unique_ptr<CalibrationJournal> CalibrationJournal::resume(const fs::path& file, const nlohmann::json& run) {
   require_regular_file(file);
   std::ifstream in(file);
   std::string line;

@@ -82,7 +82,10 @@ class ViewRays {
   }
 
   /// The point k of a pixel's 2 x 2 rays.
-  static Eigen::Vector2d sub_ray(int u, int v, int k) { return {u + (k % 2 - 0.5) / 2, v + (k / 2 - 0.5) / 2}; }
+  static Eigen::Vector2d sub_ray(int u, int v, int k) {
+    const int column = k % 2, row = k / 2;  // of the 2 x 2 sub-rays
+    return {u + (column - 0.5) / 2, v + (row - 0.5) / 2};
+  }
 
  private:
   Eigen::Vector3d source_;

@@ -66,7 +66,7 @@ struct ImageResidual {
     pose_of(pose, R0, R, t);
     const Vec3<T> Xs = X.cast<T>() + Vec3<T>(sphere[0], sphere[1], sphere[2]);
     const Vec3<T> s = drifted_focal_spot_mm(drift[0] + T(declared_drift.x()), drift[1] + T(declared_drift.y()), view);
-    const T s0 = s.x(), s1 = s.y();
+    const T s0 = s.x(), s1 = s.y();  // NOLINT(performance-unnecessary-copy-initialization): Jets, read twice
     const Vec3<T> Y = R * Xs + t - s;
     // Seen from the moved focal spot the principal point moves with it (detector fixed).
     const T fu = T(K.fu_px) + intrinsics[2], fv = T(K.fv_px) + intrinsics[2] * T(K.fv_px / K.fu_px);

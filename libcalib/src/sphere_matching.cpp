@@ -107,7 +107,8 @@ std::vector<Eigen::Vector2d> candidate_shifts(const std::vector<Eigen::Vector2d>
   std::vector<Eigen::Vector2d> shifts{Eigen::Vector2d::Zero()};
   for (const auto& [v, b] : peaks) {
     if (static_cast<int>(shifts.size()) >= count) break;
-    const Eigen::Vector2d centre((b % size - half) * bin, (b / size - half) * bin);
+    const int bx = b % size, by = b / size;
+    const Eigen::Vector2d centre((bx - half) * bin, (by - half) * bin);
     // Refine: mean of the offsets within two bins.
     Eigen::Vector2d sum(0, 0);
     int n = 0;

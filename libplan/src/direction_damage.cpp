@@ -65,6 +65,7 @@ std::vector<DirectionDamage> direction_damage(const AbsorberSegmentation& segmen
   const Detector detector{g.detector_pixels, g.detector_pixels, pitch, pitch};
   const Intrinsics K = Intrinsics::from_setup(g.source_to_detector_mm, detector, detector.centre_px());
   std::vector<ProjectionMatrix> views;
+  views.reserve(directions.size());
   for (const Eigen::Vector3d& d : directions) views.push_back(virtual_view(d, K, g.source_to_isocentre_mm));
 
   ProjectionStack paths(static_cast<int>(views.size()), detector.rows, detector.cols);

@@ -165,7 +165,8 @@ struct NextChunk {
   HWY_INLINE void ask(std::uintptr_t next_row, const XGrid& g, int y) const {
     if (next_row == 0) return;
     const std::ptrdiff_t floats = static_cast<std::ptrdiff_t>(y) * g.stride_y;
-    hwy::Prefetch(reinterpret_cast<const float*>(
+    // The next row's address is kept as an integer (0: none).
+    hwy::Prefetch(reinterpret_cast<const float*>(  // NOLINT(performance-no-int-to-ptr)
         next_row + static_cast<std::uintptr_t>(floats * static_cast<std::ptrdiff_t>(sizeof(float)))));
   }
 };

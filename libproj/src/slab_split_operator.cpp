@@ -144,6 +144,7 @@ SlabSplitOperator::SlabSplitOperator(const SlabSplitOperator& parent, std::vecto
 std::shared_ptr<const ProjectionOperator> SlabSplitOperator::subset(const std::vector<int>& views) const {
   check_subset(views);
   std::vector<int> ids;
+  ids.reserve(views.size());
   for (int v : views) ids.push_back(view_ids_[static_cast<std::size_t>(v)]);
   return std::shared_ptr<const ProjectionOperator>(new SlabSplitOperator(*this, std::move(ids)));
 }

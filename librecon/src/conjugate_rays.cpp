@@ -165,12 +165,14 @@ ConjugateRayEstimate conjugate_ray_u0(const FanSinogram& s, double start_px, dou
     m.push_back(mismatch(s, period, x.back(), out.sense));
   }
   std::vector<double> y;
+  y.reserve(m.size());
   for (const Mismatch& mi : m) y.push_back(mi.total());
   const double v = parabola_vertex(x, y);
   if (!std::isnan(v) && std::abs(v - out.u0_px) <= 0.75) out.u0_px = v;
   std::vector<double> leave_one;
   for (int b = 0; b < kBlocks; ++b) {
     std::vector<double> yb;
+    yb.reserve(m.size());
     for (const Mismatch& mi : m) yb.push_back(mi.without(b));
     const double vb = parabola_vertex(x, yb);
     if (!std::isnan(vb)) leave_one.push_back(vb);

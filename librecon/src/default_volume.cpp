@@ -9,6 +9,7 @@ namespace ctk {
 
 double median_source_distance(const std::vector<ProjectionMatrix>& views) {
   std::vector<double> d;
+  d.reserve(views.size());
   for (const auto& P : views) d.push_back(P.source_position().norm());
   return median(std::move(d));
 }

@@ -51,6 +51,7 @@ std::vector<float> ramp_filter_spectrum(int n, double da, RampWindow window) {
 CircularTrajectory fit_circular_trajectory(const std::vector<ProjectionMatrix>& views) {
   if (views.size() < 3) throw std::invalid_argument("FDK needs at least 3 views");
   std::vector<Eigen::Vector3d> s;
+  s.reserve(views.size());
   for (const auto& P : views) s.push_back(P.source_position());
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const auto& p : s) mean += p;

@@ -121,6 +121,7 @@ KnobFit fit_knob(const ConsistencyProbe& probe, State state, const Knob& knob) {
       per_view.push_back(probe.fit_costs(state.geometry, state.model));
     }
     std::vector<double> total;
+    total.reserve(per_view.size());
     for (const auto& c : per_view) total.push_back(sum(c));
     const auto lowest = static_cast<std::size_t>(std::min_element(total.begin(), total.end()) - total.begin());
     double vertex = parabola_vertex(x, total);
@@ -167,6 +168,8 @@ KnobFit fit_knob(const ConsistencyProbe& probe, State state, const Knob& knob) {
   return out;
 }
 
+// Its implicit moves are noexcept (every member's is); clang-tidy reads a throw into nlohmann::json's.
+// NOLINTNEXTLINE(bugprone-exception-escape)
 struct Trial {
   State after;
   RefinedEffect effect;
@@ -338,6 +341,7 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
   for (int round = 1; round <= options.max_rounds && !remaining.empty(); ++round) {
     if (log) log("round " + std::to_string(round) + ": trying " + std::to_string(remaining.size()) + " effects");
     std::vector<Trial> trials;
+    trials.reserve(remaining.size());
     for (const Candidate& c : remaining)
       trials.push_back(c.pattern != Candidate::Pattern::none ? fit_detector_pattern(probe, state, judge, c, log)
                                                              : try_candidate(probe, state, judge, c, options.knob_starts, log));

@@ -67,6 +67,7 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
   auto start = std::chrono::steady_clock::now();
 
   std::vector<std::shared_ptr<const ProjectionOperator>> parts;
+  parts.reserve(subsets.size());
   for (const auto& s : subsets) parts.push_back(A.subset(s));
   ProjectionStack b_part, w_part, r_part;  // one subset's data, weights and residual
   const auto load_part = [&](int s) {

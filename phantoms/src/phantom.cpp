@@ -47,7 +47,7 @@ Primitive shape_from_json(const JsonNode& node) {
   }
   auto positive3 = [&](const char* key) {
     const JsonNode n = node.at(key);
-    const Eigen::Vector3d v = n.vector3();
+    Eigen::Vector3d v = n.vector3();
     if ((v.array() <= 0).any()) n.fail("expected three positive numbers");
     return v;
   };

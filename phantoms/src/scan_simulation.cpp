@@ -105,6 +105,7 @@ SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder
   const int view_count = static_cast<int>(truth.views.size());
   const ScanDescription scan = declared_scan(sim, folder, view_count);
   std::vector<std::string> names;
+  names.reserve(static_cast<std::size_t>(view_count));
   for (int v = 0; v < view_count; ++v) names.push_back(scan.projections.file_name(v));
 
   const Phantom phantom = simulated_phantom(sim, truth.holder);

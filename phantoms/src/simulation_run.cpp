@@ -87,7 +87,8 @@ SimulationEffects simulation_effects_from_json(const nlohmann::json& named, cons
                                        "source_wobble_mm",     "moving_sphere_mm",
                                        "blur_fraction",        "blur_sigma_px",
                                        "false_blobs"};
-  for (const auto& [key, value] : named.items()) {
+  for (const auto& item : named.items()) {
+    const std::string& key = item.key();
     if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return key == k; }) == std::end(kKnown))
       throw std::invalid_argument("effect " + key + ": not an effect the simulator knows");
   }

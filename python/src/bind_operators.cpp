@@ -22,7 +22,7 @@ namespace {
 
 using Operator = std::shared_ptr<ProjectionOperator>;
 
-Operator mutable_operator(std::shared_ptr<const ProjectionOperator> op) {
+Operator mutable_operator(const std::shared_ptr<const ProjectionOperator>& op) {
   return std::const_pointer_cast<ProjectionOperator>(op);
 }
 

@@ -64,7 +64,7 @@ py::array_t<float> output_array(const py::object& out, const std::array<py::ssiz
 template <class Owner>
 py::array_t<float> owning_array(std::unique_ptr<Owner> owner, float* data, std::vector<py::ssize_t> shape) {
   py::capsule keep(owner.get(), [](void* p) { delete static_cast<Owner*>(p); });
-  owner.release();
+  static_cast<void>(owner.release());  // the capsule owns it now
   return py::array_t<float>(std::move(shape), data, keep);
 }
 

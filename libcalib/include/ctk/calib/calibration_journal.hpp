@@ -24,7 +24,7 @@ class CalibrationJournal {
   CalibrationJournal(std::filesystem::path file, const nlohmann::json& run);
   /// Continues the journal at `file`: its run must equal `run` (InputError naming the first key
   /// that differs); the views it holds are in done().
-  static std::unique_ptr<CalibrationJournal> resume(std::filesystem::path file, const nlohmann::json& run);
+  static std::unique_ptr<CalibrationJournal> resume(const std::filesystem::path& file, const nlohmann::json& run);
 
   const std::map<int, ViewCalibration>& done() const { return done_; }
   /// Appends one finished view and flushes it to the file; safe from several threads.

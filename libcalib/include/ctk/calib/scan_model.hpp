@@ -71,6 +71,8 @@ template <typename T>
 Eigen::Matrix<T, 6, 1> gravity_load_offset(const Eigen::Matrix<T, 3, 3>& R_base_flange, const Eigen::Vector3d& holder_axis,
                                            const T* gravity) {
   const Eigen::Matrix<T, 3, 1> g = -R_base_flange.row(2).transpose();
+  // For Jets a conversion, for double a copy of three numbers.
+  // NOLINTNEXTLINE(performance-unnecessary-copy-initialization)
   const Eigen::Matrix<T, 3, 1> a = holder_axis.cast<T>();
   Eigen::Matrix<T, 6, 1> x;
   x.template head<3>() = gravity[0] * a.cross(g);

@@ -36,6 +36,8 @@ struct RefinementOptions {
   void validate() const;  // std::invalid_argument naming the field (or the unknown candidate)
 };
 
+// Its implicit moves are noexcept (every member's is); clang-tidy reads a throw into nlohmann::json's.
+// NOLINTNEXTLINE(bugprone-exception-escape)
 struct RefinedEffect {
   std::string name;
   bool accepted = false;
