@@ -40,6 +40,11 @@ pkg_check_modules(GEOGRAPHICLIB QUIET IMPORTED_TARGET geographiclib)
 if(NOT GEOGRAPHICLIB_FOUND)
   ctk_missing(GeographicLib libgeographiclib-dev)
 endif()
+# The report pictures are drawn with cairo (text in a real font, antialiased lines).
+pkg_check_modules(CAIRO QUIET IMPORTED_TARGET cairo)
+if(NOT CAIRO_FOUND)
+  ctk_missing("cairo (cairo)" libcairo2-dev)
+endif()
 
 if(CTK_BUILD_TESTS)
   ctk_find_package(GTest libgtest-dev)

@@ -17,6 +17,7 @@ packages=(
   libhealpix-cxx-dev     # sphere pixelisation
   libcli11-dev           # command line
   libpugixml-dev         # XML (RTK geometry files)
+  libcairo2-dev fonts-dejavu-core   # report pictures: antialiased lines, text in DejaVu Sans
   nlohmann-json3-dev     # JSON
   libgtest-dev libgmock-dev   # tests
   libbenchmark-dev       # benchmarks

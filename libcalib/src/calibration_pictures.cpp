@@ -2,11 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "ctk/core/chart.hpp"
-#include "ctk/core/atomic_write.hpp"
 #include "ctk/geom/sphere_map.hpp"
 
 namespace ctk {
@@ -16,8 +14,7 @@ void write_residual_per_view_png(const std::vector<ViewCalibration>& views, doub
   double top = 1.25 * threshold_px;
   for (const auto& v : views) top = std::max(top, 1.05 * v.rms_px);
   const double n = static_cast<double>(std::max<std::size_t>(views.size(), 1));
-  Chart chart(760, 300,
-              {-0.5, n - 0.5, 0, top, "reprojection RMS per view (red x: rejected, orange: threshold)", "view", "RMS (px)"});
+  Chart chart(760, 300, {-0.5, n - 0.5, 0, top, "reprojection RMS per view", "view", "RMS (px)"});
   chart.ticks(std::max(1.0, nice_step(n, 10)), nice_step(top, 5));
   chart.line(-0.5, threshold_px, n - 0.5, threshold_px, colour::orange);
   for (std::size_t i = 0; i < views.size(); ++i) {
@@ -30,6 +27,10 @@ void write_residual_per_view_png(const std::vector<ViewCalibration>& views, doub
     else
       chart.cross(x, 0.97 * top, colour::grey);
   }
+  chart.legend({{"calibrated (colour: RMS / threshold)", colour::green, Mark::dot},
+                {"rejected", colour::red, Mark::cross},
+                {"skipped", colour::grey, Mark::cross},
+                {"threshold", colour::orange, Mark::line}});
   chart.save(png);
 }
 
@@ -46,24 +47,25 @@ void write_detections_png(const Image& im, const ViewCalibration& view, const st
           std::max(high - low, 1e-12);
       grey.at<unsigned char>(r, c) = static_cast<unsigned char>(std::clamp(255.0 * (1.0 - f), 0.0, 255.0));
     }
-  cv::Mat picture;
-  cv::cvtColor(grey, picture, cv::COLOR_GRAY2BGR);
-  const auto pt = [](const Eigen::Vector2d& p) {
-    return cv::Point(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())));
-  };
+  Canvas picture(im.cols, im.rows);
+  picture.paste(grey, 0, 0);
+  // Pixel centres at integer (u, v) are at canvas coordinates + 0.5.
+  const auto pt = [](const Eigen::Vector2d& p) { return cv::Point2d(p.x() + 0.5, p.y() + 0.5); };
   for (std::size_t k = 0; k < view.detected_px.size(); ++k) {
     const Eigen::Vector2d& d = view.detected_px[k];
     const Eigen::Vector2d& f = view.fitted_px[k];
-    cv::circle(picture, pt(f), static_cast<int>(std::lround(view.radius_px + 3)), colour::green, 1, cv::LINE_AA);
-    cv::line(picture, pt(f), pt(f + magnify * (d - f)), colour::red, 1, cv::LINE_AA);
-    cv::putText(picture, std::to_string(view.spheres[k]), pt(f) + cv::Point(7, -7), cv::FONT_HERSHEY_SIMPLEX, 0.35, colour::blue,
-                1, cv::LINE_AA);
+    picture.circle(pt(f), view.radius_px + 3, colour::green, false);
+    picture.line(pt(f), pt(f + magnify * (d - f)), colour::red, 1.5);
+    picture.text(std::to_string(view.spheres[k]), pt(f) + cv::Point2d(7, -7), 10, colour::blue);
   }
   char caption[160];
   std::snprintf(caption, sizeof caption, "%s, %d spheres, RMS %.3f px; green: fitted, red: residual x%g", to_string(view.status),
                 view.spheres_used, view.rms_px, magnify);
-  cv::putText(picture, caption, {8, 18}, cv::FONT_HERSHEY_SIMPLEX, 0.45, colour::red, 1, cv::LINE_AA);
-  write_png_atomically(picture, png);
+  // As large as 12 px allows within the picture's width.
+  const double size = std::min(12.0, 12.0 * (im.cols - 16) / std::max(picture.text_width(caption, 12), 1.0));
+  picture.rectangle({0, 0, picture.text_width(caption, size) + 16, 26}, colour::white, true);
+  picture.text(caption, {8, 18}, size, colour::red);
+  picture.save(png);
 }
 
 Eigen::Vector3d source_direction_in_holder(const Rigid& T_camera_holder) {
@@ -74,7 +76,7 @@ void write_view_directions_png(const std::vector<ViewDirection>& views, double t
   // Lambert cylindrical equal-area: x = longitude (shown in degrees), y = sin(latitude).
   constexpr double kDeg = 180 / M_PI;
   Chart chart(900, 287,
-              {-180, 180, -1, 1, "view directions (source seen from the holder), equal-area; colour: RMS, x: rejected",
+              {-180, 180, -1, 1, "view directions (source seen from the holder), equal-area; colour: RMS / threshold",
                "longitude about the holder axis (deg)", "sin(latitude)"});
   for (int lon = -180; lon <= 180; lon += 30) chart.line(lon, -1, lon, 1, colour::light);
   for (int lat = -60; lat <= 60; lat += 30) {
@@ -89,6 +91,8 @@ void write_view_directions_png(const std::vector<ViewDirection>& views, double t
     else
       chart.cross(p.x * kDeg, p.y, v.status == ViewStatus::rejected ? colour::red : colour::grey);
   }
+  chart.legend(
+      {{"calibrated", colour::green, Mark::dot}, {"rejected", colour::red, Mark::cross}, {"skipped", colour::grey, Mark::cross}});
   chart.save(png);
 }
 

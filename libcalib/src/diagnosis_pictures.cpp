@@ -29,10 +29,12 @@ void write_field(const ScanModelFit& f, const ScanObservations& o, const std::st
   for (int c = 0; c < kCells * kCells; ++c) {
     if (count[static_cast<std::size_t>(c)] < 3) continue;
     const Eigen::Vector2d mean = sum[static_cast<std::size_t>(c)] / count[static_cast<std::size_t>(c)];
-    const double u = (c % kCells + 0.5) * cols / kCells, v = (c / kCells + 0.5) * rows / kCells;
+    const int cell_u = c % kCells, cell_v = c / kCells;
+    const double u = (cell_u + 0.5) * cols / kCells, v = (cell_v + 0.5) * rows / kCells;
     chart.dot(u, v, colour::grey, 2);
     chart.line(u, v, u + magnify * mean.x(), v + magnify * mean.y(), colour::red, 2);
   }
+  chart.legend({{"cell centre", colour::grey, Mark::dot}, {"mean residual x" + tick_label(magnify), colour::red, Mark::line}});
   chart.save(png);
 }
 
@@ -67,7 +69,7 @@ std::vector<std::string> write_diagnosis_pictures(const Diagnosis& d, const Scan
                                                   const std::filesystem::path& stem) {
   std::vector<std::string> written;
   auto named = [&](const std::string& what) {
-    const std::filesystem::path p(stem.string() + "." + what + ".png");
+    std::filesystem::path p(stem.string() + "." + what + ".png");
     written.push_back(p.filename().string());
     return p;
   };
@@ -79,12 +81,13 @@ std::vector<std::string> write_diagnosis_pictures(const Diagnosis& d, const Scan
   double top = 0.02;
   for (double x : before) top = std::max(top, 1.1 * x);
   const auto n = static_cast<double>(before.size());
-  Chart spheres(700, 260, {-0.5, n - 0.5, 0, top, "mean residual per sphere: before (red), after (green)", "sphere", "px"});
+  Chart spheres(700, 260, {-0.5, n - 0.5, 0, top, "mean image residual per sphere", "sphere", "px"});
   spheres.ticks(nice_step(n, 10), nice_step(top, 5));
   for (std::size_t s = 0; s < before.size(); ++s) {
     spheres.dot(static_cast<double>(s), before[s], colour::red, 3);
     spheres.dot(static_cast<double>(s), after[s], colour::green, 3);
   }
+  spheres.legend({{"before", colour::red, Mark::dot}, {"after", colour::green, Mark::dot}});
   spheres.save(named("spheres"));
 
   if (o.setup.robot) {
@@ -96,12 +99,13 @@ std::vector<std::string> write_diagnosis_pictures(const Diagnosis& d, const Scan
       high = std::max(high, 1.1 * std::max(fk_before[i], fk_after[i]));
       last = std::max(last, o.views[i].view);
     }
-    Chart fk(700, 260, {-0.5, last + 0.5, 0, high, "robot prediction error per view: before (red), after (green)", "view", "mm"});
+    Chart fk(700, 260, {-0.5, last + 0.5, 0, high, "robot prediction error per view", "view", "mm"});
     fk.ticks(nice_step(last, 10), nice_step(high, 5));
     for (std::size_t i = 0; i < fk_before.size(); ++i) {
       fk.dot(o.views[i].view, fk_before[i], colour::red, 2);
       fk.dot(o.views[i].view, fk_after[i], colour::green, 2);
     }
+    fk.legend({{"before", colour::red, Mark::dot}, {"after", colour::green, Mark::dot}});
     fk.save(named("fk"));
   }
   return written;

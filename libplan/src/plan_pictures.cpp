@@ -30,11 +30,11 @@ cv::Mat slice_picture(const Volume& v, int k, float ceiling, int size) {
 // The picture under a label of two lines (every panel of a row gets the same height).
 cv::Mat labelled(const cv::Mat& picture, const std::string& line1, const std::string& line2 = "") {
   const int top = 46;
-  cv::Mat out(picture.rows + top, picture.cols, CV_8UC3, cv::Scalar(255, 255, 255));
-  picture.copyTo(out(cv::Rect(0, top, picture.cols, picture.rows)));
-  cv::putText(out, line1, cv::Point(6, 18), cv::FONT_HERSHEY_SIMPLEX, 0.5, colour::black, 1, cv::LINE_AA);
-  cv::putText(out, line2, cv::Point(6, 38), cv::FONT_HERSHEY_SIMPLEX, 0.5, colour::black, 1, cv::LINE_AA);
-  return out;
+  Canvas out(picture.cols, picture.rows + top);
+  out.paste(picture, 0, top);
+  out.text(line1, {6, 18}, 13);
+  out.text(line2, {6, 38}, 13);
+  return out.bgr();
 }
 
 // One equal-area map of the candidates coloured by `value` (from its least to its greatest), with
@@ -62,7 +62,11 @@ cv::Mat direction_map(const PlanningResult& r, const std::vector<double>& value,
     else
       chart.dot(p.x * kDeg, p.y, v.scout ? colour::black : colour::blue, v.scout ? 2 : 4);
   }
-  return chart.canvas();
+  chart.legend({{"scout view", colour::black, Mark::dot},
+                {"planned view", colour::blue, Mark::dot},
+                {"refused or not calibrated", colour::red, Mark::cross},
+                {"candidate unreachable", colour::light, Mark::dot}});
+  return chart.picture();
 }
 
 }  // namespace
@@ -72,10 +76,9 @@ void write_plan_map_png(const PlanningResult& r, const std::filesystem::path& pn
   for (const CandidateWeight& w : r.weights) density.push_back(w.density);
   cv::Mat picture;
   const cv::Mat damage =
-      direction_map(r, r.damage_mm,
-                    "directions (equal-area); colour: predicted absorber path; . scout, o planned, x refused or not calibrated");
-  const cv::Mat wanted =
-      direction_map(r, density, "colour: view density the sample's edges want, least to most (from the last coarse volume)");
+      direction_map(r, r.damage_mm, "directions (equal-area); colour: predicted absorber path, green least, red most");
+  const cv::Mat wanted = direction_map(
+      r, density, "colour: view density the sample's edges want, green least, red most (from the last coarse volume)");
   cv::vconcat(damage, wanted, picture);
   write_png_atomically(picture, png);
 }
@@ -105,20 +108,22 @@ void write_trajectory_comparison_png(const std::vector<ComparedTrajectory>& t, c
   cv::hconcat(top, slices);
   // One chart: every trajectory's x profile and the truth's.
   const LineProfile& first = t.front().quality.profiles.front();
-  Chart chart(width - 110, 220,
-              {0, static_cast<double>(first.truth.size()), 0, 1.05 * hi,
-               "profile along x through the sample's centre (grey: truth)", "voxel", "1/mm"});
+  Chart chart(
+      width - 110, 220,
+      {0, static_cast<double>(first.truth.size()), 0, 1.05 * hi, "profile along x through the sample's centre", "voxel", "1/mm"});
   const cv::Scalar colours[] = {colour::blue, colour::orange, colour::green, colour::red};
   auto draw = [&](const std::vector<float>& p, const cv::Scalar& c) {
     for (std::size_t s = 1; s < p.size(); ++s) chart.line(s - 1.0, p[s - 1], static_cast<double>(s), p[s], c, 1);
   };
   draw(first.truth, colour::grey);
+  std::vector<LegendEntry> key = {{"truth", colour::grey, Mark::line}};
   for (std::size_t i = 0; i < t.size(); ++i) {
     draw(t[i].quality.profiles.front().reconstruction, colours[i % 4]);
-    chart.text(2 + 0.2 * first.truth.size() * static_cast<double>(i), 1.0 * hi, t[i].name, colours[i % 4]);
+    key.push_back({t[i].name, colours[i % 4], Mark::line});
   }
   chart.ticks(nice_step(static_cast<double>(first.truth.size()), 8), nice_step(hi, 4));
-  cv::Mat profile = chart.canvas();
+  chart.legend(key);
+  cv::Mat profile = chart.picture();
   if (profile.cols != slices.cols) {
     cv::Mat padded(profile.rows, slices.cols, CV_8UC3, cv::Scalar(255, 255, 255));
     profile(cv::Rect(0, 0, std::min(profile.cols, slices.cols), profile.rows))

@@ -1,10 +1,13 @@
 #pragma once
-// A small plotting canvas for report pictures (OpenCV drawing): data coordinates mapped onto a
-// framed plot area, axis labels, and a PNG written atomically. Used by the calibration and
-// diagnosis reports, and by the view planner's pictures.
+// A chart for report pictures (drawn with cairo, canvas.hpp): data coordinates mapped onto a
+// framed plot area, a title, axis labels (the y label reading upwards beside its axis), round
+// ticks, a legend, and a PNG written atomically. Used by the calibration and diagnosis reports,
+// and by the view planner's pictures.
 #include <filesystem>
-#include <opencv2/core.hpp>
 #include <string>
+#include <vector>
+
+#include "ctk/core/canvas.hpp"
 
 namespace ctk {
 
@@ -13,36 +16,41 @@ struct ChartAxes {
   std::string title, x_label, y_label;
 };
 
-namespace colour {
-const cv::Scalar black(0, 0, 0), grey(160, 160, 160), light(225, 225, 225), red(40, 40, 220), green(60, 170, 60),
-    blue(200, 110, 30), orange(30, 140, 240);
-/// From green (0) through yellow to red (1), for values relative to a threshold.
-cv::Scalar ramp(double fraction);
-}  // namespace colour
+/// How a legend entry is marked: as the chart draws dots, crosses and lines.
+enum class Mark { dot, cross, line };
 
-/// Encodes a BGR picture as PNG and writes it whole or not at all.
-void write_png_atomically(const cv::Mat& picture, const std::filesystem::path& png);
+struct LegendEntry {
+  std::string label;
+  cv::Scalar colour;
+  Mark mark = Mark::dot;
+};
 
 /// A round tick step (1, 2 or 5 times a power of ten) giving about `ticks` ticks over `span`.
 double nice_step(double span, int ticks);
 
+/// A tick's label: the shortest of %g, with no "-0".
+std::string tick_label(double value);
+
 class Chart {
  public:
   Chart(int plot_width, int plot_height, ChartAxes axes);
-  cv::Point at(double x, double y) const;  // data -> canvas pixel
-  void dot(double x, double y, const cv::Scalar& c, int radius = 2);
-  void cross(double x, double y, const cv::Scalar& c, int size = 4);
-  void line(double x0, double y0, double x1, double y1, const cv::Scalar& c, int thickness = 1);
+  cv::Point2d at(double x, double y) const;  // data -> canvas pixel
+  void dot(double x, double y, const cv::Scalar& c, double radius = 2);
+  void cross(double x, double y, const cv::Scalar& c, double size = 4);
+  /// Cut at the plot's frame; dots and crosses on it are drawn whole.
+  void line(double x0, double y0, double x1, double y1, const cv::Scalar& c, double thickness = 1);
   void text(double x, double y, const std::string& s, const cv::Scalar& c = colour::black);
-  /// Tick labels along both axes at the given steps (data units).
+  /// Tick marks and labels along both axes at the given steps (data units).
   void ticks(double x_step, double y_step);
+  /// A key in the plot's top-right corner, one entry a line.
+  void legend(const std::vector<LegendEntry>& entries);
   void save(const std::filesystem::path& png) const;
-  const cv::Mat& canvas() const { return canvas_; }
+  cv::Mat picture() const;  // BGR
 
  private:
   ChartAxes axes_;
-  int left_ = 70, top_ = 46, width_, height_;
-  cv::Mat canvas_;
+  int left_ = 74, top_ = 34, width_, height_;
+  Canvas canvas_;
 };
 
 }  // namespace ctk
