@@ -54,7 +54,7 @@ __all__ = [
     "Measurements", "__version__", "as_linear_operator", "load_measurements", "read_image", "cone_vec_from_matrices", "fdk", "geometry_matrices",
     "matrices_from_cone_vec", "read_cone_vec", "read_diagnosis", "read_geometry", "read_nxtomo", "read_rtk_geometry", "read_scan", "read_xtekct",
     "os_sqs", "sirt", "wls_cg", "write_geometry", "write_rtk_geometry", "write_scan",
-    "PlanResult", "PlannedTrajectory", "plan", "plan_lab", "read_plan", "read_plan_comparison",
+    "PlanResult", "PlannedTrajectory", "plan", "plan_lab", "read_plan", "read_plan_comparison", "bench",
 ]
 
 
@@ -346,3 +346,16 @@ def diagnose(scan: str | os.PathLike, geometry: str | os.PathLike, *, repeatabil
 def read_diagnosis(file: str | os.PathLike) -> dict:
     """A ctk-diagnosis/1 report (ctk diagnose, ctk refine) as a dict; InputError unless it is one."""
     return read_report(file, "ctk-diagnosis/1")
+
+
+def bench(*, views: int = 360, reference_views: int = 12, scale: int = 1, threads: int = 0, repeat: int = 1,
+          simd: str = "") -> dict:
+    """`ctk bench --json`: the fast Joseph projector (all threads, or `threads`) against the naive
+    reference (one thread) in the same run on the standard problem, circular and spherical,
+    forward and back; the reference timed on `reference_views` views and scaled to `views`. With
+    repeat the two take turns and the medians count; simd: a narrower target than the widest.
+    Returns the report (cpu, threads, simd, problem, each direction's seconds, speedup, voxel-views
+    per second, relative difference to the reference); the table goes to the 'ctk' logger."""
+    d = _ctk._bench(views, reference_views, scale, threads, repeat, simd, lambda line: _log.info("bench: %s", line))
+    _log.info("%s", d["brief"])
+    return d["report"]

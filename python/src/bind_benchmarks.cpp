@@ -1,18 +1,23 @@
 // What benchmarks/python_overhead.py needs to time the binding against C++ in the same process:
-// the standard problem, and the operator's forward projection timed from C++ on the same arrays.
+// the standard problem, and the operator's forward projection timed from C++ on the same arrays;
+// and `ctk bench` itself (the projector against the reference in the same run).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
 #include <chrono>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "bindings.hpp"
 #include "ctk/proj/projection_operator.hpp"
+#include "ctk/proj/projector_benchmark.hpp"
 #include "ctk/proj/standard_problem.hpp"
 #include "conversions.hpp"
+#include "interruptible.hpp"
 #include "numpy_arrays.hpp"
+#include "python_bridge.hpp"
 
 namespace ctk::python {
 
@@ -46,6 +51,28 @@ void bind_benchmarks(py::module_& m) {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       },
       py::arg("operator"), py::arg("volume"), py::arg("out"), "Seconds of one forward projection timed inside C++.");
+  m.def(
+      "_bench",
+      [](int views, int reference_views, int scale, int threads, int repeat, const std::string& simd, const py::object& log) {
+        ProjectorBenchmarkOptions o;
+        o.views = views;
+        o.reference_views = reference_views;
+        o.scale = scale;
+        o.threads = threads;
+        o.repeat = repeat;
+        o.simd = simd;
+        o.validate();
+        PythonBridge bridge;
+        std::optional<ProjectorBenchmark> b;
+        interruptible([&] { b = run_projector_benchmark(o, bridge.log(log)); });
+        bridge.raise_if_stopped();
+        py::dict d;
+        d["report"] = to_python(b->report);
+        d["brief"] = b->brief();
+        return d;
+      },
+      py::arg("views"), py::arg("reference_views"), py::arg("scale"), py::arg("threads"), py::arg("repeat"), py::arg("simd"),
+      py::arg("log"));
 }
 
 }  // namespace ctk::python

@@ -1,5 +1,8 @@
 """The projector from Python: adjointness, subsets, arrays shared rather than copied, shapes
 refused, scipy's solvers on the adapter."""
+import json
+import subprocess
+
 import numpy as np
 import pytest
 from scipy.sparse.linalg import lsqr
@@ -187,3 +190,15 @@ def test_ctrl_c_stops_a_projection_and_a_solve_within_a_second():
     late = interrupted_after(1.5, lambda: ctk.wls_cg(A, whole, iterations=20))
     assert late < 1.0, f"the solve stopped {late:.2f} s after Ctrl-C"
     np.testing.assert_array_equal(A.forward(x), whole)
+
+
+def test_bench_measures_the_projector_against_the_reference_as_the_command_line_does(ctk_command):
+    report = ctk.bench(scale=16, views=8, reference_views=2)
+    for direction in (report["forward"], report["back"], report["spherical"]["forward"], report["spherical"]["back"]):
+        assert direction["relative_difference_to_reference"] < 1e-5
+        assert direction["reference_views_measured"] == 2
+    done = subprocess.run([ctk_command, "bench", "--scale", "16", "--views", "8", "--reference-views", "2", "--json"],
+                          capture_output=True, text=True, check=True)
+    assert set(json.loads(done.stdout)) == set(report)
+    with pytest.raises(ValueError, match="ProjectorBenchmarkOptions.simd"):
+        ctk.bench(scale=16, views=8, simd="AVX9")
