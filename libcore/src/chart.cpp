@@ -26,7 +26,10 @@ std::string tick_label(double value) {
 }
 
 Chart::Chart(int plot_width, int plot_height, ChartAxes axes)
-    : axes_(std::move(axes)), width_(plot_width), height_(plot_height), canvas_(plot_width + 74 + 24, plot_height + 34 + 50) {
+    : axes_(std::move(axes)),
+      width_(plot_width),
+      height_(plot_height),
+      canvas_(left_ + plot_width + right_, top_ + plot_height + bottom_) {
   canvas_.rectangle({left_ + 0.5, top_ + 0.5, static_cast<double>(width_), static_cast<double>(height_)}, colour::black);
   canvas_.text(axes_.title, {static_cast<double>(left_), 21}, kTitlePx);
   canvas_.text(axes_.x_label, {left_ + width_ / 2.0, top_ + height_ + 42.0}, kLabelPx, colour::black, TextAnchor::centre);

@@ -50,45 +50,71 @@ class Keywords {
   std::set<std::string> taken_;
 };
 
-void take_plan(Keywords& k, PlanRequest& p) {
-  k.take("views", p.views);
-  k.take("scout_nside", p.scout_nside);
-  k.take("candidate_nside", p.candidate_nside);
-  k.take("damage_exponent", p.damage_exponent);
-  k.take("spread_exponent", p.spread_exponent);
-  k.take("widest_gap_fraction", p.widest_gap_fraction);
-  k.take("edge_tangency_weight", p.edge_tangency_weight);
-  k.take("tangent_width_deg", p.tangent_width_deg);
-  k.take("seed", p.seed);
-  k.take("coarse_size", p.coarse_size);
-  k.take("coarse_voxel_mm", p.coarse_voxel_mm);
-  k.take("binning", p.binning);
+// Each request's keywords with the field each names, once: `f(key, field)` for every one (the
+// request const or not). The paths and the detector's shape are converted apart.
+template <class Plan, class F>
+void plan_keywords(Plan& p, F&& f) {
+  f("views", p.views);
+  f("scout_nside", p.scout_nside);
+  f("candidate_nside", p.candidate_nside);
+  f("damage_exponent", p.damage_exponent);
+  f("spread_exponent", p.spread_exponent);
+  f("widest_gap_fraction", p.widest_gap_fraction);
+  f("edge_tangency_weight", p.edge_tangency_weight);
+  f("tangent_width_deg", p.tangent_width_deg);
+  f("seed", p.seed);
+  f("coarse_size", p.coarse_size);
+  f("coarse_voxel_mm", p.coarse_voxel_mm);
+  f("binning", p.binning);
+}
+
+template <class Simulated, class F>
+void simulated_keywords(Simulated& r, F&& f) {
+  plan_keywords(r.plan, f);
+  f("pitch_mm", r.pitch_mm);
+  f("sdd_mm", r.sdd_mm);
+  f("sod_mm", r.sod_mm);
+  f("kvp", r.kvp);
+  f("filter_al_mm", r.filter_al_mm);
+  f("flat_counts", r.flat_counts);
+  f("compare", r.compare);
+  f("compare_only", r.compare_only);
+  f("random_draws", r.random_draws);
+  f("eval_size", r.comparison.size);
+  f("eval_voxel_mm", r.comparison.voxel_mm);
+  f("eval_iterations", r.comparison.iterations);
+  f("eval_lambda", r.comparison.lambda);
+  f("eval_binning", r.comparison.binning);
+}
+
+template <class Lab, class F>
+void lab_keywords(Lab& r, F&& f) {
+  plan_keywords(r.plan, f);
+  f("sod_mm", r.sod_mm);
+  f("timeout_s", r.timeout_s);
+}
+
+void take_path(Keywords& k, const char* key, fs::path& path) {
+  std::string given = path.string();
+  k.take(key, given);
+  path = given;
 }
 
 void take_simulated(Keywords& k, SimulatedPlanRequest& r) {
-  take_plan(k, r.plan);
+  simulated_keywords(r, [&](const char* key, auto& field) { k.take(key, field); });
   k.take("phantoms", r.phantoms);
-  std::string out = r.out.string();
-  k.take("out", out);
-  r.out = out;
+  take_path(k, "out", r.out);
   std::array<int, 2> shape{r.rows, r.cols};
   k.take("detector_shape", shape);
   r.rows = shape[0];
   r.cols = shape[1];
-  k.take("pitch_mm", r.pitch_mm);
-  k.take("sdd_mm", r.sdd_mm);
-  k.take("sod_mm", r.sod_mm);
-  k.take("kvp", r.kvp);
-  k.take("filter_al_mm", r.filter_al_mm);
-  k.take("flat_counts", r.flat_counts);
-  k.take("compare", r.compare);
-  k.take("compare_only", r.compare_only);
-  k.take("random_draws", r.random_draws);
-  k.take("eval_size", r.comparison.size);
-  k.take("eval_voxel_mm", r.comparison.voxel_mm);
-  k.take("eval_iterations", r.comparison.iterations);
-  k.take("eval_lambda", r.comparison.lambda);
-  k.take("eval_binning", r.comparison.binning);
+}
+
+void take_lab(Keywords& k, LabPlanRequest& r) {
+  lab_keywords(r, [&](const char* key, auto& field) { k.take(key, field); });
+  take_path(k, "lab", r.lab);
+  take_path(k, "setup", r.setup);
+  take_path(k, "out", r.out);
 }
 
 py::dict trajectory_to_python(const PlanningRun& r) {
@@ -154,16 +180,7 @@ py::dict plan_simulated(const py::dict& keywords, const py::object& callback, co
 py::dict plan_lab(const py::dict& keywords, const py::object& callback) {
   LabPlanRequest r;
   Keywords k(keywords);
-  take_plan(k, r.plan);
-  std::string lab, setup, out;
-  k.take("lab", lab);
-  k.take("setup", setup);
-  k.take("out", out);
-  r.lab = lab;
-  r.setup = setup;
-  r.out = out;
-  k.take("sod_mm", r.sod_mm);
-  k.take("timeout_s", r.timeout_s);
+  take_lab(k, r);
   k.finish();
   r.validate();
   PythonBridge bridge;
@@ -183,38 +200,13 @@ py::dict plan_lab(const py::dict& keywords, const py::object& callback) {
 // The defaults of every keyword, as the library has them (the Python signatures are checked
 // against these by the tests).
 py::dict plan_defaults() {
-  const SimulatedPlanRequest s;
-  const LabPlanRequest l;
-  const PlanRequest& p = s.plan;
   py::dict d;
-  d["views"] = p.views;
-  d["scout_nside"] = p.scout_nside;
-  d["candidate_nside"] = p.candidate_nside;
-  d["damage_exponent"] = p.damage_exponent;
-  d["spread_exponent"] = p.spread_exponent;
-  d["widest_gap_fraction"] = p.widest_gap_fraction;
-  d["edge_tangency_weight"] = p.edge_tangency_weight;
-  d["tangent_width_deg"] = p.tangent_width_deg;
-  d["seed"] = p.seed;
-  d["coarse_size"] = p.coarse_size;
-  d["coarse_voxel_mm"] = p.coarse_voxel_mm;
-  d["binning"] = p.binning;
+  const auto put = [&](const char* key, const auto& value) { d[key] = value; };
+  const SimulatedPlanRequest s;
+  simulated_keywords(s, put);
   d["detector_shape"] = py::make_tuple(s.rows, s.cols);
-  d["pitch_mm"] = s.pitch_mm;
-  d["sdd_mm"] = s.sdd_mm;
-  d["sod_mm"] = s.sod_mm;
-  d["kvp"] = s.kvp;
-  d["filter_al_mm"] = s.filter_al_mm;
-  d["flat_counts"] = s.flat_counts;
-  d["compare"] = s.compare;
-  d["compare_only"] = s.compare_only;
-  d["random_draws"] = s.random_draws;
-  d["eval_size"] = s.comparison.size;
-  d["eval_voxel_mm"] = s.comparison.voxel_mm;
-  d["eval_iterations"] = s.comparison.iterations;
-  d["eval_lambda"] = s.comparison.lambda;
-  d["eval_binning"] = s.comparison.binning;
-  d["timeout_s"] = l.timeout_s;
+  const LabPlanRequest l;
+  lab_keywords(l, put);
   return d;
 }
 

@@ -48,8 +48,11 @@ class Chart {
   cv::Mat picture() const;  // BGR
 
  private:
+  // Margins about the plot: tick labels and the turned y label left, the title above, tick labels
+  // and the x label below.
+  static constexpr int left_ = 74, top_ = 34, right_ = 24, bottom_ = 50;
   ChartAxes axes_;
-  int left_ = 74, top_ = 34, width_, height_;
+  int width_, height_;
   Canvas canvas_;
 };
 
