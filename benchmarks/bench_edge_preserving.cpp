@@ -7,12 +7,19 @@
 // trajectory_quality.hpp) compared. The Huber delta follows a rule: a quarter of the phantom's
 // smallest contrast (the least |attenuation| of its primitives), so noise below it is smoothed
 // quadratically and the phantom's edges, above it, are penalised linearly.
+// The least-RMSE weights differ in noise as well as in edges, so the two penalties are also set
+// side by side at equal noise: a weight's noise is the spread, over the scored region, of what the
+// photon noise alone changes (the reconstruction from the noisy views less the one from the
+// noise-free line integrals, same weights and solver); each quadratic weight's edge gradient is
+// set against the Huber penalty's at that noise, read off the line through the two Huber weights
+// whose noise brackets it.
 //   bench_edge_preserving [--phantom shepp-logan|sample-2|...] [--size 96] [--voxel 0.6] [--views 30,40,60]
 //                         [--counts 2000] [--epochs 20] [--out F.json] [--pictures DIR]
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <string>
 
 #include "ctk/core/atomic_write.hpp"
@@ -36,12 +43,49 @@ double smallest_contrast(const Phantom& phantom) {
   return least;
 }
 
+struct Tried {
+  double lambda = 0, rmse = 0, noise = 0, edge = 0;
+};
+
 struct Best {
   double lambda = 0;
   TrajectoryQuality quality;
   Volume x;
-  std::vector<nlohmann::json> tried;
+  std::vector<Tried> tried;
 };
+
+// The standard deviation of x - clean over the region's voxels.
+double noise_in_region(const Volume& x, const Volume& clean, const SampleRegion& region) {
+  double sum = 0, sum2 = 0, n = 0;
+  const auto& s = x.layout.size;
+  for (int k = 0; k < s[2]; ++k)
+    for (int j = 0; j < s[1]; ++j)
+      for (int i = 0; i < s[0]; ++i)
+        if (region.contains(x.layout.centre_of(i, j, k))) {
+          const double d = x.at(i, j, k) - clean.at(i, j, k);
+          sum += d;
+          sum2 += d * d;
+          n += 1;
+        }
+  return n > 0 ? std::sqrt(std::max(sum2 / n - (sum / n) * (sum / n), 0.0)) : 0.0;
+}
+
+// The Huber penalty's edge gradient at `noise`, linear between its two weights whose noise
+// brackets it; none outside their range.
+std::optional<double> edge_at_noise(const std::vector<Tried>& huber, double noise) {
+  for (std::size_t a = 0; a < huber.size(); ++a)
+    for (std::size_t b = 0; b < huber.size(); ++b) {
+      const Tried &lo = huber[a], &hi = huber[b];
+      if (!(lo.noise <= noise && noise <= hi.noise) || a == b) continue;
+      // The nearest bracket: no other weight's noise between the two.
+      bool nearest = true;
+      for (const Tried& t : huber) nearest = nearest && !(t.noise > lo.noise && t.noise < hi.noise);
+      if (!nearest) continue;
+      const double f = hi.noise > lo.noise ? (noise - lo.noise) / (hi.noise - lo.noise) : 0.0;
+      return lo.edge + f * (hi.edge - lo.edge);
+    }
+  return std::nullopt;
+}
 
 }  // namespace
 
@@ -99,11 +143,11 @@ int main(int argc, char** argv) {
         o.lambda = lambda;
         o.regulariser = Regulariser::gradient;
         o.huber_delta = huber_delta;
-        Volume x(t.layout);
+        Volume x(t.layout), clean(t.layout);
         solve_os_sqs(A, data.b, &data.w, x, subsets, o);
+        solve_os_sqs(A, data.expected, &data.w, clean, subsets, o);
         const TrajectoryQuality q = trajectory_quality(x, truth, t.region, t.through, bench::kNoAbsorbers);
-        best.tried.push_back(
-            {{"lambda", lambda}, {"rmse_per_mm", q.rmse_per_mm}, {"edge_gradient_per_mm2", q.edge_gradient_per_mm2}});
+        best.tried.push_back({lambda, q.rmse_per_mm, noise_in_region(x, clean, t.region), q.edge_gradient_per_mm2});
         if (best.x.data.empty() || q.rmse_per_mm < best.quality.rmse_per_mm) {
           best.lambda = lambda;
           best.quality = q;
@@ -115,15 +159,32 @@ int main(int argc, char** argv) {
     const Best quadratic = best_of(0), huber = best_of(delta);
     nlohmann::json row = {{"views", views}};
     for (const auto& [name, b] : {std::pair<const char*, const Best*>{"quadratic", &quadratic}, {"huber", &huber}}) {
+      nlohmann::json tried = nlohmann::json::array();
+      for (const Tried& w : b->tried)
+        tried.push_back(
+            {{"lambda", w.lambda}, {"rmse_per_mm", w.rmse}, {"noise_per_mm", w.noise}, {"edge_gradient_per_mm2", w.edge}});
       row[name] = {{"lambda", b->lambda},
                    {"rmse_per_mm", b->quality.rmse_per_mm},
                    {"edge_gradient_per_mm2", b->quality.edge_gradient_per_mm2},
-                   {"tried", b->tried}};
+                   {"tried", tried}};
       std::printf("  %5d  %-9s  %11.0f  %11.6f  %13.6f\n", views, name, b->lambda, b->quality.rmse_per_mm,
                   b->quality.edge_gradient_per_mm2);
     }
     row["rmse_ratio"] = huber.quality.rmse_per_mm / quadratic.quality.rmse_per_mm;
     row["edge_gradient_ratio"] = huber.quality.edge_gradient_per_mm2 / quadratic.quality.edge_gradient_per_mm2;
+    nlohmann::json equal_noise = nlohmann::json::array();
+    for (const Tried& q : quadratic.tried) {
+      const std::optional<double> h = edge_at_noise(huber.tried, q.noise);
+      if (!h) continue;
+      equal_noise.push_back({{"quadratic_lambda", q.lambda},
+                             {"noise_per_mm", q.noise},
+                             {"quadratic_edge_gradient_per_mm2", q.edge},
+                             {"huber_edge_gradient_per_mm2", *h},
+                             {"ratio", *h / q.edge}});
+      std::printf("  %5d  at noise %.6f /mm (quadratic lambda %g): edge gradient %.6f quadratic, %.6f Huber, %.2f x\n", views,
+                  q.noise, q.lambda, q.edge, *h, *h / q.edge);
+    }
+    row["equal_noise"] = equal_noise;
     result["comparisons"].push_back(row);
     if (!pictures.empty()) {
       const std::filesystem::path dir = pictures;

@@ -17,6 +17,7 @@ namespace ctk::bench {
 
 struct SimulatedViews {
   ProjectionStack b, w;
+  ProjectionStack expected;  // the line integrals without photon noise
 };
 
 /// One view per direction (the beam along it in the phantom's frame), the source `sod_mm` from the
@@ -37,10 +38,12 @@ inline SimulatedViews simulate_views(const Phantom& phantom, const std::vector<P
   const int n = static_cast<int>(views.size());
   s.b = ProjectionStack(n, detector.rows, detector.cols);
   s.w = ProjectionStack(n, detector.rows, detector.cols);
+  s.expected = ProjectionStack(n, detector.rows, detector.cols);
   const CountsModel counts{flat_counts, 0};
 #pragma omp parallel for schedule(dynamic)
   for (int v = 0; v < n; ++v) {
     const Image p = render_line_integrals(phantom, views[static_cast<std::size_t>(v)], detector, {2, std::nullopt, std::nullopt});
+    std::copy(p.pixels.begin(), p.pixels.end(), s.expected.view(v));
     Image I = expected_counts(p, counts);
     std::mt19937_64 rng(seed + static_cast<unsigned>(v));
     draw_counts(I, counts, rng);
