@@ -16,6 +16,7 @@
 //   bench_edge_preserving [--phantom shepp-logan|sample-2|...] [--size 96] [--voxel 0.6] [--views 30,40,60]
 //                         [--counts 2000] [--epochs 20] [--out F.json] [--pictures DIR]
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -70,20 +71,16 @@ double noise_in_region(const Volume& x, const Volume& clean, const SampleRegion&
   return n > 0 ? std::sqrt(std::max(sum2 / n - (sum / n) * (sum / n), 0.0)) : 0.0;
 }
 
-// The Huber penalty's edge gradient at `noise`, linear between its two weights whose noise
-// brackets it; none outside their range.
-std::optional<double> edge_at_noise(const std::vector<Tried>& huber, double noise) {
-  for (std::size_t a = 0; a < huber.size(); ++a)
-    for (std::size_t b = 0; b < huber.size(); ++b) {
-      const Tried &lo = huber[a], &hi = huber[b];
-      if (!(lo.noise <= noise && noise <= hi.noise) || a == b) continue;
-      // The nearest bracket: no other weight's noise between the two.
-      bool nearest = true;
-      for (const Tried& t : huber) nearest = nearest && !(t.noise > lo.noise && t.noise < hi.noise);
-      if (!nearest) continue;
-      const double f = hi.noise > lo.noise ? (noise - lo.noise) / (hi.noise - lo.noise) : 0.0;
-      return lo.edge + f * (hi.edge - lo.edge);
-    }
+// The Huber penalty's edge gradient at `noise`, linear between the two weights whose noise
+// brackets it (noise falls as the weight grows); none outside their range.
+std::optional<double> edge_at_noise(std::vector<Tried> huber, double noise) {
+  std::sort(huber.begin(), huber.end(), [](const Tried& a, const Tried& b) { return a.noise < b.noise; });
+  for (std::size_t i = 1; i < huber.size(); ++i) {
+    const Tried &lo = huber[i - 1], &hi = huber[i];
+    if (noise < lo.noise || noise > hi.noise) continue;
+    const double f = hi.noise > lo.noise ? (noise - lo.noise) / (hi.noise - lo.noise) : 0.0;
+    return lo.edge + f * (hi.edge - lo.edge);
+  }
   return std::nullopt;
 }
 

@@ -1,6 +1,7 @@
 #include "ctk/plan/plan_trajectory.hpp"
 
 #include <algorithm>
+#include <numeric>
 #include <chrono>
 #include <optional>
 
@@ -156,6 +157,15 @@ class Loop {
 
 int PlanningResult::acquired() const {
   return static_cast<int>(std::count_if(views.begin(), views.end(), [](const PlannedViewRecord& v) { return v.acquired; }));
+}
+
+double PlanningResult::mean_step_seconds() const {
+  if (step_seconds.empty()) return 0;
+  return std::accumulate(step_seconds.begin(), step_seconds.end(), 0.0) / static_cast<double>(step_seconds.size());
+}
+
+double PlanningResult::max_step_seconds() const {
+  return step_seconds.empty() ? 0.0 : *std::max_element(step_seconds.begin(), step_seconds.end());
 }
 
 int PlanningResult::calibrated() const {

@@ -25,11 +25,6 @@ nlohmann::json planned_view_to_json(const PlannedViewRecord& v) {
 nlohmann::json trajectory_to_json(const PlanningResult& r) {
   nlohmann::json views = nlohmann::json::array();
   for (const PlannedViewRecord& v : r.views) views.push_back(planned_view_to_json(v));
-  double worst = 0, sum = 0;
-  for (double s : r.step_seconds) {
-    worst = std::max(worst, s);
-    sum += s;
-  }
   return {{"format", "ctk-plan/1"},
           {"provenance", provenance()},
           {"acquired", r.acquired()},
@@ -52,8 +47,7 @@ nlohmann::json trajectory_to_json(const PlanningResult& r) {
             {"tangent_width_deg", r.edge_tangency.tangent_width_deg},
             {"damage_floor_mm", r.planner.damage_floor_mm},
             {"unreachable_radius_deg", r.planner.unreachable_radius_deg}}},
-          {"planning_step_seconds",
-           {{"mean", r.step_seconds.empty() ? 0.0 : sum / static_cast<double>(r.step_seconds.size())}, {"max", worst}}},
+          {"planning_step_seconds", {{"mean", r.mean_step_seconds()}, {"max", r.max_step_seconds()}}},
           {"views", views}};
 }
 

@@ -45,12 +45,8 @@ std::string PlanningRun::brief() const {
   std::ostringstream s;
   s << folder.string() << ": " << result.calibrated() << " views calibrated, " << result.acquired() << " acquired in "
     << result.views.size() << " requests";
-  if (!result.step_seconds.empty()) {
-    double sum = 0;
-    for (double t : result.step_seconds) sum += t;
-    s << "; planner step " << sum / static_cast<double>(result.step_seconds.size()) << " s mean, "
-      << *std::max_element(result.step_seconds.begin(), result.step_seconds.end()) << " s max";
-  }
+  if (!result.step_seconds.empty())
+    s << "; planner step " << result.mean_step_seconds() << " s mean, " << result.max_step_seconds() << " s max";
   s << "; absorbers: "
     << (result.segmentation.voxels > 0 ? std::to_string(result.segmentation.voxels) + " coarse voxels"
                                        : result.segmentation.note);

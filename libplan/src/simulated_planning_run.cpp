@@ -27,22 +27,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-ScanSimulation simulation_from(const SimulatedPlanRequest& o) {
-  ScanSimulation sim;
-  const Detector detector{o.cols, o.rows, o.pitch_mm, o.pitch_mm};
-  sim.setup = reference_panda_setup(detector, o.sdd_mm, o.sod_mm);
-  sim.holder = reference_helix_holder();
-  for (const std::string& name : o.phantoms) {
-    const Phantom p = fs::path(name).extension() == ".json" ? read_phantom(name) : builtin_phantom(name);
-    sim.sample.name += (sim.sample.name.empty() ? "" : " + ") + p.name;
-    sim.sample.add(p);
-  }
-  sim.spectrum = tube_spectrum(o.kvp, o.filter_al_mm);
-  sim.counts = {o.flat_counts, 100};
-  sim.seed = o.plan.seed;
-  return sim;
-}
-
 // The folder of the k-th random trajectory (k from 0): random/, random-2/, random-3/ ...
 std::string random_name(int k) { return k == 0 ? "random" : "random-" + std::to_string(k + 1); }
 
@@ -215,6 +199,18 @@ TrajectoryComparison compare(const SimulatedPlanRequest& o, const ScanSimulation
 
 }  // namespace
 
+ScanSimulation simulated_world(const SimulatedPlanRequest& o) {
+  ScanSimulation sim;
+  const Detector detector{o.cols, o.rows, o.pitch_mm, o.pitch_mm};
+  sim.setup = reference_panda_setup(detector, o.sdd_mm, o.sod_mm);
+  sim.holder = reference_helix_holder();
+  sim.sample = sample_of(o.phantoms);
+  sim.spectrum = tube_spectrum(o.kvp, o.filter_al_mm);
+  sim.counts = {o.flat_counts, 100};
+  sim.seed = o.plan.seed;
+  return sim;
+}
+
 void ComparisonOptions::validate() const {
   require_option(size >= 0, "ComparisonOptions.size", "0 (everything in the beam) or voxels per axis", size);
   require_option(voxel_mm > 0, "ComparisonOptions.voxel_mm", "a size above 0", voxel_mm);
@@ -272,11 +268,11 @@ SimulatedPlanningRun run_simulated_planning(const SimulatedPlanRequest& request,
   files.check();
   SimulatedPlanningRun run;
   if (request.compare_only) {
-    run.comparison = compare(request, simulation_from(request), hooks);
+    run.comparison = compare(request, simulated_world(request), hooks);
     run.seconds = seconds_since(start);
     return run;
   }
-  SimulatedLab lab(simulation_from(request));
+  SimulatedLab lab(simulated_world(request));
   const PlanningSetup setup = planning_setup(lab.simulation());
   const fs::path folder = request.out / "planned";
   SimulatedAcquisition acquisition(lab, folder);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "ctk/core/error.hpp"
 
@@ -168,6 +169,17 @@ Phantom builtin_phantom(const std::string& name) {
   std::string names;
   for (const auto& n : builtin_phantom_names()) names += (names.empty() ? "" : ", ") + n;
   throw InputError(name, "", "not a built-in phantom (built in: " + names + "; a phantom file's name ends in .json)");
+}
+
+Phantom sample_of(const std::vector<std::string>& names_or_files, std::vector<std::string>* warnings) {
+  Phantom sample;
+  for (const std::string& name : names_or_files) {
+    const Phantom p = std::filesystem::path(name).extension() == ".json" ? read_phantom(name, warnings) : builtin_phantom(name);
+    if (!sample.name.empty()) sample.name += " + ";
+    sample.name += p.name;
+    sample.add(p);
+  }
+  return sample;
 }
 
 }  // namespace ctk

@@ -151,18 +151,16 @@ SimulationRun run_simulation(const SimulationRequest& r, const std::filesystem::
   sim.setup = reference_panda_setup(detector, r.sdd_mm, r.sod_mm);
   sim.holder = reference_helix_holder();
   sim.with_holder = false;
+  std::vector<std::string> sample;  // the holder is drawn apart, from the scan's own description
   for (const std::string& name : r.phantoms) {
-    if (name == "helix-holder") {
+    if (name == "helix-holder")
       sim.with_holder = true;
-      continue;
-    }
-    const bool is_file = fs::path(name).extension() == ".json";
-    std::vector<std::string> warnings;
-    const Phantom p = is_file ? read_phantom(name, &warnings) : builtin_phantom(name);
-    for (const auto& w : warnings) say("warning: " + w);
-    sim.sample.name += (sim.sample.name.empty() ? "" : " + ") + p.name;
-    sim.sample.add(p);
+    else
+      sample.push_back(name);
   }
+  std::vector<std::string> warnings;
+  sim.sample = sample_of(sample, &warnings);
+  for (const auto& w : warnings) say("warning: " + w);
   if (!r.poses.empty()) {
     sim.poses = read_geometry(r.poses);
     if (sim.poses->detector.cols != r.cols || sim.poses->detector.rows != r.rows)

@@ -51,18 +51,6 @@ SimulatedPlanRequest small_simulation(const fs::path& out, int views) {
   return r;
 }
 
-// The world small_simulation describes, for the lab thread.
-ScanSimulation the_same_world(const SimulatedPlanRequest& r) {
-  ScanSimulation sim;
-  sim.setup = reference_panda_setup(Detector{r.cols, r.rows, r.pitch_mm, r.pitch_mm}, r.sdd_mm, r.sod_mm);
-  sim.holder = reference_helix_holder();
-  sim.sample = builtin_phantom("sample-2");
-  sim.spectrum = tube_spectrum(r.kvp, r.filter_al_mm);
-  sim.counts = {r.flat_counts, 100};
-  sim.seed = 7;  // another robot and photon noise than the run that wrote the setup
-  return sim;
-}
-
 TEST(PlanningRun, SimulatedThenLabModeThroughFiles) {
   const fs::path dir = testing::scratch_dir();
   // The simulated run: a planned trajectory of 2 views, whose scan serves as the lab's setup.
@@ -94,7 +82,9 @@ TEST(PlanningRun, SimulatedThenLabModeThroughFiles) {
 
   // The lab: answers every request with a shot of the simulated lab, until the planner is done.
   request.out = dir / "planned";
-  SimulatedLab world(the_same_world(simulated));
+  ScanSimulation same_world = simulated_world(simulated);
+  same_world.seed = 7;  // another robot and photon noise than the run that wrote the setup
+  SimulatedLab world(same_world);
   SimulatedAcquisition shots(world, request.lab);
   std::map<fs::path, std::string> written;  // what the lab wrote, to check nothing was touched
   std::thread lab([&] {

@@ -70,6 +70,8 @@ struct PlanningResult {
   EdgeTangencyOptions edge_tangency;     // and how the edges' demand was found
   int acquired() const;                  // projections taken
   int calibrated() const;                // of those, calibrated: the views of the trajectory
+  double mean_step_seconds() const;      // of step_seconds (0 without planned steps)
+  double max_step_seconds() const;
 };
 
 PlanningResult plan_trajectory(Acquisition& acquisition, const PlanningSetup& setup, const PlanningOptions& options,

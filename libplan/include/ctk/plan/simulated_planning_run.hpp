@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "ctk/phantoms/simulation_config.hpp"
 #include "ctk/plan/planning_run.hpp"
 #include "ctk/plan/trajectory_quality.hpp"
 
@@ -64,6 +65,10 @@ struct SimulatedPlanningRun {
   std::string brief() const;      // each trajectory's brief, then the comparison's
   nlohmann::json report() const;  // {"trajectories": {name: ctk-plan/1}, "comparison": ...}
 };
+
+/// The world the request describes: the reference robot setup and holder, the phantoms in it, the
+/// tube and the open-beam counts, the seed of the robot's and the photons' noise.
+ScanSimulation simulated_world(const SimulatedPlanRequest& request);
 
 /// Throws std::invalid_argument for a request out of range, InputError for a phantom file that
 /// cannot be read, an output folder holding an input, or (compare_only) a trajectory missing in `out`.

@@ -41,4 +41,8 @@ std::vector<std::string> builtin_phantom_names();
 /// InputError naming it and listing the names.
 Phantom builtin_phantom(const std::string& name);
 
+/// Built-in phantoms by name or ctk-phantom/1 files (names ending in .json) as one sample, named
+/// "walnut + sample-2"; `warnings` (optional) collects the files' notes.
+Phantom sample_of(const std::vector<std::string>& names_or_files, std::vector<std::string>* warnings = nullptr);
+
 }  // namespace ctk
