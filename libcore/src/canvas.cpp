@@ -106,8 +106,10 @@ double Canvas::text_width(const std::string& text, double size_px) const {
 void Canvas::text(const std::string& text, cv::Point2d at, double size_px, const cv::Scalar& colour, TextAnchor anchor,
                   double angle_deg) {
   cairo_t* cr = cairo_->cr;
-  const double w = text_width(text, size_px);
-  const double shift = anchor == TextAnchor::left ? 0.0 : anchor == TextAnchor::centre ? -w / 2 : -w;
+  const double shift = anchor == TextAnchor::left     ? 0.0
+                       : anchor == TextAnchor::centre ? -text_width(text, size_px) / 2
+                                                      : -text_width(text, size_px);
+  cairo_set_font_size(cr, size_px);
   cairo_save(cr);
   cairo_translate(cr, at.x, at.y);
   cairo_rotate(cr, -angle_deg * M_PI / 180);
