@@ -2,6 +2,7 @@
 #include <malloc.h>
 
 #include <iostream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -103,6 +104,10 @@ int run(int argc, char** argv) {
     std::cerr << "ctk" << rank_prefix << ": " << e.what() << "\n";
     return fail(130);
   } catch (const ctk::InputError& e) {
+    std::cerr << "ctk" << rank_prefix << ": input error: " << e.what() << "\n";
+    return fail(2);
+  } catch (const std::invalid_argument& e) {
+    // A request refusing a value (every options struct's validate()) is bad input as well.
     std::cerr << "ctk" << rank_prefix << ": input error: " << e.what() << "\n";
     return fail(2);
   } catch (const std::exception& e) {

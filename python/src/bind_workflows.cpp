@@ -17,8 +17,7 @@
 #include "ctk/calib/calibration_run.hpp"
 #include "ctk/calib/diagnosis_run.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
-#include "ctk/geom/run_files.hpp"
-#include "ctk/geom/scan_import.hpp"
+#include "ctk/geom/import_run.hpp"
 #include "ctk/phantoms/simulation_run.hpp"
 #include "ctk/recon/reconstruction_run.hpp"
 #include "ctk/recon/refine_scan.hpp"
@@ -48,27 +47,22 @@ py::array_t<double> circular(const std::vector<double>& angles_deg, const std::a
 py::object import_scan(const fs::path& out, const DoubleArray& matrices, const std::vector<fs::path>& files,
                        const std::array<int, 2>& detector_shape, const std::array<double, 2>& pixel_mm,
                        const std::vector<fs::path>& flat, const std::vector<fs::path>& dark) {
-  const std::vector<ProjectionMatrix> P = matrices_from_numpy(matrices, static_cast<py::ssize_t>(files.size()));
   if (flat.empty() != dark.empty()) throw py::value_error("raw counts need both flat and dark (line integrals neither)");
-  ProjectionSet projections;
-  for (const fs::path& f : files) projections.file_names.push_back(fs::absolute(f).string());
-  projections.count = static_cast<int>(files.size());
-  if (!flat.empty()) {
-    projections.kind = ProjectionKind::counts;
-    for (const fs::path& f : flat) projections.flat.push_back(fs::absolute(f).string());
-    for (const fs::path& d : dark) projections.dark.push_back(fs::absolute(d).string());
-  }
-  const ImportedScan imported =
-      import_matrices({detector_shape[1], detector_shape[0], pixel_mm[0], pixel_mm[1]}, P, projections, out);
-  RunFiles run;  // never write over what the scan reads
-  for (std::size_t v = 0; v < files.size(); ++v) run.input("files[" + std::to_string(v) + "]", files[v]);
-  for (const fs::path& f : flat) run.input("flat", f);
-  for (const fs::path& d : dark) run.input("dark", d);
-  run.output("out", out);
-  run.output("the matrices beside out", imported.scan.resolve(imported.scan.matrices->file));
-  run.check();
-  write_imported_scan(imported, out);
-  return to_python(scan_to_json(read_scan(out)));
+  MatricesImportRequest r;
+  r.field_names = [](const std::string& field) -> std::string {  // as this function's keywords
+    if (field == "detector") return "detector_shape";
+    if (field == "pitch_mm") return "pixel_mm";
+    return field;
+  };
+  r.out = out;
+  r.matrices = matrices_from_numpy(matrices, static_cast<py::ssize_t>(files.size()));
+  for (const fs::path& f : files) r.files.push_back(fs::absolute(f).string());
+  r.kind = flat.empty() ? ProjectionKind::line_integrals : ProjectionKind::counts;
+  for (const fs::path& f : flat) r.flat.push_back(fs::absolute(f).string());
+  for (const fs::path& d : dark) r.dark.push_back(fs::absolute(d).string());
+  r.detector = std::array<int, 2>{detector_shape[1], detector_shape[0]};
+  r.pitch_mm = {pixel_mm[0], pixel_mm[1]};
+  return to_python(scan_to_json(run_import(r).scan));
 }
 
 py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geometry_file, const std::vector<std::string>& effects,
@@ -254,7 +248,9 @@ detector_shape (rows, cols), pixel_mm (u, v).
         py::arg("pixel_mm"), py::arg("flat") = std::vector<fs::path>{}, py::arg("dark") = std::vector<fs::path>{}, R"doc(
 Writes a ctk-scan/1 file `out` (and its matrices beside it, <stem>.matrices.json) for projection
 files with one matrix each; raw counts when flat and dark frames are given, line integrals
-otherwise. Refuses (InputError) an `out` that is one of the inputs. Returns the scan as read back.
+otherwise, as `ctk import` writes it (import_run.hpp). Refuses (InputError, nothing written) an `out`
+that is one of the inputs, files none (or most) of which exist, and a first image whose size is not
+`detector_shape`. Returns the scan as read back.
 )doc");
   m.def("_simulate", &simulate, py::arg("out"), py::arg("phantoms"), py::arg("trajectory"), py::arg("views"), py::arg("nside"),
         py::arg("cap_deg"), py::arg("poses"), py::arg("detector_shape"), py::arg("pitch_mm"), py::arg("sdd_mm"),
