@@ -35,13 +35,13 @@ void require_partition(const ProjectionOperator& A, const std::vector<std::vecto
       throw std::invalid_argument("solve_os_sqs: view " + std::to_string(v) + " is in no subset");
 }
 
-// r = A x - b, then its weighted half square sum, then r *= w (w empty: unit weights).
+// r = A x - b, then its weighted half square sum, then r *= scale w (w empty: unit weights).
 double weighted_residual(const ProjectionOperator& A, const Volume& x, const ProjectionStack& b, const FloatBuffer& w,
-                         ProjectionStack& r) {
+                         ProjectionStack& r, float scale = 1) {
   A.apply(x, r);
   detail::axpy(-1.0, b.data, r.data);
   const double half = 0.5 * detail::weighted_square_sum(r.data, w);
-  if (!w.empty()) detail::weighted_copy(r.data, w, r.data);
+  if (!w.empty() || scale != 1) detail::weighted_copy(r.data, w, r.data, scale);
   return half;
 }
 
@@ -122,12 +122,10 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
     for (int s = 0; s < M; ++s) {
       load_part(s);
       const ProjectionOperator& As = *parts[static_cast<std::size_t>(s)];
-      seen += weighted_residual(As, at, b_part, weights ? w_part.data : unit, r_part);
+      // The subset stands for the scan: its gradient times M (scaled on the subset's residual,
+      // a few views, rather than on the volume), plus the penalty's.
+      seen += weighted_residual(As, at, b_part, weights ? w_part.data : unit, r_part, static_cast<float>(M));
       As.apply_adjoint(r_part, g);
-      // The subset stands for the scan: its gradient times M, plus the penalty's.
-      const float scale = static_cast<float>(M);
-#pragma omp parallel for schedule(static)
-      for (std::ptrdiff_t i = 0; i < n; ++i) g.data[static_cast<std::size_t>(i)] *= scale;
       if (huber)
         add_huber_gradient_and_curvature(penalty, at, g, huber_curvature);
       else

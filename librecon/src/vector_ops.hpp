@@ -51,15 +51,15 @@ inline void axpy(double alpha, const FloatBuffer& x, FloatBuffer& y) {
   for (std::ptrdiff_t i = 0; i < n; ++i) y[static_cast<std::size_t>(i)] += a * x[static_cast<std::size_t>(i)];
 }
 
-/// out = w * x elementwise (w empty: copy).
-inline void weighted_copy(const FloatBuffer& x, const FloatBuffer& w, FloatBuffer& out) {
+/// out = scale * w * x elementwise (w empty: scale * x; a scale of 1 changes no bit).
+inline void weighted_copy(const FloatBuffer& x, const FloatBuffer& w, FloatBuffer& out, float scale = 1) {
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(x.size());
   out.resize(x.size());
   const bool weighted = !w.empty();
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const std::size_t k = static_cast<std::size_t>(i);
-    out[k] = weighted ? w[k] * x[k] : x[k];
+    out[k] = scale * (weighted ? w[k] * x[k] : x[k]);
   }
 }
 
