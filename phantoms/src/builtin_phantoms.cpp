@@ -101,10 +101,13 @@ Phantom sample1_phantom() {
   const Vector3d cube_centre(-6, 0, -12);
   p.primitives.push_back(Primitive::box(cube_centre, Vector3d(22, 18, 30), kIdentity, low, "cube"));
   add_hole(p, cube_centre, 7, 18, about_u(90), low, "cube hole");
+  // The thesis' cylinder, 32 mm across, standing on the cube (it overhangs the cube's 22 x 18 mm
+  // top) and 1 mm from the absorber; 22 mm from the holder's axis at most (the bore's radius is 25).
+  const double radius = 16;
   const Vector3d cylinder_centre(-6, 0, 3 + 16);
-  p.primitives.push_back(Primitive::cylinder(cylinder_centre, 8, 32, kIdentity, low, "cylinder"));
+  p.primitives.push_back(Primitive::cylinder(cylinder_centre, radius, 32, kIdentity, low, "cylinder"));
   // Across holes stop where their rim leaves the cylinder (a hole must stay inside its material).
-  const double across = 2 * std::sqrt(8.0 * 8.0 - 3.0 * 3.0);
+  const double across = 2 * std::sqrt(radius * radius - 3.0 * 3.0);
   add_hole(p, cylinder_centre + Vector3d(0, 0, -7), 6, across, about_v(90), low, "cylinder hole 0");
   add_hole(p, cylinder_centre + Vector3d(0, 0, 7), 6, across, about_v(90), low, "cylinder hole 1");
   p.primitives.push_back(Primitive::box(Vector3d(13, 0, 0), Vector3d(4, 30, 50), kIdentity, high, "absorber"));
@@ -120,15 +123,19 @@ Phantom sample2_phantom() {
   p.primitives.push_back(Primitive::box(Vector3d::Zero(), Vector3d(34, 34, 30), kIdentity, low, "box"));
   p.primitives.push_back(Primitive::box(Vector3d(0, 0, 0.75), Vector3d(31, 31, 28.5), kIdentity, -low, "box inside"));
   const double floor = -13.5;
+  // A cube with a square hole (2 x 2 mm, through its 3 mm depth).
   const Vector3d cube(-7, -7, floor + 5);
   p.primitives.push_back(Primitive::box(cube, Vector3d(6, 3, 10), kIdentity, low, "small cube"));
-  add_hole(p, cube, 2, 3, about_u(90), low, "small cube hole");
-  const Vector3d cyl_a(7, -7, floor + 6), cyl_b(7, 7, floor + 6);
-  p.primitives.push_back(Primitive::cylinder(cyl_a, 3, 12, kIdentity, low, "cylinder a"));
-  add_hole(p, cyl_a, 2, 12, kIdentity, low, "cylinder a hole");
-  p.primitives.push_back(Primitive::cylinder(cyl_b, 3, 12, kIdentity, low, "cylinder b"));
-  add_hole(p, cyl_b, 0.8, 12, kIdentity, low, "cylinder b hole");
-  p.primitives.push_back(Primitive::box(Vector3d(-7, 7, floor + 6), Vector3d(1, 12, 12), kIdentity, high, "absorber"));
+  p.primitives.push_back(Primitive::box(cube, Vector3d(2, 3, 2), kIdentity, -low, "small cube hole"));
+  const Vector3d cyl_a(7, -7, floor + 6);
+  p.primitives.push_back(Primitive::cylinder(cyl_a, 3, 12, kIdentity, low, "cylinder"));
+  add_hole(p, cyl_a, 2, 12, kIdentity, low, "cylinder hole");
+  // The thesis' small cylinder: 3 mm across, 5 mm tall, a 0.8 mm hole along its axis.
+  const Vector3d cyl_b(7, 7, floor + 2.5);
+  p.primitives.push_back(Primitive::cylinder(cyl_b, 1.5, 5, kIdentity, low, "small cylinder"));
+  add_hole(p, cyl_b, 0.8, 5, kIdentity, low, "small cylinder hole");
+  // The plate at the box's centre, standing on its floor.
+  p.primitives.push_back(Primitive::box(Vector3d(0, 0, floor + 6), Vector3d(1, 12, 12), kIdentity, high, "absorber"));
   made_of(p, 0, "abs");
   p.primitives.back().material = "aluminium";  // the absorber
   return p;
