@@ -342,9 +342,17 @@ ImportRun run_import(const NxTomoImportRequest& r, const std::function<void(int 
   files.input(r.name(request, "nexus"), r.nexus);
   files.output(r.name(request, "out"), r.out);
   files.output("the matrices beside " + r.name(request, "out"), beside(r.out, ".matrices.json"));
-  files.output_folder("the frames beside " + r.name(request, "out"), beside(r.out, ".frames"));
+  const fs::path frames = beside(r.out, ".frames");
+  files.output_folder("the frames beside " + r.name(request, "out"), frames);
   files.check();
-  return publish([&] { return import_nxtomo(scan, plan, r.out, progress); }, r, request, std::move(notes), {});
+  std::error_code ec;
+  const bool had_frames = fs::exists(frames, ec);
+  try {
+    return publish([&] { return import_nxtomo(scan, plan, r.out, progress); }, r, request, std::move(notes), {});
+  } catch (...) {
+    if (!had_frames) fs::remove(frames, ec);  // the folder it made, if empty: the frames written went with the run
+    throw;
+  }
 }
 
 ImportRun run_import(const NikonImportRequest& r) {

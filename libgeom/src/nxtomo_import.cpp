@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "ctk/core/cancellation.hpp"
 #include "ctk/core/error.hpp"
 
 namespace ctk {
@@ -90,6 +91,7 @@ ImportedScan import_nxtomo(const NxTomo& scan, const NxTomoPlan& plan, const fs:
     else
       write_image_float(image, file);
     if (progress) progress(++written, total);
+    throw_if_stop_requested();  // a caller's stop (Python's Ctrl-C) between frames
     return file.string();
   };
   auto numbered = [](const char* stem, std::size_t i) {

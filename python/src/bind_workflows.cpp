@@ -8,6 +8,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -44,16 +46,75 @@ py::array_t<double> circular(const std::vector<double>& angles_deg, const std::a
   return matrices_to_numpy(circular_matrices(orbit));
 }
 
+// The scan an import wrote, as read back; its warnings (missing projection files, keys not
+// modelled) go to Python's warnings.
+py::object imported_scan(const ImportRun& run) {
+  const py::object warn = py::module_::import("warnings").attr("warn");
+  for (const std::string& w : run.warnings) warn(w, py::module_::import("builtins").attr("UserWarning"), 2);
+  return to_python(scan_to_json(run.scan));
+}
+
+// A workflow's request field named as this module's keyword (`renamed`: those that differ).
+std::function<std::string(const std::string&)> keywords(std::map<std::string, std::string> renamed) {
+  return [renamed = std::move(renamed)](const std::string& field) {
+    const auto k = renamed.find(field);
+    return k != renamed.end() ? k->second : field;
+  };
+}
+
+py::object import_nxtomo(const fs::path& nexus, const fs::path& out, const std::string& entry, std::optional<double> sod,
+                         std::optional<double> sdd, const std::optional<std::array<double, 2>>& pixel_mm,
+                         const std::optional<std::array<double, 2>>& principal_point, int sense, const std::string& kind, int bin,
+                         const py::object& progress) {
+  if (kind != "counts" && kind != "line_integrals") throw py::value_error("kind: expected counts or line_integrals, got " + kind);
+  NxTomoImportRequest r;
+  r.field_names = keywords({{"setup.source_to_axis_mm", "sod"},
+                            {"setup.source_to_detector_mm", "sdd"},
+                            {"setup.pitch_mm", "pixel_mm"},
+                            {"setup.principal_point_px", "principal_point"},
+                            {"setup.sense", "sense"}});
+  r.nexus = nexus;
+  r.out = out;
+  r.entry = entry;
+  r.bin = bin;
+  r.setup.source_to_axis_mm = sod;
+  r.setup.source_to_detector_mm = sdd;
+  if (pixel_mm) r.setup.pitch_mm = Eigen::Vector2d((*pixel_mm)[0], (*pixel_mm)[1]);
+  if (principal_point) r.setup.principal_point_px = Eigen::Vector2d((*principal_point)[0], (*principal_point)[1]);
+  r.setup.sense = sense;
+  r.setup.line_integrals = kind == "line_integrals";
+  // Copying the frames stops on Ctrl-C or a progress callable raising: its outputs are then removed.
+  struct Stopped {};
+  PythonBridge bridge;
+  const auto copied = [&, report = bridge.progress(progress)](int written, int total) {
+    report(written, total);
+    if (bridge.stop_requested()) throw Stopped{};
+  };
+  std::optional<ImportRun> run;
+  try {
+    interruptible([&] { run = run_import(r, copied); });
+  } catch (const Stopped&) {
+  }
+  bridge.raise_if_stopped();
+  return imported_scan(*run);
+}
+
+py::object import_nikon(const fs::path& xtekct, const fs::path& out, int sense, int bin) {
+  NikonImportRequest r;
+  r.field_names = keywords({});
+  r.xtekct = xtekct;
+  r.out = out;
+  r.sense = sense;
+  r.bin = bin;
+  return imported_scan(interruptible([&] { return run_import(r); }));
+}
+
 py::object import_scan(const fs::path& out, const DoubleArray& matrices, const std::vector<fs::path>& files,
                        const std::array<int, 2>& detector_shape, const std::array<double, 2>& pixel_mm,
                        const std::vector<fs::path>& flat, const std::vector<fs::path>& dark) {
   if (flat.empty() != dark.empty()) throw py::value_error("raw counts need both flat and dark (line integrals neither)");
   MatricesImportRequest r;
-  r.field_names = [](const std::string& field) -> std::string {  // as this function's keywords
-    if (field == "detector") return "detector_shape";
-    if (field == "pitch_mm") return "pixel_mm";
-    return field;
-  };
+  r.field_names = keywords({{"detector", "detector_shape"}, {"pitch_mm", "pixel_mm"}});
   r.out = out;
   r.matrices = matrices_from_numpy(matrices, static_cast<py::ssize_t>(files.size()));
   for (const fs::path& f : files) r.files.push_back(fs::absolute(f).string());
@@ -62,7 +123,7 @@ py::object import_scan(const fs::path& out, const DoubleArray& matrices, const s
   for (const fs::path& d : dark) r.dark.push_back(fs::absolute(d).string());
   r.detector = std::array<int, 2>{detector_shape[1], detector_shape[0]};
   r.pitch_mm = {pixel_mm[0], pixel_mm[1]};
-  return to_python(scan_to_json(run_import(r).scan));
+  return imported_scan(run_import(r));
 }
 
 py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geometry_file, const std::vector<std::string>& effects,
@@ -251,6 +312,22 @@ files with one matrix each; raw counts when flat and dark frames are given, line
 otherwise, as `ctk import` writes it (import_run.hpp). Refuses (InputError, nothing written) an `out`
 that is one of the inputs, files none (or most) of which exist, and a first image whose size is not
 `detector_shape`. Returns the scan as read back.
+)doc");
+  m.def("import_nxtomo", &import_nxtomo, py::arg("nexus"), py::arg("out"), py::arg("entry") = "", py::arg("sod") = py::none(),
+        py::arg("sdd") = py::none(), py::arg("pixel_mm") = py::none(), py::arg("principal_point") = py::none(),
+        py::arg("sense") = 1, py::arg("kind") = "counts", py::arg("bin") = 1, py::arg("progress") = py::none(), R"doc(
+An HDF5/NeXus NXtomo file as a ctk-scan/1 file `out`, as `ctk import nxtomo` makes it: projections,
+flats and darks by image key, a circular orbit from the rotation angles, the distances and pixel
+size from the file unless given (sod, sdd in mm; pixel_mm (u, v); principal_point (u0, v0) px);
+kind "line_integrals" for frames that are already; bin n x n recorded in the scan. The frames are
+copied out as TIFF into <out stem>.frames/; progress(written, total) as they are, and Ctrl-C or a
+raising progress stops the copy with nothing left behind. Returns the scan as read back; missing
+or assumed numbers are InputError naming the keyword.
+)doc");
+  m.def("import_nikon", &import_nikon, py::arg("xtekct"), py::arg("out"), py::arg("sense") = 1, py::arg("bin") = 1, R"doc(
+A Nikon (X-Tek) scan, its .xtekct file and the <Name>_NNNN.tif projections beside it, as a
+ctk-scan/1 file `out`, as `ctk import nikon` makes it (the white level and a zero dark written as
+images beside it). Returns the scan as read back; keys read and not modelled are warned about.
 )doc");
   m.def("_simulate", &simulate, py::arg("out"), py::arg("phantoms"), py::arg("trajectory"), py::arg("views"), py::arg("nside"),
         py::arg("cap_deg"), py::arg("poses"), py::arg("detector_shape"), py::arg("pitch_mm"), py::arg("sdd_mm"),

@@ -183,3 +183,44 @@ def test_other_tools_scans_read_as_the_command_line_imports_them(tmp_path, ctk_c
     assert np.allclose(imported, nikon["matrices"], rtol=1e-12, atol=1e-9)
     with pytest.raises(ctk.InputError, match="not an HDF5 file"):
         ctk.read_nxtomo(tmp_path / "nk.json")
+
+
+def test_vendor_scans_import_from_python_as_from_the_command_line(tmp_path, ctk_command):
+    import os
+    import signal
+    run([os.environ["CTK_VENDOR_SCANS"], "write", str(tmp_path)])
+    nexus, xtekct = tmp_path / "nxtomo" / "scan.nx", tmp_path / "nikon" / "ball.xtekct"
+    run([ctk_command, "import", "nxtomo", "--nexus", str(nexus), "--out", str(tmp_path / "cli-nx.json")])
+    run([ctk_command, "import", "nikon", "--xtekct", str(xtekct), "--out", str(tmp_path / "cli-nk.json")])
+    seen = []
+    scan = ctk.import_nxtomo(nexus, tmp_path / "nx.json", progress=lambda done, total: seen.append((done, total)))
+    assert scan["projections"]["count"] == 90 and seen[-1] == (95, 95)
+    scan = ctk.import_nikon(xtekct, tmp_path / "nk.json", bin=2)
+    assert scan["detector"]["binning"] == 2
+    for mine, theirs in (("nx", "cli-nx"), ("nk", "cli-nk")):
+        _, P = ctk.geometry_matrices(ctk.read_geometry(tmp_path / f"{mine}.matrices.json"))
+        _, Q = ctk.geometry_matrices(ctk.read_geometry(tmp_path / f"{theirs}.matrices.json"))
+        assert np.array_equal(P, Q), mine
+    assert np.array_equal(ctk.read_image(tmp_path / "nx.frames" / "proj_00007.tif"),
+                          ctk.read_image(tmp_path / "cli-nx.frames" / "proj_00007.tif"))
+
+    # Refusals name the keyword; a progress callable that raises stops the copy, leaving nothing.
+    with pytest.raises(ValueError, match="sod: expected a finite distance above 0"):
+        ctk.import_nxtomo(nexus, tmp_path / "bad.json", sod=-5)
+    with pytest.raises(ctk.InputError, match="out: would overwrite the input nexus"):
+        ctk.import_nxtomo(nexus, nexus)
+
+    def stop(done, total):
+        if done == 10:
+            raise RuntimeError("enough")
+    with pytest.raises(RuntimeError, match="enough"):
+        ctk.import_nxtomo(nexus, tmp_path / "stopped.json", progress=stop)
+    assert not (tmp_path / "stopped.json").exists() and not (tmp_path / "stopped.matrices.json").exists()
+    assert not (tmp_path / "stopped.frames").exists()
+
+    def ctrl_c(done, total):  # Ctrl-C while the frames are copied
+        if done == 10:
+            os.kill(os.getpid(), signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt):
+        ctk.import_nxtomo(nexus, tmp_path / "interrupted.json", progress=ctrl_c)
+    assert sorted(p.name for p in tmp_path.glob("interrupted*")) == []
