@@ -13,6 +13,7 @@
 
 #include "commands.hpp"
 #include "ctk/geom/import_run.hpp"
+#include "interruption.hpp"
 #include "option_checks.hpp"
 
 namespace ctk::tools {
@@ -217,9 +218,14 @@ void register_import(CLI::App& app) {
     if (!n->pitch.empty()) setup.pitch_mm = Eigen::Vector2d(n->pitch.front(), n->pitch.back());
     setup.principal_point_px = principal_point(n->arguments.principal_point);
     setup.line_integrals = n->arguments.kind == "line_integrals";
+    // Ctrl-C while the frames are copied: stopped between two, nothing left behind, exit 130.
+    const InterruptionWatch watch;
     print(run_import(n->request, [](int written, int total) {
       if (written == total || written % 50 == 0)
         std::cout << "\r  frames " << written << " of " << total << (written == total ? "\n" : "") << std::flush;
+      if (InterruptionWatch::requested())
+        throw Interrupted("import stopped on request after " + std::to_string(written) + " of " + std::to_string(total) +
+                          " frames; nothing written");
     }));
   });
 
