@@ -22,12 +22,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The command line's form of a projection import: CLI11 fills plain values, turned into the request.
-struct ProjectionArguments {
+// What CLI11 fills in a plain form and the request holds in its own (a kind, a detector, a point).
+struct PlainArguments {
   std::string kind = "counts";
   std::vector<int> detector;
   std::vector<double> principal_point;
-  std::optional<double> sod, sdd;
 };
 
 // The request's fields as this command's options, for its messages.
@@ -51,7 +50,7 @@ std::string option_named(const std::string& field) {
 }
 
 template <class Request>
-Request& with_arguments(Request& r, const ProjectionArguments& a) {
+Request& with_arguments(Request& r, const PlainArguments& a) {
   r.kind = a.kind == "counts" ? ProjectionKind::counts : ProjectionKind::line_integrals;
   if (!a.detector.empty()) r.detector = std::array<int, 2>{a.detector[0], a.detector[1]};
   return r;
@@ -80,7 +79,7 @@ void add_out_option(CLI::App* cmd, ImportRequest& r) {
   cmd->add_option("--out", r.out, "scan.json to write (the matrices go beside it as <stem>.matrices.json)")->required();
 }
 
-void add_projection_options(CLI::App* cmd, ProjectionImportRequest& r, ProjectionArguments& a, bool pitch_required) {
+void add_projection_options(CLI::App* cmd, ProjectionImportRequest& r, PlainArguments& a, bool pitch_required) {
   add_out_option(cmd, r);
   cmd->add_option("--files", r.files,
                   "Projection files: a printf pattern (with --count), a quoted glob or the names in view order")
@@ -101,8 +100,8 @@ void add_projection_options(CLI::App* cmd, ProjectionImportRequest& r, Projectio
   add_bin_option(cmd, r.bin);
 }
 
-CLI::Option* add_sense_option(CLI::App* cmd, int& sense, const char* what) {
-  return cmd->add_option("--sense", sense, what)->check(CLI::IsMember({1, -1}))->capture_default_str();
+void add_sense_option(CLI::App* cmd, int& sense, const char* what) {
+  cmd->add_option("--sense", sense, what)->check(CLI::IsMember({1, -1}))->capture_default_str();
 }
 
 }  // namespace
@@ -113,7 +112,7 @@ void register_import(CLI::App& app) {
 
   struct Circular {
     CircularImportRequest request;
-    ProjectionArguments arguments;
+    PlainArguments arguments;
   };
   auto c = std::make_shared<Circular>();
   CLI::App* circular = cmd->add_subcommand(
@@ -138,7 +137,7 @@ void register_import(CLI::App& app) {
 
   struct ConeVec {
     ConeVecImportRequest request;
-    ProjectionArguments arguments;
+    PlainArguments arguments;
     std::string orientation = "as-described";
   };
   auto v = std::make_shared<ConeVec>();
@@ -161,7 +160,7 @@ void register_import(CLI::App& app) {
 
   struct Rtk {
     RtkImportRequest request;
-    ProjectionArguments arguments;
+    PlainArguments arguments;
     std::string rows;  // empty: what the file's ctk comment names, else as-stored
   };
   auto r = std::make_shared<Rtk>();
@@ -185,7 +184,7 @@ void register_import(CLI::App& app) {
 
   struct NxTomo {
     NxTomoImportRequest request;
-    ProjectionArguments arguments;
+    PlainArguments arguments;
     std::vector<double> pitch;
   };
   auto n = std::make_shared<NxTomo>();
@@ -197,9 +196,13 @@ void register_import(CLI::App& app) {
   nxtomo->add_option("--nexus", n->request.nexus, "The NXtomo file (.nx, .nxs, .h5)")->required()->check(CLI::ExistingFile);
   add_out_option(nxtomo, n->request);
   nxtomo->add_option("--entry", n->request.entry, "The NXentry to read (default: the first whose definition is NXtomo)");
-  nxtomo->add_option("--sod", n->arguments.sod, "Source to rotation axis, mm (default: |instrument/source/distance|)")
+  nxtomo
+      ->add_option("--sod", n->request.setup.source_to_axis_mm,
+                   "Source to rotation axis, mm (default: |instrument/source/distance|)")
       ->check(positive_number);
-  nxtomo->add_option("--sdd", n->arguments.sdd, "Source to detector, mm (default: SOD + instrument/detector/distance)")
+  nxtomo
+      ->add_option("--sdd", n->request.setup.source_to_detector_mm,
+                   "Source to detector, mm (default: SOD + instrument/detector/distance)")
       ->check(positive_number);
   nxtomo->add_option("--pitch", n->pitch, "Pixel pitch in mm: one value or u v (default: the detector's x/y_pixel_size)")
       ->expected(1, 2)
@@ -213,8 +216,6 @@ void register_import(CLI::App& app) {
   add_bin_option(nxtomo, n->request.bin);
   nxtomo->callback([n] {
     NxTomoSetup& setup = n->request.setup;
-    setup.source_to_axis_mm = n->arguments.sod;
-    setup.source_to_detector_mm = n->arguments.sdd;
     if (!n->pitch.empty()) setup.pitch_mm = Eigen::Vector2d(n->pitch.front(), n->pitch.back());
     setup.principal_point_px = principal_point(n->arguments.principal_point);
     setup.line_integrals = n->arguments.kind == "line_integrals";

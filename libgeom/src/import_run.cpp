@@ -87,13 +87,12 @@ void check_images(const ScanDescription& scan, const std::string& files, std::ve
 
 // The binning recorded in the scan; the matrices file keeps addressing stored pixels.
 void bin_imported(ImportedScan& imported, const ImportRequest& r, const char* request) {
-  const int bin = r.bin;
   try {
-    bin_scan(imported.scan, bin);
+    bin_scan(imported.scan, r.bin);
   } catch (const std::invalid_argument&) {
     throw InputError(
         r.name(request, "bin"), "",
-        text(bin, " does not fit the ", imported.scan.detector.cols, " x ", imported.scan.detector.rows, " detector"));
+        text(r.bin, " does not fit the ", imported.scan.detector.cols, " x ", imported.scan.detector.rows, " detector"));
   }
 }
 
@@ -117,8 +116,8 @@ ImportRun publish(const std::function<ImportedScan()>& write, const ImportReques
   return run;
 }
 
-// The three imports of projection files named by the caller: images checked, no output over an
-// input (`geometry_field`: the geometry file read, if any), written together.
+// The imports of projection files named by the caller (circular, cone-vec, RTK, matrices): images
+// checked, no output over an input (`geometry_field`: the geometry file read, if any), written together.
 ImportRun finish(ImportedScan imported, const ProjectionImportRequest& r, const char* request, std::vector<std::string> notes,
                  const std::string& geometry_field = {}, const fs::path& geometry_file = {}) {
   std::vector<std::string> warnings;
@@ -140,14 +139,6 @@ fs::path beside(const fs::path& out, const std::string& suffix) {
   return fs::absolute(out).parent_path() / (out.stem().string() + suffix);
 }
 
-}  // namespace
-
-std::string ImportRequest::name(const char* type, const char* field) const {
-  return field_names ? field_names(field) : std::string(type) + "." + field;
-}
-
-namespace {
-
 // validate()'s checks, naming the field as the request names it.
 void require(const ImportRequest& r, bool ok, const char* type, const char* field, const std::string& expected, double value) {
   require_option(ok, r.name(type, field).c_str(), expected.c_str(), value);
@@ -163,6 +154,10 @@ void require_pitch(const ProjectionImportRequest& r, const char* type) {
 }
 
 }  // namespace
+
+std::string ImportRequest::name(const char* type, const char* field) const {
+  return field_names ? field_names(field) : std::string(type) + "." + field;
+}
 
 void ImportRequest::validate() const {
   require_given(*this, !out.empty(), "ImportRequest", "out", "the scan file to write");

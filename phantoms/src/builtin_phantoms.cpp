@@ -103,9 +103,9 @@ Phantom sample1_phantom() {
   add_hole(p, cube_centre, 7, 18, about_u(90), low, "cube hole");
   // The thesis' cylinder, 32 mm across, standing on the cube (it overhangs the cube's 22 x 18 mm
   // top) and 1 mm from the absorber; 22 mm from the holder's axis at most (the bore's radius is 25).
-  const double radius = 16;
-  const Vector3d cylinder_centre(-6, 0, 3 + 16);
-  p.primitives.push_back(Primitive::cylinder(cylinder_centre, radius, 32, kIdentity, low, "cylinder"));
+  const double radius = 16, height = 32;
+  const Vector3d cylinder_centre(-6, 0, 3 + height / 2);
+  p.primitives.push_back(Primitive::cylinder(cylinder_centre, radius, height, kIdentity, low, "cylinder"));
   // Across holes stop where their rim leaves the cylinder (a hole must stay inside its material).
   const double across = 2 * std::sqrt(radius * radius - 3.0 * 3.0);
   add_hole(p, cylinder_centre + Vector3d(0, 0, -7), 6, across, about_v(90), low, "cylinder hole 0");

@@ -135,16 +135,14 @@ py::dict trajectory_to_python(const PlanningRun& r) {
 }
 
 // A request's record to `callback(trajectory, record)` with the GIL; False from it, an exception
-// or Ctrl-C ends the run by an exception the bridge turns back into what Python raised.
-struct Stopped {};
-
+// or Ctrl-C ends the run (the bridge then raises what Python raised).
 std::function<void(const std::string&, const PlannedViewRecord&)> view_hook(PythonBridge& bridge, const py::object& callback) {
   return [&bridge, callback](const std::string& trajectory, const PlannedViewRecord& v) {
     bridge.with_gil([&] {
       if (!callback.is_none() && callback(trajectory, to_python(planned_view_to_json(v))).is(py::bool_(false)))
         bridge.request_stop();
     });
-    if (bridge.stop_requested()) throw Stopped{};
+    bridge.end_run_if_stopping();
   };
 }
 
@@ -160,11 +158,7 @@ py::dict plan_simulated(const py::dict& keywords, const py::object& callback, co
   hooks.view = [&](const std::string& trajectory, int, const PlannedViewRecord& v) { on_view(trajectory, v); };
   hooks.log = bridge.log(log);
   std::optional<SimulatedPlanningRun> run;
-  try {
-    interruptible([&] { run = run_simulated_planning(r, hooks); });
-  } catch (const Stopped&) {
-  }
-  bridge.raise_if_stopped();
+  bridge.run_stoppable([&] { run = run_simulated_planning(r, hooks); });
   py::dict d;
   d["stopped"] = !run.has_value();
   if (!run) return d;
@@ -186,11 +180,7 @@ py::dict plan_lab(const py::dict& keywords, const py::object& callback) {
   PythonBridge bridge;
   const auto on_view = view_hook(bridge, callback);
   std::optional<PlanningRun> run;
-  try {
-    interruptible([&] { run = run_lab_planning(r, [&](const PlannedViewRecord& v) { on_view("planned", v); }); });
-  } catch (const Stopped&) {
-  }
-  bridge.raise_if_stopped();
+  bridge.run_stoppable([&] { run = run_lab_planning(r, [&](const PlannedViewRecord& v) { on_view("planned", v); }); });
   py::dict d;
   d["stopped"] = !run.has_value();
   if (run) d["trajectory"] = trajectory_to_python(*run);

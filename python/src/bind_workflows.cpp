@@ -50,7 +50,7 @@ py::array_t<double> circular(const std::vector<double>& angles_deg, const std::a
 // modelled) go to Python's warnings.
 py::object imported_scan(const ImportRun& run) {
   const py::object warn = py::module_::import("warnings").attr("warn");
-  for (const std::string& w : run.warnings) warn(w, py::module_::import("builtins").attr("UserWarning"), 2);
+  for (const std::string& w : run.warnings) warn(w, py::handle(PyExc_UserWarning), 2);
   return to_python(scan_to_json(run.scan));
 }
 
@@ -84,18 +84,13 @@ py::object import_nxtomo(const fs::path& nexus, const fs::path& out, const std::
   r.setup.sense = sense;
   r.setup.line_integrals = kind == "line_integrals";
   // Copying the frames stops on Ctrl-C or a progress callable raising: its outputs are then removed.
-  struct Stopped {};
   PythonBridge bridge;
   const auto copied = [&, report = bridge.progress(progress)](int written, int total) {
     report(written, total);
-    if (bridge.stop_requested()) throw Stopped{};
+    bridge.end_run_if_stopping();
   };
   std::optional<ImportRun> run;
-  try {
-    interruptible([&] { run = run_import(r, copied); });
-  } catch (const Stopped&) {
-  }
-  bridge.raise_if_stopped();
+  bridge.run_stoppable([&] { run = run_import(r, copied); });
   return imported_scan(*run);
 }
 
@@ -136,20 +131,14 @@ py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geomet
   o.validate();
   const ScanDescription scan = read_scan(scan_file);
   const Geometry geometry = geometry_or_nominal(scan, scan_file, geometry_file.value_or(fs::path()));
-  // The loop has no stop request of its own: a step's log line that finds the run stopping ends it
-  // by an exception, which the bridge then turns back into what Python raised.
-  struct Stopped {};
+  // The loop has no stop request of its own: a step's log line that finds the run stopping ends it.
   PythonBridge bridge;
   const auto say = [&, line_to = bridge.log(log)](const std::string& line) {
     line_to(line);
-    if (bridge.stop_requested()) throw Stopped{};
+    bridge.end_run_if_stopping();
   };
   std::optional<RefineScanSummary> s;
-  try {
-    interruptible([&] { s = refine_scan(scan, geometry, o, say); });
-  } catch (const Stopped&) {
-  }
-  bridge.raise_if_stopped();
+  bridge.run_stoppable([&] { s = refine_scan(scan, geometry, o, say); });
   py::dict d;
   d["report"] = to_python(s->report());
   d["geometry"] = to_python(geometry_to_json(s->refined));

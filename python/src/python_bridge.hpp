@@ -9,6 +9,8 @@
 #include <string>
 #include <utility>
 
+#include "interruptible.hpp"
+
 namespace ctk::python {
 
 namespace py = pybind11;
@@ -54,8 +56,24 @@ class PythonBridge {
   void raise_if_stopped() {
     if (error_) throw std::move(*error_);
   }
+  /// Called by a run's hook (a log line, a progress step) of a run that has no stop request of
+  /// its own: ends the run there, by an exception run_stoppable() catches, when it is stopping.
+  void end_run_if_stopping() {
+    if (stop_requested()) throw Stopping{};
+  }
+  /// Runs `work` as interruptible() does, ended early by end_run_if_stopping(), then raises what a
+  /// callable or Ctrl-C raised; returns without raising when a callable asked the run to stop.
+  template <class Work>
+  void run_stoppable(Work&& work) {
+    try {
+      interruptible(std::forward<Work>(work));
+    } catch (const Stopping&) {
+    }
+    raise_if_stopped();
+  }
 
  private:
+  struct Stopping {};
   bool stopped_ = false;
   std::optional<py::error_already_set> error_;
 };
