@@ -85,6 +85,10 @@ void register_diagnose(CLI::App& app) {
       ->check(positive_number);
   cmd->add_option("--robot-repeatability-deg", o->run.repeatability_deg, "Same, rotation; default: measured on the scan")
       ->check(positive_number);
+  cmd->add_option("--false-acceptance-rate", o->run.diagnosis.false_acceptance_rate,
+                  "Probability that chance alone accepts any effect in a scan that has none")
+      ->check(CLI::Range(1e-9, 0.5))
+      ->capture_default_str();
   cmd->callback([o] { run_diagnose(*o); });
 }
 

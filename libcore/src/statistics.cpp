@@ -1,9 +1,18 @@
 #include "ctk/core/statistics.hpp"
 
 #include <Eigen/Dense>
+#include <boost/math/distributions/students_t.hpp>
 #include <limits>
+#include <stdexcept>
 
 namespace ctk {
+
+double one_sided_threshold(double level, std::size_t pairs) {
+  if (!(level > 0 && level < 1) || pairs < 2)
+    throw std::invalid_argument("one_sided_threshold: expected 0 < level < 1 and at least two pairs");
+  const boost::math::students_t t(static_cast<double>(pairs - 1));
+  return boost::math::quantile(boost::math::complement(t, level));
+}
 
 double parabola_vertex(const std::vector<double>& x, const std::vector<double>& y) {
   const double x0 = x[x.size() / 2];  // centred, for conditioning

@@ -7,17 +7,20 @@
 // halves; the effect is fitted on one half and judged on the other, where each view's pose is
 // refitted with the model fixed and its cost (image chi-square plus robot prior) is compared
 // with the cost under the model without the effect. The effect is accepted when the mean
-// per-view improvement exceeds `z_accept` (3) standard errors of those paired differences: a
-// one-sided test at p ~ 0.001, so chance alone accepts an effect about once in a thousand.
-// Effects are added one at a time, the best first; candidates whose held-out cost is within the
-// same 3 standard errors of the best explain the same residual and are listed in
+// per-view improvement, in standard errors of those paired differences, passes a threshold that
+// holds the scan's false-acceptance rate at `false_acceptance_rate` over every effect of every
+// round (round r spends rate / 2^r, shared by its candidates: a Bonferroni bound, Student's t
+// quantile), and when the effect's fit on all views does not raise the in-sample cost of the
+// model it extends (a model with more freedom that fits worse has not been fitted as a superset).
+// Effects are added one at a time, the best first; candidates whose held-out cost is within
+// `z_accept` standard errors of the best explain the same residual and are listed in
 // `confounded_with`; among them the one earliest in kEffects is reported (robot frames before
 // detector parameters: the robot's base is never where the setup says, the detector is measured
 // separately). The others stay candidates: one that still explains what the chosen one leaves
 // (the two differ at second order and the data are precise enough) is accepted beside it.
 // Loads outside the vocabulary (kOutsideEffects: a holder sagging under gravity) compete on the
-// same terms; one that explains the residual significantly better than every named effect enters
-// the model, is never accepted, and is reported as unexplained structure.
+// same terms; one that explains the residual better than every named effect by more than
+// `z_accept` enters the model, is never accepted, and is reported as unexplained structure.
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -31,6 +34,10 @@
 namespace ctk {
 
 struct DiagnosisOptions {
+  /// Probability that chance alone accepts any effect in a scan that has none (family-wise).
+  double false_acceptance_rate = 0.01;
+  /// Held-out cost differences within this many standard errors: the data do not tell two
+  /// candidates apart (confounding), nor a load outside the vocabulary from a named effect.
   double z_accept = 3.0;
   double robot_sigma_mm = 0.1;  // repeatability the robot prior assumes (3-D RMS)
   double robot_sigma_deg = 0.02;
@@ -54,17 +61,20 @@ struct ModelError {
 struct EffectFinding {
   Effect effect;
   bool accepted = false;
-  double z = 0;                   // held-out improvement in standard errors
-  EffectParameters parameters;    // the final model (all views, every accepted effect and load)
-  EffectParameters model_before;  // the model it was tested against
-  EffectParameters model_after;   // the model right after it entered (its before/after figures)
-  Eigen::MatrixXd covariance;     // of this effect's parameters in the final model (may be empty)
+  double z = 0;                        // held-out improvement in standard errors
+  double threshold_z = 0;              // what z had to pass in its round (false_acceptance_rate spent there)
+  bool raised_in_sample_cost = false;  // its fit on all views was worse than the model it extends
+  EffectParameters parameters;         // the final model (all views, every accepted effect and load)
+  EffectParameters model_before;       // the model it was tested against
+  EffectParameters model_after;        // the model right after it entered (its before/after figures)
+  Eigen::MatrixXd covariance;          // of this effect's parameters in the final model (may be empty)
   std::vector<Effect> confounded_with;
   ModelError before, after;
 };
 
 struct Diagnosis {
   int views_ok = 0;
+  double false_acceptance_rate = 0;  // the family-wise rate the acceptance held (DiagnosisOptions)
   ModelError baseline, final_error;
   std::vector<EffectFinding> effects;  // every candidate, accepted ones first in order of acceptance
   EffectParameters model;              // all accepted effects and the loads outside the vocabulary

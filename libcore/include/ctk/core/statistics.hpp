@@ -42,6 +42,12 @@ inline double paired_z(const std::vector<double>& before, const std::vector<doub
   return mean > 0 ? 1e9 : mean < 0 ? -1e9 : 0.0;
 }
 
+/// The value a paired z-score over `pairs` pairs (paired_z) exceeds by chance with probability
+/// `level` when the true mean difference is zero: the one-sided quantile of Student's t with
+/// pairs - 1 degrees of freedom (the z-score is that t statistic). std::invalid_argument unless
+/// 0 < level < 1 and pairs >= 2.
+double one_sided_threshold(double level, std::size_t pairs);
+
 /// Vertex of the least-squares parabola through (x_i, y_i) (three or more points); NaN when it
 /// opens downwards or is flat.
 double parabola_vertex(const std::vector<double>& x, const std::vector<double>& y);
