@@ -18,7 +18,8 @@ install(EXPORT ctkTargets NAMESPACE ctk:: DESTINATION ${ctk_cmake_dir})
 configure_package_config_file(${CMAKE_SOURCE_DIR}/cmake/ctkConfig.cmake.in ${CMAKE_BINARY_DIR}/ctkConfig.cmake
                               INSTALL_DESTINATION ${ctk_cmake_dir})
 write_basic_package_version_file(${CMAKE_BINARY_DIR}/ctkConfigVersion.cmake COMPATIBILITY SameMinorVersion)
-install(FILES ${CMAKE_BINARY_DIR}/ctkConfig.cmake ${CMAKE_BINARY_DIR}/ctkConfigVersion.cmake DESTINATION ${ctk_cmake_dir})
+install(FILES ${CMAKE_BINARY_DIR}/ctkConfig.cmake ${CMAKE_BINARY_DIR}/ctkConfigVersion.cmake
+              ${CMAKE_SOURCE_DIR}/cmake/opencv_modules.cmake DESTINATION ${ctk_cmake_dir})
 
 # The Debian package: everything installed, the run-time libraries it needs found by dpkg-shlibdeps.
 set(CPACK_GENERATOR DEB)

@@ -6,6 +6,7 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+__build__: str
 
 class InputError(ValueError):
     file: str

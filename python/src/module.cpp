@@ -2,6 +2,7 @@
 // it and adds what is Python's own (the scipy adapter, result classes).
 #include <pybind11/pybind11.h>
 
+#include <cctype>
 #include <string>
 
 #include "bindings.hpp"
@@ -12,7 +13,14 @@ namespace py = pybind11;
 
 PYBIND11_MODULE(_ctk, m) {
   m.doc() = "ctk: calibration and reconstruction of cone-beam CT along arbitrary trajectories";
-  m.attr("__version__") = CTK_VERSION;
+  // PEP 440: the release, and the commit as a local label ("0.4.0+2b02db5.dirty"), as `ctk --version`
+  // names it; __build__ is that line verbatim.
+  const std::string build = ctk::build_version();
+  std::string commit;
+  if (const auto open = build.find('('), close = build.rfind(')'); open != std::string::npos && close > open)
+    for (const char c : build.substr(open + 1, close - open - 1)) commit += std::isalnum(static_cast<unsigned char>(c)) ? c : '.';
+  m.attr("__version__") = commit.empty() ? std::string(CTK_VERSION) : std::string(CTK_VERSION) + "+" + commit;
+  m.attr("__build__") = build;
   // Files written from Python record the script that wrote them.
   std::string invocation = "python";
   // Appended piecewise: `" " + std::string` trips GCC 12's -Wrestrict false positive (GCC PR 105329).

@@ -25,4 +25,19 @@ touch "$work/dpkg/status" "$work/dpkg/available"
 dpkg --instdir="$work/root" --admindir="$work/dpkg" --log=/dev/null --force-depends --force-not-root --force-script-chrootless \
   -i "$deb" > "$work/dpkg.log" 2>&1
 "$work/root/usr/bin/ctk" --version
+# The Python module where Debian's python3 looks without PYTHONPATH: under /usr (the package) in
+# lib/python3/dist-packages, under the default prefix /usr/local in lib/python3.X/dist-packages.
+python=/usr/bin/python3
+if [ -x "$python" ] && ls "$build"/python/ctk/_ctk*.so > /dev/null 2>&1; then
+  site=$("$python" -c 'import sys; print("/usr/local/lib/python%d.%d/dist-packages" % sys.version_info[:2])')
+  "$python" -c "import sys; sys.exit(0 if '$site' in sys.path and '/usr/lib/python3/dist-packages' in sys.path else 1)" ||
+    { echo "FAIL: $site or /usr/lib/python3/dist-packages is not on $python's default path"; exit 1; }
+  ls "$work"/root/usr/lib/python3/dist-packages/ctk/_ctk*.so > /dev/null ||
+    { echo "FAIL: the package does not put the module in /usr/lib/python3/dist-packages"; exit 1; }
+  DESTDIR="$work/stage" cmake --install "$build" --prefix /usr/local > "$work/install-local.log"
+  ls "$work/stage$site"/ctk/_ctk*.so > /dev/null ||
+    { echo "FAIL: cmake --install --prefix /usr/local does not put the module in $site"; exit 1; }
+  # Imported from there (the staged copy standing for the installed one) it is the build's module.
+  PYTHONPATH="$work/stage$site" "$python" -c "import ctk, sys; assert ctk.__file__.startswith('$work/stage'), ctk.__file__; print('python module: ' + ctk.__version__)"
+fi
 echo "installed: 1 passed, 0 failed"
