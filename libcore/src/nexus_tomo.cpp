@@ -3,6 +3,7 @@
 #include "ctk/core/nexus_tomo.hpp"
 
 #include <array>
+#include <optional>
 #include <cmath>
 #include <utility>
 
@@ -17,48 +18,80 @@ using hdf5::Handle;
 
 namespace {
 
-bool exists(hid_t location, const std::string& path) {
-  // H5Lexists checks one link at a time: every parent must exist before a child is asked for.
+enum class LinkKind { missing, inside, outside };
+
+// Whether `path` names an object, and whether reaching it leaves the file: H5Lexists checks one
+// link at a time, so every parent is asked for before its child; an external link on the way
+// leads to another file (which may be a FIFO, or any file the reading user may read).
+LinkKind find_link(hid_t location, const std::string& path) {
   std::size_t from = path.front() == '/' ? 1 : 0;
   while (true) {
     const std::size_t slash = path.find('/', from);
     const std::string prefix = path.substr(0, slash);
-    if (H5Lexists(location, prefix.c_str(), H5P_DEFAULT) <= 0) return false;
-    if (slash == std::string::npos) return true;
+    if (H5Lexists(location, prefix.c_str(), H5P_DEFAULT) <= 0) return LinkKind::missing;
+    H5L_info_t info{};
+    if (H5Lget_info(location, prefix.c_str(), &info, H5P_DEFAULT) < 0 || info.type == H5L_TYPE_EXTERNAL ||
+        info.type >= H5L_TYPE_UD_MIN)
+      return LinkKind::outside;
+    if (slash == std::string::npos) return LinkKind::inside;
     from = slash + 1;
   }
 }
 
-// A string attribute or dataset (fixed or variable length), or "" when it is not a string.
-std::string read_string(hid_t object, bool attribute) {
+// What makes a dataset's values come from outside the file ("" when nothing does): external
+// storage (raw data in other files) or a virtual dataset (views of other datasets, in other files
+// or missing, then read as zeros).
+std::string outside_storage(hid_t dataset) {
+  const Handle plist(H5Dget_create_plist(dataset), H5Pclose);
+  if (!plist.valid()) return "its storage cannot be read";
+  if (H5Pget_external_count(plist.get()) > 0) return "its values are stored in other files (external storage)";
+  if (H5Pget_layout(plist.get()) == H5D_VIRTUAL) return "it is a virtual dataset (its values come from other datasets)";
+  return {};
+}
+
+// A string attribute or dataset, as any writer stores one (h5py's `str`: variable length, UTF-8;
+// numpy's bytes: fixed length, null-padded, exactly as long as the text; C: null-terminated;
+// Fortran: space-padded), or nothing when it is not one string. The memory type takes the file's
+// character set (HDF5 converts no string between ASCII and UTF-8, so a UTF-8 `definition` read as
+// ASCII was "no NXtomo entry") and one byte more than the file's size (a null-padded "mm" read
+// into two null-terminated bytes lost its last character: a unit of "m").
+std::optional<std::string> read_string(hid_t object, bool attribute) {
   const Handle type(attribute ? H5Aget_type(object) : H5Dget_type(object), H5Tclose);
-  if (!type.valid() || H5Tget_class(type.get()) != H5T_STRING) return {};
+  if (!type.valid() || H5Tget_class(type.get()) != H5T_STRING) return std::nullopt;
   const Handle space(attribute ? H5Aget_space(object) : H5Dget_space(object), H5Sclose);
-  if (H5Sget_simple_extent_npoints(space.get()) != 1) return {};
+  if (H5Sget_simple_extent_npoints(space.get()) != 1) return std::nullopt;
+  const Handle memory(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_cset(memory.get(), H5Tget_cset(type.get()));
+  auto read = [&](void* buffer) {
+    return attribute ? H5Aread(object, memory.get(), buffer)
+                     : H5Dread(object, memory.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer);
+  };
+  std::string s;
   if (H5Tis_variable_str(type.get()) > 0) {
     char* value = nullptr;
-    const Handle memory(H5Tcopy(H5T_C_S1), H5Tclose);
     H5Tset_size(memory.get(), H5T_VARIABLE);
-    const herr_t read =
-        attribute ? H5Aread(object, memory.get(), &value) : H5Dread(object, memory.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &value);
-    std::string s = read >= 0 && value ? std::string(value) : std::string();
+    const herr_t status = read(&value);
+    if (status >= 0 && value) s = value;
     if (value) H5free_memory(value);
-    return s;
+    if (status < 0) return std::nullopt;
+  } else {
+    const std::size_t size = H5Tget_size(type.get());
+    std::string buffer(size + 1, '\0');
+    H5Tset_size(memory.get(), size + 1);
+    H5Tset_strpad(memory.get(), H5T_STR_NULLTERM);
+    if (read(buffer.data()) < 0) return std::nullopt;
+    s = buffer.substr(0, buffer.find('\0'));
   }
-  std::string s(H5Tget_size(type.get()), '\0');
-  const Handle memory(H5Tcopy(H5T_C_S1), H5Tclose);
-  H5Tset_size(memory.get(), s.size());
-  const herr_t read = attribute ? H5Aread(object, memory.get(), s.data())
-                                : H5Dread(object, memory.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, s.data());
-  if (read < 0) return {};
-  s.resize(s.find('\0') == std::string::npos ? s.size() : s.find('\0'));
+  // Fortran's space padding, and the odd writer's trailing blank.
+  s.erase(s.find_last_not_of(" \t\r\n") + 1);
   return s;
 }
 
-std::string string_attribute(hid_t object, const char* name) {
-  if (H5Aexists(object, name) <= 0) return {};
+// An attribute's text: "" when there is none; nothing when it is there but not one string.
+std::optional<std::string> string_attribute(hid_t object, const char* name) {
+  if (H5Aexists(object, name) <= 0) return std::string();
   const Handle a(H5Aopen(object, name, H5P_DEFAULT), H5Aclose);
-  return a.valid() ? read_string(a.get(), true) : std::string();
+  return a.valid() ? read_string(a.get(), true) : std::nullopt;
 }
 
 class Reader {
@@ -75,20 +108,31 @@ class Reader {
   Reader& operator=(const Reader&) = delete;
 
   hid_t file() const { return h5_; }
-  bool has(const std::string& path) const { return exists(h5_, path); }
+  /// Whether `path` is in the file; refused when it, or a group on the way, is a link to another file.
+  bool has(const std::string& path) const {
+    const LinkKind kind = find_link(h5_, path);
+    if (kind == LinkKind::outside)
+      fail(path, "is, or lies behind, a link to another file; ctk reads an NXtomo file whole, without the files it links to");
+    return kind == LinkKind::inside;
+  }
+  /// The dataset at `path`, refused unless its values are in this file.
+  Handle dataset(const std::string& path) const {
+    Handle d(H5Dopen2(h5_, path.c_str(), H5P_DEFAULT), H5Dclose);
+    if (!d.valid()) fail(path, "cannot be opened");
+    if (const std::string why = outside_storage(d.get()); !why.empty())
+      fail(path, why + "; ctk reads an NXtomo file whole, without the files it refers to");
+    return d;
+  }
   [[noreturn]] void fail(const std::string& path, const std::string& what) const {
     throw InputError(file_.string(), "dataset '" + path + "'", what);
   }
 
-  std::string string(const std::string& path) const {
-    const Handle d(H5Dopen2(h5_, path.c_str(), H5P_DEFAULT), H5Dclose);
-    return d.valid() ? read_string(d.get(), false) : std::string();
-  }
+  /// A string dataset's text; nothing when it is not one string.
+  std::optional<std::string> string(const std::string& path) const { return read_string(dataset(path).get(), false); }
 
   // A one-dimensional numeric dataset (a scalar counts as one value) and its `units` attribute.
   std::vector<double> numbers(const std::string& path, std::string* units = nullptr) const {
-    const Handle d(H5Dopen2(h5_, path.c_str(), H5P_DEFAULT), H5Dclose);
-    if (!d.valid()) fail(path, "cannot be opened");
+    const Handle d = dataset(path);
     const Handle type(H5Dget_type(d.get()), H5Tclose);
     const H5T_class_t c = H5Tget_class(type.get());
     if (c != H5T_INTEGER && c != H5T_FLOAT) fail(path, "expected numbers");
@@ -99,7 +143,13 @@ class Reader {
       fail(path, "cannot read its values");
     for (double x : v)
       if (!std::isfinite(x)) fail(path, "holds a value that is not finite");
-    if (units) *units = string_attribute(d.get(), "units");
+    if (units) {
+      const std::optional<std::string> text = string_attribute(d.get(), "units");
+      if (!text)
+        throw InputError(file_.string(), "attribute 'units' of dataset '" + path + "'",
+                         "expected one string (a unit such as mm)");
+      *units = *text;
+    }
     return v;
   }
 
@@ -138,10 +188,17 @@ std::vector<std::string> member_names(hid_t group) {
 
 // The first group at the root whose `definition` says NXtomo.
 std::string find_entry(const Reader& r, const fs::path& file) {
+  std::string unreadable;  // a definition that is not one string: named if no entry is found
   for (const std::string& name : member_names(r.file())) {
     const std::string definition = "/" + name + "/definition";
-    if (r.has(definition) && r.string(definition) == "NXtomo") return "/" + name;
+    if (!r.has(definition)) continue;
+    const std::optional<std::string> text = r.string(definition);
+    if (text == "NXtomo") return "/" + name;
+    if (!text && unreadable.empty()) unreadable = definition;
   }
+  if (!unreadable.empty())
+    throw InputError(file.string(), "dataset '" + unreadable + "'",
+                     "expected one string (NXtomo's entry says definition 'NXtomo'); no other group at the root says it");
   throw InputError(file.string(), "", "no group at the root has definition 'NXtomo' (name one with --entry)");
 }
 
@@ -167,7 +224,8 @@ std::string find_source(const Reader& r, const std::string& instrument) {
       H5O_info_t object{};
       if (H5Oget_info_by_name(group.get(), name.c_str(), &object, H5P_DEFAULT) < 0 || object.type != H5O_TYPE_GROUP) continue;
       const Handle child(H5Gopen2(group.get(), name.c_str(), H5P_DEFAULT), H5Gclose);
-      if (child.valid() && string_attribute(child.get(), "NX_class") == "NXsource") return instrument + "/" += name;
+      if (child.valid() && string_attribute(child.get(), "NX_class") == std::optional<std::string>("NXsource"))
+        return instrument + "/" += name;
     }
   return instrument + "/source";
 }
@@ -191,7 +249,7 @@ NxTomo read_nxtomo(const fs::path& file, const std::string& entry_name) {
   scan.data_path = r.has(detector + "/data") ? detector + "/data" : scan.entry + "/data/data";
   if (!r.has(scan.data_path)) r.fail(detector + "/data", "missing: NXtomo keeps its frames there");
   {
-    const Handle d(H5Dopen2(r.file(), scan.data_path.c_str(), H5P_DEFAULT), H5Dclose);
+    const Handle d = r.dataset(scan.data_path);
     const Handle space(H5Dget_space(d.get()), H5Sclose);
     const Handle type(H5Dget_type(d.get()), H5Tclose);
     if (!d.valid() || H5Sget_simple_extent_ndims(space.get()) != 3)
@@ -203,6 +261,30 @@ NxTomo read_nxtomo(const fs::path& file, const std::string& entry_name) {
     H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
     for (hsize_t n : dims)
       if (n == 0 || n > (1u << 30)) r.fail(scan.data_path, "has an empty or implausibly large dimension");
+    // A small file may declare any size; what it stores bounds what it can hold, before a frame
+    // is allocated or written (a 15 KB file declaring 200,000 frames).
+    const Handle plist(H5Dget_create_plist(d.get()), H5Pclose);
+    const hsize_t stored = H5Dget_storage_size(d.get());
+    const auto declared = static_cast<double>(dims[0]) * static_cast<double>(dims[1]) * static_cast<double>(dims[2]) *
+                          static_cast<double>(H5Tget_size(type.get()));
+    if (stored == 0) r.fail(scan.data_path, "stores no values (declared, never written)");
+    if (H5Pget_layout(plist.get()) == H5D_CHUNKED) {
+      // Chunks never written read as the fill value: frames nobody measured.
+      std::array<hsize_t, 3> chunk{};
+      hsize_t allocated = 0;
+      if (H5Pget_chunk(plist.get(), 3, chunk.data()) == 3 && H5Dget_num_chunks(d.get(), space.get(), &allocated) >= 0) {
+        double total = 1;
+        for (std::size_t a = 0; a < 3; ++a)
+          total *= std::ceil(static_cast<double>(dims[a]) / static_cast<double>(std::max<hsize_t>(chunk[a], 1)));
+        if (static_cast<double>(allocated) < total)
+          r.fail(scan.data_path, "stores " + std::to_string(allocated) + " of its " +
+                                     std::to_string(static_cast<long long>(total)) +
+                                     " chunks; the rest were declared and never written");
+      }
+    }
+    if (H5Pget_layout(plist.get()) == H5D_CONTIGUOUS && static_cast<double>(stored) < declared)
+      r.fail(scan.data_path, "declares " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
+                                 std::to_string(dims[2]) + " values but stores " + std::to_string(stored) + " bytes");
     scan.frames = static_cast<int>(dims[0]);
     scan.rows = static_cast<int>(dims[1]);
     scan.cols = static_cast<int>(dims[2]);
