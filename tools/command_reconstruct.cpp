@@ -64,6 +64,10 @@ ReconstructionOptions library_options(const ReconstructOptions& o) {
   r.preconditioner = cg_preconditioner_from_string(o.preconditioner);
   r.statistical_weights = !o.unweighted;
   r.undistort = !o.as_measured;
+  if (o.size.size() == 2)
+    throw InputError("--size", "",
+                     "expected one value (a cube of n voxels) or three (nx ny nz), got two: " + std::to_string(o.size[0]) + " " +
+                         std::to_string(o.size[1]));
   for (std::size_t a = 0; a < 3 && !o.size.empty(); ++a) r.size[a] = o.size[std::min(a, o.size.size() - 1)];
   r.voxel_mm = o.voxel_mm;
   r.decomposition = decomposition_from_string(o.decomposition);

@@ -3,6 +3,7 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "ctk/core/error.hpp"
 #include "ctk/core/output_set.hpp"
 
 namespace ctk {
@@ -10,6 +11,12 @@ namespace ctk {
 namespace fs = std::filesystem;
 
 void write_path_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  // The rename below would put a regular file where a device, a FIFO or a folder was.
+  std::error_code ec;
+  const fs::file_type existing = fs::status(path, ec).type();
+  if (!ec && existing != fs::file_type::not_found && existing != fs::file_type::regular)
+    throw InputError(path.string(), "",
+                     "exists and is not a regular file; an output replaces a file whole, so it names only files");
   if (path.has_parent_path()) fs::create_directories(path.parent_path());
   const fs::path tmp = temporary_beside(path);
   try {

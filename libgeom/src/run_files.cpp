@@ -1,12 +1,18 @@
 #include "ctk/geom/run_files.hpp"
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <map>
 #include <set>
 #include <utility>
 
 #include "ctk/core/error.hpp"
+#include "ctk/core/output_set.hpp"
 #include "ctk/geom/scan.hpp"
 
 namespace ctk {
@@ -43,6 +49,52 @@ bool starts_and_ends(const std::string& s, const std::string& prefix, const std:
 }
 
 std::string named(const std::string& what, const fs::path& p) { return what + " (" + p.string() + ")"; }
+
+// What an existing path is when it is not what an output may replace ("" when it may): outputs are
+// written beside and renamed into place, which would put a regular file where a device, a FIFO or a
+// socket was (`--out /dev/null` run as root replaced the machine's null device).
+std::string not_replaceable(const fs::path& p, bool folder) {
+  std::error_code ec;
+  const fs::file_status s = fs::status(p, ec);  // through symbolic links: what the name leads to
+  if (ec || s.type() == fs::file_type::not_found) return {};
+  if (folder) return s.type() == fs::file_type::directory ? std::string() : std::string("not a folder");
+  switch (s.type()) {
+    case fs::file_type::regular:
+      return {};
+    case fs::file_type::directory:
+      return "a folder";
+    case fs::file_type::character:
+    case fs::file_type::block:
+      return "a device";
+    case fs::file_type::fifo:
+      return "a FIFO";
+    case fs::file_type::socket:
+      return "a socket";
+    default:
+      return "not a regular file";
+  }
+}
+
+// The folder an output goes into, or the nearest of its parents that exists, must take new files:
+// a run that can only write its results after an hour's solve is told before it starts. Asked by
+// creating (and removing) a file there: permission bits do not tell root about a read-only mount,
+// nor anyone about a file system such as /proc.
+std::string not_writable(const fs::path& place) {
+  fs::path folder = place.parent_path();
+  std::error_code ec;
+  while (!folder.empty() && !fs::exists(folder, ec)) {
+    if (folder == folder.parent_path()) break;
+    folder = folder.parent_path();
+  }
+  if (folder.empty()) folder = ".";
+  if (!fs::is_directory(folder, ec)) return folder.string() + " is not a folder";
+  const fs::path probe = temporary_beside(folder / ".ctk-probe");
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) return "the folder " + folder.string() + " does not take new files (" + std::strerror(errno) + ")";
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return {};
+}
 
 }  // namespace
 
@@ -91,6 +143,11 @@ void RunFiles::check() const {
   }
   std::map<fs::path, const Entry*> written;
   for (const Entry& out : outputs_) {
+    if (const std::string kind = not_replaceable(out.path, false); !kind.empty())
+      throw InputError(out.path.string(), out.what,
+                       "is " + kind + ", not a regular file; ctk replaces its outputs whole, so it names only files");
+    if (const std::string why = not_writable(out.place); !why.empty())
+      throw InputError(out.path.string(), out.what, "cannot be written: " + why);
     if (const auto it = by_place.find(out.place); it != by_place.end())
       refuse(out, "the input " + named(it->second->what, it->second->path));
     bool exists = false;
@@ -104,6 +161,10 @@ void RunFiles::check() const {
       refuse(out, "the output " + named(it->second->what, it->second->path) + " of the same run");
   }
   for (const Entry& folder : output_folders_) {
+    if (const std::string kind = not_replaceable(folder.path, true); !kind.empty())
+      throw InputError(folder.path.string(), folder.what, "is " + kind + "; the run writes its files into a folder there");
+    if (const std::string why = not_writable(folder.place / "."); !why.empty())
+      throw InputError(folder.path.string(), folder.what, "cannot be written: " + why);
     for (const Entry& in : inputs_)
       if (inside(in.place, folder.place)) refuse(folder, "the input " + named(in.what, in.path) + ", which lies in it");
     for (const Entry& in : input_folders_)

@@ -50,8 +50,28 @@ expect "import --out onto --flat" "would overwrite the input --flat" \
   --detector 48 48 --pitch 9 --sod 1360 --sdd 2150 --step 90
 expect "simulate into the folder of its --poses" "would overwrite the input poses" \
   "$ctk" simulate --out s --poses s/truth-geometry.json --cols 48 --rows 48 --pitch 9
+# An output that names a device, a FIFO or a folder is refused before any work, never replaced
+# by a regular file (a private null device: `--out /dev/null` run as root replaced the machine's).
+mknod null-device c 1 3 2>/dev/null && {
+  expect "geometry --out onto a device" "is a device, not a regular file" "$ctk" geometry --scan s/scan.json --out null-device
+  [ -c null-device ] || { echo "FAIL: the device was replaced"; failures=$((failures + 1)); }
+}
+mkfifo fifo
+expect "geometry --astra onto a FIFO" "is a FIFO, not a regular file" "$ctk" geometry --scan s/scan.json --out f.json --astra fifo
+[ -p fifo ] || { echo "FAIL: the FIFO was replaced"; failures=$((failures + 1)); }
+mkdir a-folder.h5
+expect "reconstruct --out onto a folder" "is a folder, not a regular file" \
+  "$ctk" reconstruct --scan s/scan.json --geometry s/truth-geometry.json --out a-folder.h5 --iterations 1
+# An output folder that cannot take files is found before the solve, not after it.
+mkdir locked && chmod 555 locked
+if ! touch locked/probe 2>/dev/null; then  # root writes anywhere but on a read-only file system
+  expect "reconstruct --out in a folder that takes no files" "cannot be written" \
+    "$ctk" reconstruct --scan s/scan.json --geometry s/truth-geometry.json --out locked/v.nrrd --iterations 1
+fi
+expect "reconstruct --out on a read-only file system" "cannot be written" \
+  "$ctk" reconstruct --scan s/scan.json --geometry s/truth-geometry.json --out /proc/v.nrrd --iterations 1
 after=$(cat s/*.json s/*.csv s/*.tif s/projections/* | md5sum)
 [ "$before" = "$after" ] || { echo "FAIL: an input changed"; failures=$((failures + 1)); }
-ls ./*.nrrd ./*.raw s/*.nrrd s/*.raw g.json d.json both.json 2>/dev/null | grep . && { echo "FAIL: an output was written"; failures=$((failures + 1)); }
+ls ./*.nrrd ./*.raw s/*.nrrd s/*.raw g.json d.json both.json f.json 2>/dev/null | grep . && { echo "FAIL: an output was written"; failures=$((failures + 1)); }
 echo "$failures failed"
 [ "$failures" -eq 0 ]
