@@ -25,10 +25,12 @@ inline bool line_integral(float counts, float flat, float dark, float& p, float*
   const float open = flat - dark, detected = counts - dark;
   const float relative = std::max(detected, kMinCounts) / open;
   float t = open > 0 ? relative : kMaxTransmission;
-  // A NaN count is not clamped: mask_non_finite counts it, once.
-  const bool clamped = !std::isnan(counts) && (open <= 0 || detected < kMinCounts || t > kMaxTransmission);
+  // A count that is not finite (NaN, +Inf, -Inf) is not clamped: its line integral is NaN, which
+  // mask_non_finite masks and counts, once (a +Inf count clamped to the flat gave weight +Inf).
+  const bool finite = std::isfinite(counts);
+  const bool clamped = finite && (open <= 0 || detected < kMinCounts || t > kMaxTransmission);
   if (clamped) t = std::clamp(t, kMinCounts / std::max(open, 1.0f), kMaxTransmission);
-  p = std::isnan(counts) ? counts : -std::log(t);  // a NaN count stays NaN: mask_non_finite takes it
+  p = finite ? -std::log(t) : std::numeric_limits<float>::quiet_NaN();
   if (w) *w = open > 0 ? relative : 0.0f;
   return clamped;
 }
@@ -44,7 +46,7 @@ std::size_t LineIntegrals(const float* counts, const float* flat, const float* d
   const hn::ScalableTag<float> d;
   const std::size_t N = hn::Lanes(d);
   const auto zero = hn::Zero(d), one = hn::Set(d, 1.0f), min_counts = hn::Set(d, kMinCounts),
-             max_t = hn::Set(d, kMaxTransmission);
+             max_t = hn::Set(d, kMaxTransmission), nan_value = hn::Set(d, std::numeric_limits<float>::quiet_NaN());
   std::size_t clamped = 0, i = 0;
   for (; i + N <= n; i += N) {
     const auto c = hn::LoadU(d, counts + i), dk = hn::LoadU(d, dark + i);
@@ -52,12 +54,12 @@ std::size_t LineIntegrals(const float* counts, const float* flat, const float* d
     const auto relative = hn::Div(hn::Max(detected, min_counts), open);
     const auto lit = hn::Gt(open, zero);
     auto t = hn::IfThenElse(lit, relative, max_t);
-    const auto nan = hn::IsNaN(c);  // not Ne(c, c): an ordered comparison, false for NaN on AVX-512
-    const auto bad = hn::AndNot(nan, hn::Or(hn::Not(lit), hn::Or(hn::Lt(detected, min_counts), hn::Gt(t, max_t))));
+    const auto unusable = hn::Not(hn::IsFinite(c));  // NaN or infinite: NaN out, masked later
+    const auto bad = hn::AndNot(unusable, hn::Or(hn::Not(lit), hn::Or(hn::Lt(detected, min_counts), hn::Gt(t, max_t))));
     clamped += hn::CountTrue(d, bad);
     const auto low = hn::Div(min_counts, hn::Max(open, one));
     t = hn::IfThenElse(bad, hn::Min(hn::Max(t, low), max_t), t);
-    hn::StoreU(hn::IfThenElse(nan, c, hn::Neg(hn::Log(d, t))), d, p + i);
+    hn::StoreU(hn::IfThenElse(unusable, nan_value, hn::Neg(hn::Log(d, t))), d, p + i);
     if (w) hn::StoreU(hn::IfThenElseZero(lit, relative), d, w + i);
   }
   for (; i < n; ++i) clamped += line_integral(counts[i], flat[i], dark[i], p[i], w ? w + i : nullptr);

@@ -88,6 +88,26 @@ TEST(Measurements, CountsGiveLineIntegralsNearTheTruthAndWeights) {
   EXPECT_EQ(m.clamped_pixels, 0u);
 }
 
+// One infinite count (a saturated or overflowed pixel written as +Inf) is masked and counted like a
+// NaN: its weight is zero and every weight finite (weight +Inf gave an all-zero WLS-CG volume).
+TEST(Measurements, AnInfiniteCountIsMaskedAndCounted) {
+  const auto dir = testing::scratch_dir();
+  ScanSimulation sim = tiny_scan(SimulatedOutput::counts);
+  sim.counts = {60000, 100};
+  simulate_scan(sim, dir);
+  const ScanDescription scan = read_scan(dir / "scan.json");
+  Image view = read_image(scan.projection_path(2));
+  const auto at = static_cast<std::size_t>(7 * view.cols + 9);
+  view.pixels[at] = std::numeric_limits<float>::infinity();
+  write_image_float(view, scan.projection_path(2));
+  const Measurements m = load_measurements(scan, read_geometry(dir / "truth-geometry.json"));
+  EXPECT_EQ(m.masked_pixels, 1u);
+  EXPECT_EQ(m.clamped_pixels, 0u);
+  EXPECT_EQ(m.weights.at(2, 7, 9), 0.0f);
+  for (std::size_t i = 0; i < m.weights.data.size(); ++i) ASSERT_TRUE(std::isfinite(m.weights.data[i])) << i;
+  for (std::size_t i = 0; i < m.line_integrals.data.size(); ++i) ASSERT_TRUE(std::isfinite(m.line_integrals.data[i])) << i;
+}
+
 // A binned counts scan: each binned pixel is the line integral of the counts its pixels collected
 // together, -log(sum(I - dark) / sum(flat - dark)), not the mean of their line integrals.
 TEST(Measurements, BinnedCountsAreSummedBeforeTheLogarithm) {
@@ -124,7 +144,9 @@ TEST(Measurements, BinnedCountsAreSummedBeforeTheLogarithm) {
 
 // The conversion runs as SIMD lanes and a scalar tail: every lane and the tail follow the
 // definition, -log(max(I - dark, 0.5) / (flat - dark)) with the transmission clamped to
-// (0.5 / open, 1.5] where implausible, weights the unclamped transmission, NaN counts kept NaN.
+// (0.5 / open, 1.5] where implausible, weights the unclamped transmission; a count that is not
+// finite (NaN, +Inf, -Inf) gives NaN, neither clamped nor weighted, for mask_non_finite to mask and
+// count (a +Inf count clamped to the flat had weight +Inf: an all-zero WLS-CG volume).
 TEST(Measurements, CountsToLineIntegralsFollowTheDefinitionInEveryLane) {
   const int n = 1003;  // not a multiple of any vector width
   Image counts{n, 1, std::vector<float>(n)}, flat{n, 1, std::vector<float>(n)}, dark{n, 1, std::vector<float>(n)};
@@ -134,10 +156,12 @@ TEST(Measurements, CountsToLineIntegralsFollowTheDefinitionInEveryLane) {
     const auto u = static_cast<std::size_t>(i);
     dark.pixels[u] = static_cast<float>(90 + next() % 20);
     flat.pixels[u] = static_cast<float>(i % 97 == 0 ? 50 + next() % 80 : 8000 + next() % 4000);  // some flats at or below dark
-    const std::uint32_t kind = next() % 10;
+    const std::uint32_t kind = next() % 12;
     counts.pixels[u] = kind == 0   ? dark.pixels[u] - 5                       // below dark
                        : kind == 1 ? flat.pixels[u] * 2                       // transmission above 1.5
                        : kind == 2 ? std::numeric_limits<float>::quiet_NaN()  // a dead pixel
+                       : kind == 3 ? std::numeric_limits<float>::infinity()   // an overflow
+                       : kind == 4 ? -std::numeric_limits<float>::infinity()
                                    : dark.pixels[u] + static_cast<float>(next() % 9000);
   }
   std::vector<float> p(n), w(n);
@@ -147,8 +171,8 @@ TEST(Measurements, CountsToLineIntegralsFollowTheDefinitionInEveryLane) {
   for (int i = 0; i < n; ++i) {
     const auto u = static_cast<std::size_t>(i);
     const double open = double(flat.pixels[u]) - dark.pixels[u], detected = double(counts.pixels[u]) - dark.pixels[u];
-    if (std::isnan(counts.pixels[u])) {
-      EXPECT_TRUE(std::isnan(p[u])) << i;
+    if (!std::isfinite(counts.pixels[u])) {
+      EXPECT_TRUE(std::isnan(p[u])) << i << ": count " << counts.pixels[u];
       continue;
     }
     double t = open > 0 ? std::max(detected, 0.5) / open : 1.5;
