@@ -66,7 +66,7 @@ std::vector<RtkProjection> rtk_views(const Geometry& g, RtkRows& rows) {
     if (first) rows = rtk_rows_for(*v.P);
     first = false;
     try {
-      out.push_back(to_rtk(*v.P, g.detector, rows));
+      out.push_back(to_rtk(holder_matrix_in_rtk_frame(*v.P), g.detector, rows));
     } catch (const std::invalid_argument& e) {
       throw InputError(g.source(), "views[" + std::to_string(v.index) + "].P", e.what());
     }
@@ -98,7 +98,7 @@ void run_geometry(const GeometryOptions& o) {
   RtkRows rows = RtkRows::flipped;
   if (!o.rtk.empty()) {
     rtk = rtk_views(g, rows);
-    write_rtk_geometry(rtk, rows, o.rtk);
+    write_rtk_geometry(rtk, rows, o.rtk, true);
   }
   outputs.publish();
   std::cout << origin << " written to " << o.out.string() << "\n";
@@ -108,7 +108,8 @@ void run_geometry(const GeometryOptions& o) {
     std::cout << "RTK geometry of the " << rtk.size() << " posed views written to " << o.rtk.string() << " (pixel map "
               << to_string(rows)
               << (rows == RtkRows::flipped ? ": give RTK the projections flipped vertically" : ": RTK reads the images as stored")
-              << ", origin at minus half their extent; docs/geometry.md)\n";
+              << ", origin at minus half their extent; the holder's axis on RTK's y: RTK (x, y, z) = holder (x, z, -y); "
+                 "docs/formats.md)\n";
   report(scan, g);
 }
 

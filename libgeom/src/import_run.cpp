@@ -300,10 +300,10 @@ ImportRun run_import(const RtkImportRequest& r) {
     throw InputError(r.geometry.string(), "", text(g.views.size(), " projections for ", projections.count, " files"));
   const RtkRows rows = r.rows.value_or(g.pixel_map());
   const Detector detector = described_detector(r, projections, request, r.pitch_mm.front(), r.pitch_mm.back(), notes);
-  std::vector<ProjectionMatrix> matrices;
-  for (const RtkProjection& v : g.views)
-    matrices.push_back(from_rtk(v, detector, rows));  // the reader refused what this cannot take
+  // The reader refused what from_rtk cannot take.
+  const std::vector<ProjectionMatrix> matrices = holder_matrices(g, detector, rows);
   notes.push_back(text("pixel map ", to_string(rows), !r.rows && g.rows ? " (named by the file)" : ""));
+  if (g.holder_z_on_rtk_y) notes.push_back("volume frame: written by ctk with the holder's z on RTK's y, turned back");
   return finish(import_matrices(detector, matrices, projections, r.out), r, request, std::move(notes),
                 r.name(request, "geometry"), r.geometry);
 }

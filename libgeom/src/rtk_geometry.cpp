@@ -41,6 +41,14 @@ Eigen::Matrix3d detector_mm_to_pixels(const Detector& d, RtkRows rows) {
 }
 
 constexpr const char* rows_comment = "ctk pixel map: ";
+constexpr const char* frame_comment = "ctk volume frame: RTK (x, y, z) = holder (x, z, -y)";
+
+// Holder coordinates of a point given in RTK's volume frame of a ctk export.
+Eigen::Matrix4d holder_from_rtk() {
+  Eigen::Matrix4d H = Eigen::Matrix4d::Identity();
+  H.block<3, 3>(0, 0) << 1, 0, 0, 0, 0, -1, 0, 1, 0;  // RTK x, y, z along holder x, z, -y
+  return H;
+}
 
 // Angles in [0, 360), as RTK stores them.
 double wrapped_degrees(double a) { return a - 360.0 * std::floor(a / 360.0); }
@@ -281,6 +289,7 @@ RtkGeometry read_rtk_geometry(const std::filesystem::path& file) {
         const std::string rest = text.substr(at + std::string(rows_comment).size());
         g.rows = rest.rfind("as-stored", 0) == 0 ? RtkRows::as_stored : RtkRows::flipped;
       }
+      if (text.find(frame_comment) != std::string::npos) g.holder_z_on_rtk_y = true;
     }
     if (e.type() != pugi::node_element) continue;
     if (strcasecmp(e.name(), "Projection") == 0)
@@ -292,7 +301,26 @@ RtkGeometry read_rtk_geometry(const std::filesystem::path& file) {
   return g;
 }
 
-void write_rtk_geometry(const std::vector<RtkProjection>& views, RtkRows rows, const std::filesystem::path& file) {
+ProjectionMatrix holder_matrix_in_rtk_frame(const ProjectionMatrix& P) {
+  return ProjectionMatrix(Matrix34d(P.matrix() * holder_from_rtk()));
+}
+
+ProjectionMatrix rtk_frame_matrix_in_holder(const ProjectionMatrix& P) {
+  return ProjectionMatrix(Matrix34d(P.matrix() * holder_from_rtk().inverse()));
+}
+
+std::vector<ProjectionMatrix> holder_matrices(const RtkGeometry& g, const Detector& detector, RtkRows rows) {
+  std::vector<ProjectionMatrix> out;
+  out.reserve(g.views.size());
+  for (const RtkProjection& v : g.views) {
+    const ProjectionMatrix P = from_rtk(v, detector, rows);
+    out.push_back(g.holder_z_on_rtk_y ? rtk_frame_matrix_in_holder(P) : P);
+  }
+  return out;
+}
+
+void write_rtk_geometry(const std::vector<RtkProjection>& views, RtkRows rows, const std::filesystem::path& file,
+                        bool holder_z_on_rtk_y) {
   if (views.empty()) throw std::invalid_argument("write_rtk_geometry: no views");
   write_file_atomically(file, [&](std::ostream& out) {
     out.imbue(std::locale::classic());
@@ -301,6 +329,8 @@ void write_rtk_geometry(const std::vector<RtkProjection>& views, RtkRows rows, c
     out << "  <!-- " << rows_comment << to_string(rows) << ": detector x = (u - (cols - 1) / 2) pitch_u, y = "
         << (rows == RtkRows::as_stored ? "(v - (rows - 1) / 2)" : "((rows - 1) / 2 - v)")
         << " pitch_v in mm, (u, v) = (column, row) of the stored images -->\n";
+    if (holder_z_on_rtk_y)
+      out << "  <!-- " << frame_comment << ": the holder's axis is RTK's y, about which rtkfdk reconstructs -->\n";
     // A parameter equal over all views is written once (and not at all where it is RTK's default 0).
     std::vector<const Parameter*> per_view;
     for (const Parameter& p : parameters) {

@@ -75,9 +75,7 @@ py::array_t<double> read_rtk(const fs::path& file, const std::array<int, 2>& det
   const Detector d = detector_from(detector_shape, pixel_mm);
   const RtkGeometry g = read_rtk_geometry(file);
   const RtkRows sense = rows.empty() ? g.pixel_map() : rows_from(rows);
-  std::vector<ProjectionMatrix> out;
-  for (const RtkProjection& v : g.views) out.push_back(from_rtk(v, d, sense));
-  return matrices_to_numpy(out);
+  return matrices_to_numpy(holder_matrices(g, d, sense));
 }
 
 py::object optional_mm(const std::optional<double>& v) { return v ? py::object(py::float_(*v)) : py::object(py::none()); }

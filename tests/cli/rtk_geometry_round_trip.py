@@ -53,6 +53,30 @@ def main():
     print(f"{len(truth)} views, largest difference {worst:.2e} px")
     if len(back) != len(truth) or worst > 1e-6:
         failures.append(f"{len(back)} views back of {len(truth)}, largest difference {worst} px")
+    # A joint-7 orbit turns the holder about its own z: exported, that axis is RTK's y, about which
+    # rtkfdk reconstructs, so every view has the same out-of-plane and in-plane angles and only the
+    # gantry angle turns, in equal steps through joint 7's 332 degrees.
+    orbit = work / "orbit"
+    r = run("simulate", "--out", orbit, "--trajectory", "circular", "--views", "8", "--cols", "96", "--rows", "80", "--pitch",
+            "4.5", "--phantom", "helix-holder", "--robot-noise-mm", "0", "--robot-noise-deg", "0")
+    r = r.returncode or run("geometry", "--scan", orbit / "scan.json", "--geometry", orbit / "truth-geometry.json", "--out",
+                            work / "orbit.json", "--rtk", work / "orbit.xml").returncode
+    if r:
+        failures.append("the orbit's export failed")
+    else:
+        import xml.etree.ElementTree as ET
+        root = ET.parse(work / "orbit.xml").getroot()
+        fixed = {e.tag: float(e.text) for e in root if e.tag != "Projection"}
+        per_view = [{e.tag: float(e.text) for e in proj if e.tag != "Matrix"} for proj in root.iter("Projection")]
+        angle = lambda tag: [v.get(tag, fixed.get(tag, 0.0)) for v in per_view]
+        gantry = sorted(angle("GantryAngle"))
+        steps = [b - a for a, b in zip(gantry, gantry[1:])]  # joint 7 turns through 332 degrees in equal steps
+        for tag in ("OutOfPlaneAngle", "InPlaneAngle"):
+            values = angle(tag)
+            if max(values) - min(values) > 1e-9 or (tag == "OutOfPlaneAngle" and abs(values[0]) > 1e-9):
+                failures.append(f"orbit exported with {tag} {values}: its axis is not RTK's y")
+        if max(steps) - min(steps) > 1e-6 or not 300 < sum(steps) < 360:
+            failures.append(f"orbit's gantry angles {gantry}: expected 7 equal steps through joint 7's range (about 332 degrees)")
     # A damaged file: named, exit 2, nothing written.
     damaged = work / "damaged.xml"
     damaged.write_text((work / "g.xml").read_text().replace("<GantryAngle>", "<GantryAngle>x", 1))

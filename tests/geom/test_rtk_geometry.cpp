@@ -154,9 +154,10 @@ TEST(RtkGeometry, ParametersBeforeTheProjectionsHoldForEach) {
                          "<Projection><GantryAngle>90</GantryAngle><ProjectionOffsetX>5</ProjectionOffsetX></Projection>\n"
                          "<Projection><GantryAngle>180</GantryAngle></Projection>\n"
                          "</RTKThreeDCircularGeometry>\n";
-  const auto [views, rows] = read_rtk_geometry(file);
+  const auto [views, rows, holder_z_on_rtk_y] = read_rtk_geometry(file);
   ASSERT_EQ(views.size(), 3u);
   EXPECT_FALSE(rows) << "a file not written by ctk names no pixel map";
+  EXPECT_FALSE(holder_z_on_rtk_y) << "nor a volume frame of ctk's: its matrices are read in their own frame";
   EXPECT_EQ(views[2].source_to_detector_mm, 1536);
   EXPECT_EQ(views[1].projection_offset_x_mm, 5);
   EXPECT_EQ(views[2].projection_offset_x_mm, 5) << "a value holds until set anew, as RTK reads it";

@@ -55,9 +55,20 @@ ProjectionMatrix from_rtk(const RtkProjection& p, const Detector& detector, RtkR
 /// saying which.
 RtkProjection to_rtk(const ProjectionMatrix& P, const Detector& detector, RtkRows rows);
 
+/// RTK's circular geometry turns about its volume's y axis (rtkfdk weights and filters for that
+/// axis), ctk's holder frame about z. Exports therefore put the holder's z on RTK's y: RTK (x, y, z)
+/// = holder (x, z, -y), a turn of 90 degrees about x; a volume RTK reconstructs from them is the
+/// holder's with y and z so exchanged. RTK's own files are read in their own frame.
+/// The matrix of P (holder frame) for a volume in RTK's frame of a ctk export, and back.
+ProjectionMatrix holder_matrix_in_rtk_frame(const ProjectionMatrix& P);
+ProjectionMatrix rtk_frame_matrix_in_holder(const ProjectionMatrix& P);
+
 struct RtkGeometry {
   std::vector<RtkProjection> views;
   std::optional<RtkRows> rows;  // the sense a file written by ctk names in its comment
+  /// Whether the file says it was written by ctk with the holder's z on RTK's y (its matrices then
+  /// map RTK's volume frame; rtk_frame_matrix_in_holder brings them back).
+  bool holder_z_on_rtk_y = false;
 
   /// The sense to read the views under: the one the file names, else as_stored (RTK indexing
   /// the images as stored, as its own tools write them).
@@ -71,7 +82,12 @@ RtkGeometry read_rtk_geometry(const std::filesystem::path& file);
 
 /// Writes version 3 atomically, as RTK writes it: parameters equal over all views once, the rest
 /// per projection, each projection with its matrix; 17 significant digits. A comment names the
-/// pixel map under `rows` (RTK ignores it; read_rtk_geometry reads it back).
-void write_rtk_geometry(const std::vector<RtkProjection>& views, RtkRows rows, const std::filesystem::path& file);
+/// pixel map under `rows`, and another the volume frame when `holder_z_on_rtk_y` (RTK ignores
+/// both; read_rtk_geometry reads them back).
+void write_rtk_geometry(const std::vector<RtkProjection>& views, RtkRows rows, const std::filesystem::path& file,
+                        bool holder_z_on_rtk_y = false);
+
+/// The matrices of a geometry file as ctk's holder frame sees them (a ctk export's frame undone).
+std::vector<ProjectionMatrix> holder_matrices(const RtkGeometry& geometry, const Detector& detector, RtkRows rows);
 
 }  // namespace ctk
