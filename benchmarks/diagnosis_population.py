@@ -27,6 +27,7 @@ import pathlib
 import platform
 import re
 import shutil
+import random
 import subprocess
 import sys
 import tempfile
@@ -99,7 +100,69 @@ NOISE = [("0.02", "0.005"), ("0.05", "0.01"), ("0.2", "0.05")]
 NULL_SEEDS = 3  # null scans per family, noise level and seed block: the false-acceptance rate's denominator
 
 
+def lab_nuisances(seed):
+    """What a real lab adds that the model does not name, drawn per scan over the ranges labs see:
+    a polychromatic spectrum (beam hardening of spheres and wall), scatter of 2-10 % of the flat,
+    a detector PSF of 0.5-1 px, a focal spot of 0.1-0.4 mm, lag of up to 5 % of the previous view,
+    a thesis sample inside the holder, and robot errors that are not Gaussian: two landing places
+    per target (half the scans). An arm that droops with its reach is not among them: over a
+    scan's workspace that droop is nearly a turn and shift of the base, which the diagnosis rightly
+    reports as the base frame (nuisance_population's droop cases)."""
+    r = random.Random(seed)
+    options = ["--kvp", f"{r.uniform(60, 120):.0f}", "--filter-al-mm", "1", "--scatter", f"{r.uniform(0.02, 0.10):.3f}",
+               "--detector-psf-px", f"{r.uniform(0.5, 1.0):.2f}", "--focal-spot-mm", f"{r.uniform(0.1, 0.4):.2f}",
+               "--lag", f"{r.uniform(0.0, 0.05):.3f}", "--phantom", r.choice(["sample-1", "sample-2"])]
+    if r.random() < 0.5:
+        options += ["--robot-clusters-mm", f"{r.uniform(0.05, 0.15):.3f}"]
+    return options
+
+
+def nuisance_population(seeds):
+    """Null scans with lab nuisances on every trajectory family (`seeds` per family: the
+    false-acceptance rate's denominator), and every effect at its three sizes, with nuisances, on
+    random directions (the detection rate per effect). Robot noise 0.05 mm throughout."""
+    cases = []
+    mm, deg = "0.05", "0.01"
+    for traj, (options, views) in TRAJECTORIES.items():
+        for seed in range(1, seeds + 1):
+            s = 5000 + seed
+            cases.append({"trajectory": traj, "noise_mm": 0.05, "noise_deg": 0.01, "seed": s, "allowed": [], "truth": [],
+                          "outside": None, "size": 0, "truth_parameters": {},
+                          "options": options + ["--robot-noise-mm", mm, "--robot-noise-deg", deg, "--seed", str(s)] + lab_nuisances(s)})
+    # An arm drooping with its reach: the base frame (or what it is confounded with) may take it.
+    for traj in ("random", "cap"):
+        options, views = TRAJECTORIES[traj]
+        for k, droop in enumerate((0.1, 0.2, 0.3, 0.5)):
+            s = 6000 + 10 * k + (traj == "cap")
+            cases.append({"trajectory": traj, "noise_mm": 0.05, "noise_deg": 0.01, "seed": s, "truth": [], "outside": "arm_droop",
+                          "allowed": ["holder_mount", "joint_offsets", "robot_base_frame"], "structure_optional": True,
+                          "size": k, "truth_parameters": {},
+                          "options": options + ["--robot-noise-mm", mm, "--robot-noise-deg", deg, "--seed", str(s),
+                                                "--robot-droop-mm-per-m", str(droop)] + lab_nuisances(s)})
+    options, views = TRAJECTORIES["random"]
+    for effect, sizes in effects(0.05, views).items():
+        for i, (opts, truth) in enumerate(sizes):
+            s = 7000 + 10 * i + list(effects(0.05, views)).index(effect)
+            cases.append({"trajectory": "random", "noise_mm": 0.05, "noise_deg": 0.01, "seed": s, "allowed": [], "truth": [effect],
+                          "outside": None, "size": i, "truth_parameters": {effect: truth} if truth else {},
+                          "options": options + ["--robot-noise-mm", mm, "--robot-noise-deg", deg, "--seed", str(s)] +
+                          lab_nuisances(s) + opts})
+    return cases
+
+
+def wilson_interval(k, n, z=1.959964):
+    """95 % score interval of a rate seen k times in n (Wilson 1927): honest at k = 0."""
+    if n == 0:
+        return (0.0, 1.0)
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
 def population(kind, seeds):
+    if kind == "nuisances":
+        return nuisance_population(seeds)
     cases = []
     for traj, (mm, deg), seed in itertools.product(list(TRAJECTORIES), NOISE, range(1, seeds + 1)):
         options, views = TRAJECTORIES[traj]
@@ -213,7 +276,7 @@ def judge(case, report):
     truth = set(case["truth"])
     structured = report["unexplained"]["structured"]
     if case["outside"]:
-        right = structured and set(names) <= set(case["allowed"])
+        right = (structured or case.get("structure_optional", False)) and set(names) <= set(case["allowed"])
     elif not truth:
         right = not names and not structured
     else:
@@ -259,8 +322,8 @@ def cpu_slug():
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--ctk", required=True)
-    p.add_argument("--slice", choices=["small", "full"], default="small")
-    p.add_argument("--seeds", type=int, default=1)
+    p.add_argument("--slice", choices=["small", "full", "nuisances"], default="small")
+    p.add_argument("--seeds", type=int, default=1, help="seed blocks (nuisances: null scans per trajectory family)")
     p.add_argument("--jobs", type=int, default=1, help="cases at once (each uses every core)")
     p.add_argument("--match", help="only the cases whose '<trajectory> <effect>' contains this regular expression "
                    "(e.g. 'cap holder_sag', '^sphere none'); a look at a part, not the population")
@@ -348,6 +411,15 @@ def main():
         "slice": a.slice, "cases": len(results), "exactly_right": sum(r["right"] for r in results),
         "share_right": sum(r["right"] for r in results) / max(len(results), 1),
         "false_acceptance_on_null": sum(bool(r["accepted"]) for r in null) / max(len(null), 1),
+        "null_scans": len(null), "null_scans_with_an_acceptance": sum(bool(r["accepted"]) for r in null),
+        "false_acceptance_95_interval": wilson_interval(sum(bool(r["accepted"]) for r in null), len(null)),
+        "null_scans_reported_structured": sum(bool(r.get("structured")) for r in null),
+        "detection_by_effect_and_size": {
+            e: {str(size): sum(1 for r in results if r["truth"] == [e] and r["size"] == size and
+                               (e in (r["accepted"] or []) or any(e in v for v in r.get("confounded", {}).values())))
+                / max(1, sum(1 for r in results if r["truth"] == [e] and r["size"] == size))
+                for size in sorted({r["size"] for r in results if r["truth"] == [e]})}
+            for e in sorted({t for r in results for t in r["truth"]})},
         "pulls_within_2_sigma": within2 / len(all_pulls) if all_pulls else None, "pulls": len(all_pulls),
         "by_family": by_family,
         "diagnosed_with_the_wall_measured": {

@@ -44,6 +44,7 @@ struct SimulateOptions {
   std::optional<double> blur_fraction;
   double blur_sigma_px = 2.0;
   std::optional<int> false_blobs;
+  std::optional<double> scatter_fraction, detector_psf_px, focal_spot_mm, detector_lag, robot_clusters_mm, robot_droop_mm_per_m;
 };
 
 // The effect options by the names the library's request takes (simulation_run.hpp).
@@ -76,6 +77,11 @@ nlohmann::json named_effects(const SimulateOptions& o) {
     put("blur_sigma_px", o.blur_sigma_px);
   }
   if (o.false_blobs) put("false_blobs", *o.false_blobs);
+  for (const auto& [key, value] :
+       {std::pair{"scatter_fraction", o.scatter_fraction}, std::pair{"detector_psf_px", o.detector_psf_px},
+        std::pair{"focal_spot_mm", o.focal_spot_mm}, std::pair{"detector_lag", o.detector_lag},
+        std::pair{"robot_clusters_mm", o.robot_clusters_mm}, std::pair{"robot_droop_mm_per_m", o.robot_droop_mm_per_m}})
+    if (value) put(key, *value);
   return e;
 }
 
@@ -222,6 +228,28 @@ void register_simulate(CLI::App& app) {
   cmd->add_option("--false-blobs", o->false_blobs, "Spurious sphere-like blobs per view")
       ->check(CLI::Range(0, 10000))
       ->group(effects);
+  const std::string nuisances = "Lab nuisances (no effect names them)";
+  cmd->add_option("--scatter", o->scatter_fraction,
+                  "Scatter: a smooth background, this fraction of the flat's transmitted signal")
+      ->check(CLI::Range(0.0, 1.0))
+      ->group(nuisances);
+  cmd->add_option("--detector-psf-px", o->detector_psf_px, "Detector PSF, Gaussian sigma (px), on the intensities")
+      ->check(non_negative_number)
+      ->group(nuisances);
+  cmd->add_option("--focal-spot-mm", o->focal_spot_mm, "Focal spot FWHM (mm): a penumbra of FWHM times (magnification - 1)")
+      ->check(non_negative_number)
+      ->group(nuisances);
+  cmd->add_option("--lag", o->detector_lag, "Detector lag: this fraction of each view is the previous view's signal")
+      ->check(CLI::Range(0.0, 0.99))
+      ->group(nuisances);
+  cmd->add_option("--robot-clusters-mm", o->robot_clusters_mm,
+                  "The flange lands in one of two places per target this far apart (one direction per scan)")
+      ->check(non_negative_number)
+      ->group(nuisances);
+  cmd->add_option("--robot-droop-mm-per-m", o->robot_droop_mm_per_m,
+                  "The flange sinks this much per metre of horizontal reach from the base (gravity on the arm)")
+      ->check(non_negative_number)
+      ->group(nuisances);
   cmd->callback([o] { run_simulate(*o); });
 }
 

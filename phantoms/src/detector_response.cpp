@@ -32,6 +32,18 @@ void add_blob(Image& image, const Blob& blob) {
     }
 }
 
+void apply_detector_response(Image& signal, double blur_sigma_px, double scatter_fraction) {
+  Image scatter;
+  if (scatter_fraction > 0) {
+    scatter = signal;
+    blur_image(scatter, std::max(signal.cols, signal.rows) / 8.0);
+  }
+  if (blur_sigma_px > 0) blur_image(signal, blur_sigma_px);
+  if (scatter_fraction > 0)
+    for (std::size_t i = 0; i < signal.pixels.size(); ++i)
+      signal.pixels[i] += static_cast<float>(scatter_fraction) * scatter.pixels[i];
+}
+
 Image expected_counts(const Image& line_integrals, const CountsModel& model) {
   Image counts = line_integrals;
   for (float& p : counts.pixels) p = static_cast<float>(model.dark_counts + model.flat_counts * std::exp(-double(p)));

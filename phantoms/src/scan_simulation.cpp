@@ -48,10 +48,10 @@ ScanDescription declared_scan(const ScanSimulation& sim, const fs::path& folder,
 }
 
 // One acquired view, from the phantom to the file.
-std::size_t write_projection(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view, const RenderOptions& render,
-                             const fs::path& file) {
+std::size_t write_projection(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view, const TrueView* previous,
+                             const RenderOptions& render, const fs::path& file) {
   std::size_t saturated = 0;
-  const Image image = simulated_image(sim, phantom, view, render, &saturated);
+  const Image image = simulated_image(sim, phantom, view, render, &saturated, previous);
   if (sim.output == SimulatedOutput::line_integrals)
     write_image_float(image, file);
   else
@@ -67,16 +67,55 @@ void write_flat_and_dark(const ScanSimulation& sim, const fs::path& folder) {
 
 }  // namespace
 
-Image simulated_image(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view, const RenderOptions& render,
-                      std::size_t* saturated) {
+namespace {
+
+// One view's noise-free signal (counts above dark) through the lab's nuisances: the detector's
+// PSF, the focal spot's penumbra (its FWHM times the magnification less one, at the holder
+// origin), scatter.
+Image expected_signal(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view, const RenderOptions& render) {
   Image image = render_line_integrals(phantom, *view.P, sim.setup.detector, render);
   if (view.blur_sigma_px > 0) blur_image(image, view.blur_sigma_px);
   for (const Blob& blob : view.blobs) add_blob(image, blob);
-  if (sim.output == SimulatedOutput::line_integrals) return image;
+  for (float& p : image.pixels) p = static_cast<float>(sim.counts.flat_counts * std::exp(-double(p)));
+  const SimulationEffects& e = sim.effects;
+  const double magnification = sim.setup.source_to_detector_mm / sim.setup.source_to_isocentre_mm;
+  const double spot_px = e.focal_spot_mm ? *e.focal_spot_mm / 2.3548 * (magnification - 1) / sim.setup.detector.pitch_u_mm : 0.0;
+  const double psf_px = e.detector_psf_px.value_or(0.0);
+  apply_detector_response(image, std::hypot(spot_px, psf_px), e.scatter_fraction.value_or(0.0));
+  return image;
+}
+
+bool has_detector_nuisances(const SimulationEffects& e) {
+  return e.scatter_fraction || e.detector_psf_px || e.focal_spot_mm || e.detector_lag;
+}
+
+}  // namespace
+
+Image simulated_image(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view, const RenderOptions& render,
+                      std::size_t* saturated, const TrueView* previous) {
+  const bool nuisances = has_detector_nuisances(sim.effects) && sim.output == SimulatedOutput::counts;
+  Image counts;
+  if (!nuisances) {
+    Image image = render_line_integrals(phantom, *view.P, sim.setup.detector, render);
+    if (view.blur_sigma_px > 0) blur_image(image, view.blur_sigma_px);
+    for (const Blob& blob : view.blobs) add_blob(image, blob);
+    if (sim.output == SimulatedOutput::line_integrals) return image;
+    counts = expected_counts(image, sim.counts);
+  } else {
+    counts = expected_signal(sim, phantom, view, render);
+    // Lag: what the previous frame left in the detector (its own holder when a sphere moves).
+    if (sim.effects.detector_lag && previous && previous->P) {
+      const Image before =
+          expected_signal(sim, previous->holder ? simulated_phantom(sim, *previous->holder) : phantom, *previous, render);
+      const auto lag = static_cast<float>(*sim.effects.detector_lag);
+      for (std::size_t i = 0; i < counts.pixels.size(); ++i)
+        counts.pixels[i] = (1 - lag) * counts.pixels[i] + lag * before.pixels[i];
+    }
+    for (float& c : counts.pixels) c += static_cast<float>(sim.counts.dark_counts);
+  }
   // Noise differs per view but not with the thread count: one stream per (seed, view).
   std::seed_seq seq{static_cast<std::uint64_t>(sim.seed), static_cast<std::uint64_t>(view.index), std::uint64_t{0x5ca1ab1e}};
   std::mt19937_64 rng(seq);
-  Image counts = expected_counts(image, sim.counts);
   const std::size_t n = draw_counts(counts, sim.counts, rng);
   if (saturated) *saturated = n;
   return counts;
@@ -122,7 +161,9 @@ SimulationReport simulate_scan(const ScanSimulation& sim, const fs::path& folder
     const TrueView& view = truth.views[static_cast<std::size_t>(acquired[static_cast<std::size_t>(i)])];
     std::optional<Phantom> moved;  // this view's own holder when a sphere moves during the scan
     if (view.holder) moved = simulated_phantom(sim, *view.holder);
-    saturated_total += write_projection(sim, moved ? *moved : phantom, view, render, scan.projection_path(view.index));
+    const TrueView* previous =
+        i > 0 ? &truth.views[static_cast<std::size_t>(acquired[static_cast<std::size_t>(i - 1)])] : nullptr;
+    saturated_total += write_projection(sim, moved ? *moved : phantom, view, previous, render, scan.projection_path(view.index));
     const int finished = ++done;
 #pragma omp critical(ctk_simulation_progress)
     if (progress) progress(finished, total);

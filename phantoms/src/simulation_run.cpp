@@ -86,7 +86,10 @@ SimulationEffects simulation_effects_from_json(const nlohmann::json& named, cons
                                        "source_drift_mm",      "holder_sag_deg",
                                        "source_wobble_mm",     "moving_sphere_mm",
                                        "blur_fraction",        "blur_sigma_px",
-                                       "false_blobs"};
+                                       "false_blobs",          "scatter_fraction",
+                                       "detector_psf_px",      "focal_spot_mm",
+                                       "detector_lag",         "robot_clusters_mm",
+                                       "robot_droop_mm_per_m"};
   for (const auto& item : named.items()) {
     const std::string& key = item.key();
     if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return key == k; }) == std::end(kKnown))
@@ -119,6 +122,19 @@ SimulationEffects simulation_effects_from_json(const nlohmann::json& named, cons
     e.blurred_views = BlurredViews{number(named["blur_fraction"], "blur_fraction"),
                                    has("blur_sigma_px") ? number(named["blur_sigma_px"], "blur_sigma_px") : 2.0};
   if (has("false_blobs")) e.false_blobs_per_view = static_cast<int>(number(named["false_blobs"], "false_blobs"));
+  const std::pair<const char*, std::optional<double>*> nuisances[] = {
+      {"scatter_fraction", &e.scatter_fraction},   {"detector_psf_px", &e.detector_psf_px},
+      {"focal_spot_mm", &e.focal_spot_mm},         {"detector_lag", &e.detector_lag},
+      {"robot_clusters_mm", &e.robot_clusters_mm}, {"robot_droop_mm_per_m", &e.robot_droop_mm_per_m}};
+  for (const auto& [key, field] : nuisances)
+    if (has(key)) {
+      const double value = number(named[key], key);
+      if (!(value >= 0) || (std::string(key) == "detector_lag" && !(value < 1)))
+        throw std::invalid_argument(std::string(key) + ": expected a value of 0 or more" +
+                                    (std::string(key) == "detector_lag" ? " and below 1" : "") + ", got " +
+                                    std::to_string(value));
+      *field = value;
+    }
   return e;
 }
 

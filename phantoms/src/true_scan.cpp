@@ -87,6 +87,11 @@ void draw_robot_views(const ScanSimulation& sim, TrueScan& truth, double true_sd
   truth.T_flange_holder = (e.holder_mount ? e.holder_mount->rigid() : Rigid::Identity()) * sim.setup.T_flange_holder;
   const double sigma_t = sim.robot_noise.translation_mm / std::sqrt(3.0);
   const double sigma_r = sim.robot_noise.rotation_deg * kDegree / std::sqrt(3.0);
+  // Two places per target (the thesis' placement experiment): half the separation either way along
+  // one direction of the flange frame, drawn once per scan. Drawn only when asked for, so that
+  // scans without it keep their random streams.
+  Eigen::Vector3d cluster_axis = Eigen::Vector3d::Zero();
+  if (e.robot_clusters_mm) cluster_axis = gaussian3(rng, 1.0).normalized() * (0.5 * *e.robot_clusters_mm);
   for (std::size_t v = 0; v < sim.trajectory.size(); ++v) {
     TrueView view;
     view.index = static_cast<int>(v);
@@ -100,8 +105,13 @@ void draw_robot_views(const ScanSimulation& sim, TrueScan& truth, double true_sd
     if (e.joint_offsets_rad)
       for (std::size_t j = 0; j < q.size(); ++j) q[j] += (*e.joint_offsets_rad)[j];
     view.joints_true = q;
-    const Rigid noise = make_rigid(rotation_from_vector(gaussian3(rng, sigma_r)), gaussian3(rng, sigma_t));
-    const Rigid T_base_flange = panda::forward_kinematics(q);
+    Rigid noise = make_rigid(rotation_from_vector(gaussian3(rng, sigma_r)), gaussian3(rng, sigma_t));
+    if (e.robot_clusters_mm)
+      noise.translation() += std::bernoulli_distribution(0.5)(rng) ? cluster_axis : Eigen::Vector3d(-cluster_axis);
+    Rigid T_base_flange = panda::forward_kinematics(q);
+    // Gravity bends the arm: the flange sinks in proportion to its horizontal reach from the base.
+    if (e.robot_droop_mm_per_m)
+      T_base_flange.translation().z() -= *e.robot_droop_mm_per_m * 1e-3 * T_base_flange.translation().head<2>().norm();
     Rigid sag = Rigid::Identity();
     if (e.holder_sag_deg) {
       // In flange coordinates: the holder's axis and gravity; it turns about their cross product.
@@ -242,6 +252,16 @@ nlohmann::json truth_to_json(const ScanSimulation& sim, const TrueScan& truth, c
     for (const TrueView& v : truth.views)
       if (v.blur_sigma_px > 0) views.push_back(v.index);
     effects["blurred_views"] = {{"sigma_px", e.blurred_views->sigma_px}, {"views", views}};
+  }
+  {
+    nlohmann::json nuisances = nlohmann::json::object();
+    const std::pair<const char*, const std::optional<double>*> named[] = {
+        {"scatter_fraction", &e.scatter_fraction},   {"detector_psf_px", &e.detector_psf_px},
+        {"focal_spot_mm", &e.focal_spot_mm},         {"detector_lag", &e.detector_lag},
+        {"robot_clusters_mm", &e.robot_clusters_mm}, {"robot_droop_mm_per_m", &e.robot_droop_mm_per_m}};
+    for (const auto& [key, value] : named)
+      if (*value) nuisances[key] = **value;
+    if (!nuisances.empty()) effects["lab_nuisances"] = nuisances;
   }
   if (e.false_blobs_per_view) {
     nlohmann::json blobs = nlohmann::json::array();

@@ -225,6 +225,85 @@ TEST(ScanSimulation, CountsScanHasFlatDarkAndOpenBeamAtTheFlatLevel) {
   EXPECT_EQ(scan.panda->joints.rows().size(), 2u);
 }
 
+// The lab's nuisances, as stated: scatter raises the open beam by its fraction of the (here
+// nearly open) signal; lag mixes in the view before; the robot's two landing places lie the
+// stated distance apart; a droop sinks the flange by the stated amount per metre of reach.
+TEST(ScanSimulation, LabNuisancesAreWhatTheyClaim) {
+  ScanSimulation sim = small_circular_scan(4);
+  sim.setup = reference_panda_setup({96, 80, 4.5, 4.5}, 2150, 1360);
+  sim.trajectory = circular_robot_trajectory(sim.setup, 4);
+  sim.output = SimulatedOutput::counts;
+  sim.counts = {60000, 0};
+  sim.robot_noise = {0, 0};
+  const Phantom phantom = simulated_phantom(sim, sim.holder);
+  const RenderOptions render = simulated_render_options(sim);
+  const TrueScan plain = make_true_scan(sim);
+  auto corner_mean = [](const Image& im) {
+    double sum = 0;
+    for (int r = 0; r < 8; ++r)
+      for (int c = 0; c < 8; ++c) sum += im.pixels[static_cast<std::size_t>(r * im.cols + c)];
+    return sum / 64;
+  };
+  const double open = corner_mean(simulated_image(sim, phantom, plain.views[1], render));
+  ScanSimulation scattered = sim;
+  scattered.effects.scatter_fraction = 0.08;
+  const double raised = corner_mean(simulated_image(scattered, phantom, plain.views[1], render));
+  EXPECT_NEAR(open, 60000, 4 * std::sqrt(60000.0 / 64));
+  // The corner sees mostly open beam from afar: between 0.06 and 0.08 of the flat more.
+  EXPECT_GT(raised / open - 1, 0.06);
+  EXPECT_LT(raised / open - 1, 0.081);
+
+  // Lag of a half, noise made negligible: the image is the mean of this view's and the previous one's.
+  ScanSimulation lagging = sim;
+  lagging.counts = {6e4, 0};
+  lagging.effects.detector_lag = 0.5;
+  ScanSimulation plain_counts = lagging;
+  plain_counts.effects.detector_lag = 0.0;  // the nuisance path, no lag
+  const Image mixed = simulated_image(lagging, phantom, plain.views[2], render, nullptr, &plain.views[1]);
+  const Image now = simulated_image(plain_counts, phantom, plain.views[2], render);
+  const Image before = simulated_image(plain_counts, phantom, plain.views[1], render);
+  double worst = 0, changed = 0;
+  for (std::size_t i = 0; i < mixed.pixels.size(); ++i) {
+    const double expected = 0.5 * (now.pixels[i] + before.pixels[i]);
+    worst = std::max(worst, std::abs(mixed.pixels[i] - expected) / std::sqrt(std::max(expected, 1.0)));
+    changed = std::max(changed, std::abs(double(now.pixels[i]) - before.pixels[i]));
+  }
+  EXPECT_GT(changed, 1000.0) << "the two views must differ for the test to mean anything";
+  EXPECT_LT(worst, 6.0) << "beyond Poisson noise of the mixed mean";
+
+  ScanSimulation clustered = sim;
+  clustered.effects.robot_clusters_mm = 0.3;
+  clustered.trajectory = circular_robot_trajectory(sim.setup, 40);
+  const TrueScan two = make_true_scan(clustered);
+  const TrueScan none = make_true_scan([&] {
+    ScanSimulation s = clustered;
+    s.effects.robot_clusters_mm.reset();
+    return s;
+  }());
+  ScanSimulation drooping = sim;
+  drooping.effects.robot_droop_mm_per_m = 0.5;
+  const TrueScan drooped = make_true_scan(drooping);
+  int near = 0, far = 0;
+  for (std::size_t v = 0; v < two.views.size(); ++v) {
+    // Holder offsets between the scans, in the flange frame (the noise sits between flange and holder).
+    const Eigen::Matrix3d camera_flange =
+        clustered.setup.T_camera_base.linear() * panda::forward_kinematics(*clustered.trajectory[v].joints).linear();
+    const Eigen::Vector3d d =
+        camera_flange.transpose() * (two.views[v].T_camera_holder->translation() - none.views[v].T_camera_holder->translation());
+    EXPECT_NEAR(d.norm(), 0.15, 1e-9) << v;
+    (d.dot(Eigen::Vector3d(1, 2, 3)) > 0 ? near : far) += 1;
+  }
+  EXPECT_GT(near, 5);
+  EXPECT_GT(far, 5);
+  for (std::size_t v = 0; v < drooped.views.size(); ++v) {
+    const Rigid base_flange = panda::forward_kinematics(*drooping.trajectory[v].joints);
+    const double reach_m = base_flange.translation().head<2>().norm() * 1e-3;
+    const Eigen::Vector3d shift = drooped.views[v].T_camera_holder->translation() - plain.views[v].T_camera_holder->translation();
+    const Eigen::Vector3d expected = sim.setup.T_camera_base.linear() * Eigen::Vector3d(0, 0, -0.5 * reach_m);
+    EXPECT_LT((shift - expected).norm(), 1e-9) << v;
+  }
+}
+
 }  // namespace
 }  // namespace ctk
 

@@ -26,6 +26,12 @@ struct CountsModel {
                              // frames, so their own noise is neglected)
 };
 
+/// What a real detector and source add to the noise-free signal (counts above dark, flat *
+/// exp(-p)): the detector's PSF and the focal spot's penumbra blur it (Gaussian sigmas in px,
+/// combined in quadrature), scatter adds a smooth background: `scatter_fraction` times the signal
+/// blurred over an eighth of the detector (the flat times the transmission seen from afar).
+void apply_detector_response(Image& signal, double blur_sigma_px, double scatter_fraction);
+
 /// Mean counts dark + flat * exp(-p) per pixel: the noise-free expectation.
 Image expected_counts(const Image& line_integrals, const CountsModel& model);
 /// Draws Poisson counts around `expected` - dark (exact below 1000 counts, normal above: the two

@@ -29,9 +29,10 @@ OpenBeamFrames open_beam_frames(const ScanSimulation& simulation);
 Phantom simulated_phantom(const ScanSimulation& simulation, const Holder& holder);
 RenderOptions simulated_render_options(const ScanSimulation& simulation);
 /// One acquired view's image as the detector delivers it: counts (noise drawn from the seed and
-/// the view index) or noise-free line integrals, per `simulation.output`.
+/// the view index) or noise-free line integrals, per `simulation.output`. Counts carry the lab's
+/// nuisances the effects ask for (PSF, focal spot, scatter; lag from `previous`, the view acquired before).
 Image simulated_image(const ScanSimulation& simulation, const Phantom& phantom, const TrueView& view, const RenderOptions& render,
-                      std::size_t* saturated = nullptr);
+                      std::size_t* saturated = nullptr, const TrueView* previous = nullptr);
 
 /// `progress(done, total)` is called as views are written (from one thread at a time).
 SimulationReport simulate_scan(const ScanSimulation& simulation, const std::filesystem::path& folder,

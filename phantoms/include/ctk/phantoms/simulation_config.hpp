@@ -63,6 +63,14 @@ struct SimulationEffects {
   std::optional<double> moving_sphere_mm;
   std::optional<BlurredViews> blurred_views;
   std::optional<int> false_blobs_per_view;
+  /// A real lab's nuisances, which no effect of the diagnosis names and none may be reported for
+  /// (counts output only; the robot ones for any output):
+  std::optional<double> scatter_fraction;      // smooth background: this fraction of the flat times the blurred transmission
+  std::optional<double> detector_psf_px;       // Gaussian PSF of the detector (sigma, px) on the intensities
+  std::optional<double> focal_spot_mm;         // focal spot FWHM: a Gaussian penumbra scaled by the magnification less one
+  std::optional<double> detector_lag;          // this fraction of the previous view's signal stays in the next
+  std::optional<double> robot_clusters_mm;     // the flange lands in one of two places per target, this far apart
+  std::optional<double> robot_droop_mm_per_m;  // the flange sinks this much per metre of horizontal reach (gravity)
 };
 
 /// Pose repeatability between the joints' forward kinematics and where the flange really is:
