@@ -1,7 +1,10 @@
 #include "ctk/recon/solver_state.hpp"
 
-#include <fstream>
+#include <boost/crc.hpp>
 #include <cmath>
+#include <fstream>
+#include <sstream>
+#include <iomanip>
 #include <limits>
 #include <stdexcept>
 
@@ -23,6 +26,18 @@ void write_floats(std::ostream& out, const FloatBuffer& v) {
   out.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(float)));
 }
 
+// CRC-32 of the header (without its checksum) and of every vector's bytes, as 8 hex digits: a
+// flipped bit anywhere, in the numbers or in the description of the run they belong to, is found.
+std::string checksum(const nlohmann::json& head_without_checksum, const std::vector<const FloatBuffer*>& vectors) {
+  boost::crc_32_type crc;
+  const std::string text = head_without_checksum.dump();
+  crc.process_bytes(text.data(), text.size());
+  for (const FloatBuffer* v : vectors) crc.process_bytes(v->data(), v->size() * sizeof(float));
+  std::ostringstream hex;
+  hex << std::hex << std::setw(8) << std::setfill('0') << crc.checksum();
+  return hex.str();
+}
+
 }  // namespace
 
 void check_solver_state(const SolverState& s, const std::string& solver, const std::vector<std::size_t>& vector_lengths,
@@ -40,7 +55,7 @@ void write_solver_state(const SolverSnapshot& s, const nlohmann::json& run, cons
   std::vector<std::size_t> lengths;
   for (const FloatBuffer* v : s.vectors) lengths.push_back(v->size());
   const auto& l = s.x.layout;
-  const nlohmann::json head = {{"format", kFormat},
+  nlohmann::json head = {{"format", kFormat},
                                {"provenance", provenance()},
                                {"solver", s.solver},
                                {"iteration", s.iteration},
@@ -52,6 +67,9 @@ void write_solver_state(const SolverSnapshot& s, const nlohmann::json& run, cons
                                  {"voxel_mm", {l.voxel_mm.x(), l.voxel_mm.y(), l.voxel_mm.z()}},
                                  {"origin_mm", {l.origin_mm.x(), l.origin_mm.y(), l.origin_mm.z()}}}},
                                {"run", run}};
+  std::vector<const FloatBuffer*> all = {&s.x.data};
+  all.insert(all.end(), s.vectors.begin(), s.vectors.end());
+  head["crc32"] = checksum(head, all);
   // Saved now, not with the run's outputs: it must survive the run being stopped.
   const OutputSet::Outside now;
   write_file_atomically(file, [&](std::ostream& out) {
@@ -116,6 +134,16 @@ SolverState read_solver_state(const fs::path& file, nlohmann::json& run) {
     read(s.vectors.back());
   }
   if (!in) throw InputError(file.string(), "", "could not be read to its end");
+  if (head.contains("crc32")) {  // states of earlier builds have none
+    const std::string stored = node.at("crc32").string();
+    nlohmann::json described = head;
+    described.erase("crc32");
+    std::vector<const FloatBuffer*> all = {&s.x.data};
+    for (const FloatBuffer& v : s.vectors) all.push_back(&v);
+    if (checksum(described, all) != stored)
+      throw InputError(file.string(), "key 'crc32'",
+                       "does not match the state's content (a damaged file): start again without --resume, or delete it");
+  }
   run = head.at("run");
   return s;
 }
