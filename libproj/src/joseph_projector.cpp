@@ -25,7 +25,11 @@ constexpr int kBackTableRays = 65536;
 }  // namespace
 
 void ProjectorOptions::validate() const {
-  require_option(threads >= 0, "ProjectorOptions.threads", "at least 0 (0: all OpenMP threads)", threads);
+  // Each thread holds its own ray band (up to 1 MB): more threads than a few per processor buy
+  // nothing and 100,000 of them ended the process.
+  const int most = 4 * omp_get_num_procs();
+  const std::string expected = "0 (all OpenMP threads) to " + std::to_string(most) + " (four per processor)";
+  require_option(threads >= 0 && threads <= most, "ProjectorOptions.threads", expected.c_str(), threads);
   require_option(rows_per_block >= 0, "ProjectorOptions.rows_per_block", "at least 0 (0: the default for the views)",
                  rows_per_block);
 }

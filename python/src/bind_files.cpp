@@ -167,6 +167,9 @@ void bind_files(py::module_& m) {
         VolumeLayout l;
         l.size = {static_cast<int>(volume.shape(2)), static_cast<int>(volume.shape(1)), static_cast<int>(volume.shape(0))};
         l.voxel_mm = {voxel_mm[0], voxel_mm[1], voxel_mm[2]};
+        if (!(l.voxel_mm.array() > 0).all() || !l.voxel_mm.allFinite())
+          throw py::value_error("voxel_mm: expected finite sizes above 0 (mm), got (" + std::to_string(voxel_mm[0]) + ", " +
+                                std::to_string(voxel_mm[1]) + ", " + std::to_string(voxel_mm[2]) + ")");
         l.origin_mm = origin_mm.is_none() ? VolumeLayout::centred(l.size, l.voxel_mm).origin_mm : [&] {
           const auto o = origin_mm.cast<std::array<double, 3>>();
           return Eigen::Vector3d(o[0], o[1], o[2]);

@@ -39,8 +39,13 @@ Eigen::Vector3d vector3(const py::object& o, const char* what) {
 VolumeLayout layout_from(const std::array<int, 3>& shape_zyx, const py::object& voxel_mm, const py::object& origin_mm) {
   for (int n : shape_zyx)
     if (n < 1) throw py::value_error("volume_shape needs three positive sizes (z, y, x)");
-  VolumeLayout l = VolumeLayout::centred({shape_zyx[2], shape_zyx[1], shape_zyx[0]}, vector3(voxel_mm, "voxel_mm"));
+  const Eigen::Vector3d voxel = vector3(voxel_mm, "voxel_mm");
+  if (!(voxel.array() > 0).all() || !voxel.allFinite())
+    throw py::value_error("voxel_mm: expected finite sizes above 0 (mm), got (" + std::to_string(voxel.x()) + ", " +
+                          std::to_string(voxel.y()) + ", " + std::to_string(voxel.z()) + ")");
+  VolumeLayout l = VolumeLayout::centred({shape_zyx[2], shape_zyx[1], shape_zyx[0]}, voxel);
   if (!origin_mm.is_none()) l.origin_mm = vector3(origin_mm, "origin_mm");
+  if (!l.origin_mm.allFinite()) throw py::value_error("origin_mm: expected finite coordinates (mm)");
   return l;
 }
 

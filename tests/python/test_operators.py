@@ -202,3 +202,18 @@ def test_bench_measures_the_projector_against_the_reference_as_the_command_line_
     assert set(json.loads(done.stdout)) == set(report)
     with pytest.raises(ValueError, match="ProjectorBenchmarkOptions.simd"):
         ctk.bench(scale=16, views=8, simd="AVX9")
+
+
+def test_sizes_and_threads_are_refused_as_the_command_line_refuses_them(tmp_path):
+    """A voxel of zero or negative size, or a thread count no machine has, is refused naming the
+    keyword (a negative voxel gave a mirrored volume; 100,000 threads ended the interpreter)."""
+    P = np.tile(np.array([[1000.0, 0, 20, 0], [0, 1000, 20, 0], [0, 0, 1, 500]]), (3, 1, 1))
+    for voxel in (0, -1, (1, 0, 1), float("nan")):
+        with pytest.raises(ValueError, match="voxel_mm: expected finite sizes above 0"):
+            ctk.Projector(P, (8, 8, 8), voxel_mm=voxel, detector_shape=(40, 40))
+        with pytest.raises(ValueError, match="voxel_mm: expected finite sizes above 0"):
+            ctk.write_volume(np.zeros((2, 2, 2), np.float32), tmp_path / "v.nrrd",
+                             voxel_mm=voxel if isinstance(voxel, tuple) else (voxel, 1, 1))
+    assert not (tmp_path / "v.nrrd").exists()
+    with pytest.raises(ValueError, match=r"ProjectorOptions.threads: expected 0 .* \(four per processor\), got 100000"):
+        ctk.Projector(P, (8, 8, 8), voxel_mm=1, detector_shape=(40, 40), threads=100000)
