@@ -56,17 +56,17 @@ void write_solver_state(const SolverSnapshot& s, const nlohmann::json& run, cons
   for (const FloatBuffer* v : s.vectors) lengths.push_back(v->size());
   const auto& l = s.x.layout;
   nlohmann::json head = {{"format", kFormat},
-                               {"provenance", provenance()},
-                               {"solver", s.solver},
-                               {"iteration", s.iteration},
-                               {"log", log},
-                               {"scalars", s.scalars},
-                               {"vector_lengths", lengths},
-                               {"volume",
-                                {{"size", l.size},
-                                 {"voxel_mm", {l.voxel_mm.x(), l.voxel_mm.y(), l.voxel_mm.z()}},
-                                 {"origin_mm", {l.origin_mm.x(), l.origin_mm.y(), l.origin_mm.z()}}}},
-                               {"run", run}};
+                         {"provenance", provenance()},
+                         {"solver", s.solver},
+                         {"iteration", s.iteration},
+                         {"log", log},
+                         {"scalars", s.scalars},
+                         {"vector_lengths", lengths},
+                         {"volume",
+                          {{"size", l.size},
+                           {"voxel_mm", {l.voxel_mm.x(), l.voxel_mm.y(), l.voxel_mm.z()}},
+                           {"origin_mm", {l.origin_mm.x(), l.origin_mm.y(), l.origin_mm.z()}}}},
+                         {"run", run}};
   std::vector<const FloatBuffer*> all = {&s.x.data};
   all.insert(all.end(), s.vectors.begin(), s.vectors.end());
   head["crc32"] = checksum(head, all);
