@@ -1,5 +1,7 @@
 #include "ctk/geom/nikon_xtekct.hpp"
 
+#include <algorithm>
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <fstream>
@@ -76,6 +78,13 @@ class KeyValues {
     if (!(v > 0)) throw InputError(file_.string(), "key '" + key + "'", "expected a number above 0, got " + text(key));
     return v;
   }
+  // A length in mm no scanner has outside [1 um, 100 m] (a distance of 1e-300 made no projection).
+  double length_mm(const std::string& key) const {
+    const double v = positive(key);
+    if (!(v >= 1e-3 && v <= 1e5))
+      throw InputError(file_.string(), "key '" + key + "'", "expected a length between 0.001 and 100000 mm, got " + text(key));
+    return v;
+  }
 
  private:
   fs::path file_;
@@ -93,10 +102,10 @@ NikonScan read_xtekct(const fs::path& file) {
   s.name = kv.text("Name");
   s.projections = kv.count("Projections");
   s.white_level = kv.positive("WhiteLevel");
-  s.detector = Detector{kv.count("DetectorPixelsX"), kv.count("DetectorPixelsY"), kv.positive("DetectorPixelSizeX"),
-                        kv.positive("DetectorPixelSizeY")};
-  s.source_to_object_mm = kv.positive("SrcToObject");
-  s.source_to_detector_mm = kv.positive("SrcToDetector");
+  s.detector = Detector{kv.count("DetectorPixelsX"), kv.count("DetectorPixelsY"), kv.length_mm("DetectorPixelSizeX"),
+                        kv.length_mm("DetectorPixelSizeY")};
+  s.source_to_object_mm = kv.length_mm("SrcToObject");
+  s.source_to_detector_mm = kv.length_mm("SrcToDetector");
   if (!(s.source_to_object_mm < s.source_to_detector_mm))
     throw InputError(file.string(), "key 'SrcToObject'",
                      kv.text("SrcToObject") + " mm is not less than SrcToDetector " + kv.text("SrcToDetector") + " mm");
@@ -117,12 +126,21 @@ NikonScan read_xtekct(const fs::path& file) {
           std::string(key) + " = " + kv.text(key) +
           " mm is not modelled (the detector is taken centred on the beam); ctk refine measures the detector's offset");
 
-  // InputFolderName is often a path on the acquisition PC: only a folder beside the file is used.
+  // InputFolderName is often a path on the acquisition PC: only a folder beside the file is used,
+  // named relative to it and staying inside it (no root, no "..": a file must not send the import
+  // to read another folder of the machine).
   const std::string input = kv.text("InputFolderName");
   const fs::path folder = file.parent_path();
   s.input_folder = folder;
-  if (!input.empty() && input.find_first_of(":\\") == std::string::npos && fs::is_directory(folder / input))
-    s.input_folder = folder / input;
+  const fs::path named(input);
+  const bool beside = !input.empty() && input.find_first_of(":\\") == std::string::npos && named.is_relative() &&
+                      std::none_of(named.begin(), named.end(), [](const fs::path& part) { return part == ".."; });
+  if (beside && fs::is_directory(folder / named)) {
+    s.input_folder = folder / named;
+  } else if (!input.empty() && !beside) {
+    s.warnings.push_back("InputFolderName = " + input + " is not a folder beside " + file.filename().string() +
+                         ": the projections are looked for beside the file");
+  }
   return s;
 }
 

@@ -184,6 +184,24 @@ TEST(Nikon, RefusesMissingAndMalformedKeys) {
   const std::string e = error_of([&] { nikon_projection_files(read_xtekct(dir / "d.xtekct")); });
   EXPECT_NE(e.find("key 'Projections': 3 projections, but"), std::string::npos) << e;
   EXPECT_NE(e.find("holds 1 files named x_*.tif"), std::string::npos) << e;
+  // A distance no scanner has (1e-300 mm made no projection matrix, and the refusal named nothing).
+  testing::write_text(dir / "e.xtekct", base + "SrcToObject=1e-300\nSrcToDetector=500\nAngularStep=1\n");
+  EXPECT_NE(
+      error_of([&] { read_xtekct(dir / "e.xtekct"); }).find("key 'SrcToObject': expected a length between 0.001 and 100000 mm"),
+      std::string::npos);
+  // InputFolderName may name a folder beside the file, never one elsewhere on the machine.
+  fs::create_directories(dir / "inside");
+  fs::create_directories(dir.parent_path() / "elsewhere");
+  for (const char* folder : {"../elsewhere", "/tmp", "inside/../../elsewhere"}) {
+    testing::write_text(dir / "f.xtekct",
+                        base + "SrcToObject=100\nSrcToDetector=500\nAngularStep=1\nInputFolderName=" + folder + "\n");
+    const NikonScan scan = read_xtekct(dir / "f.xtekct");
+    EXPECT_EQ(scan.input_folder, dir) << folder;
+    ASSERT_FALSE(scan.warnings.empty()) << folder;
+    EXPECT_NE(scan.warnings.back().find("is not a folder beside f.xtekct"), std::string::npos) << scan.warnings.back();
+  }
+  testing::write_text(dir / "g.xtekct", base + "SrcToObject=100\nSrcToDetector=500\nAngularStep=1\nInputFolderName=inside\n");
+  EXPECT_EQ(read_xtekct(dir / "g.xtekct").input_folder, dir / "inside");
 }
 
 TEST(FileNames, NaturalOrderComparesDigitRunsByValue) {
