@@ -170,7 +170,11 @@ void run_calibrate(const CalibrateOptions& o) {
   write_text_atomically(report, j.dump(2) + "\n");
   std::vector<fs::path> pictures;
   for (const nlohmann::json& name : j["pictures"]) pictures.push_back(o.out.parent_path() / name.get<std::string>());
-  write_run_page("calibrate", run_result.brief(), j, pictures, fs::path(report).replace_extension(".html"));
+  const std::string next =
+      scan.holder ? "ctk diagnose --scan " + o.scan.string() + " --geometry " + o.out.string() + " --out " +
+                        (o.out.parent_path() / "diagnosis.json").string()
+                  : "ctk reconstruct --scan " + o.scan.string() + " --geometry " + o.out.string() + " --out volume.nrrd";
+  write_run_page("calibrate", run_result.brief(), j, pictures, fs::path(report).replace_extension(".html"), next);
   outputs.publish();
   if (journal) journal->remove();
   if (c.taken_over > 0) std::cout << c.taken_over << " views taken from the interrupted run, the others calibrated now\n";

@@ -60,7 +60,12 @@ void run_diagnose(const DiagnoseOptions& o) {
   std::vector<fs::path> pictures;
   for (const nlohmann::json& name : report["pictures"])
     pictures.push_back(fs::path(o.out).parent_path() / name.get<std::string>());
-  write_run_page("diagnose", run.brief(), report, pictures, stem.string() + ".html");
+  // With an effect accepted, the corrected scan is calibrated again; without, the calibration stands.
+  const std::string next = run.diagnosis.accepted.empty() ? "ctk reconstruct --scan " + o.scan.string() + " --geometry " +
+                                                                o.geometry.string() + " --out volume.nrrd"
+                                                          : "ctk calibrate --scan " + corrected_file.string() + " --out " +
+                                                                (fs::path(o.out).parent_path() / "recalibrated.json").string();
+  write_run_page("diagnose", run.brief(), report, pictures, stem.string() + ".html", next);
 
   outputs.publish();
   std::cout << run.brief() << "\n";

@@ -60,13 +60,14 @@ std::string base64(const std::string& bytes) {
 
 bool scalar(const json& v) { return v.is_primitive(); }
 
-// Numbers as a person reads them: integers whole, others to six significant digits.
+// Numbers as a person reads them: integers whole, others to three significant digits (the JSON
+// beside the page keeps them whole).
 std::string text_of(const json& v) {
   if (v.is_string()) return escaped(v.get<std::string>());
   if (v.is_number_integer() || v.is_number_unsigned()) return v.dump();
   if (v.is_number_float()) {
     char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.6g", v.get<double>());
+    std::snprintf(buffer, sizeof buffer, "%.3g", v.get<double>());
     return buffer;
   }
   if (v.is_boolean()) return v.get<bool>() ? "yes" : "no";
@@ -88,10 +89,13 @@ bool table_of_records(const json& v) {
   return v.is_array() && !v.empty() && std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_object(); });
 }
 
-// A list of records (per-view results) as one table: a column per key any record has, in the
-// order keys first appear.
+// A list of records (per-view results) as one table: a column per key any record has, what a
+// record is and its verdict first (name, index, view, status, accepted), then the others as
+// they first appear (JSON objects keep their keys in alphabetical order).
 void records(std::ostream& out, const json& rows) {
   std::vector<std::string> columns;
+  for (const char* leading : {"name", "index", "view", "status", "accepted", "reason"})
+    if (std::any_of(rows.begin(), rows.end(), [&](const json& r) { return r.contains(leading); })) columns.emplace_back(leading);
   for (const json& r : rows)
     for (auto it = r.begin(); it != r.end(); ++it)
       if (std::find(columns.begin(), columns.end(), it.key()) == columns.end()) columns.push_back(it.key());
@@ -147,8 +151,13 @@ std::string html_report_text(const HtmlReport& r) {
       << "<style>body{font-family:sans-serif;margin:2em;max-width:80em}table{border-collapse:collapse;margin:0.5em 0}"
          "td,th{border:1px solid #ccc;padding:2px 8px;text-align:left;font-size:90%}th{background:#f2f2f2}"
          "table.records td{font-family:monospace}figure{display:inline-block;margin:0.5em;vertical-align:top}"
-         "figcaption{font-size:90%;color:#444}code{font-size:85%;word-break:break-all}</style></head>\n"
-      << "<body>\n<h1>" << escaped(r.title) << "</h1>\n<p class=\"brief\">" << escaped(r.brief) << "</p>\n";
+         "figcaption{font-size:90%;color:#444}code{font-size:85%;word-break:break-all}"
+         "div.verdict{border-left:6px solid #2a6;background:#f3faf5;padding:0.6em 1em;margin:1em 0;font-size:110%}"
+         "div.verdict code{font-size:95%;word-break:normal}</style></head>\n"
+      << "<body>\n<h1>" << escaped(r.title) << "</h1>\n<div class=\"verdict\" id=\"verdict\"><p class=\"brief\">"
+      << escaped(r.brief) << "</p>\n";
+  if (!r.next.empty()) out << "<p>next: <code>" << escaped(r.next) << "</code></p>\n";
+  out << "</div>\n";
   if (!r.pictures.empty()) {
     out << "<h2>pictures</h2>\n";
     for (const auto& [caption, file] : r.pictures)
@@ -163,11 +172,14 @@ std::string html_report_text(const HtmlReport& r) {
   }
   section(out, "results", body, 0);
   if (!provenance.is_null()) section(out, "provenance", provenance, 0);
-  // The footer says how many pictures the browser could show (a test reads it from the page).
+  // The footer says how many pictures the browser could show, and the body where the verdict ends
+  // on the screen (a test reads both from the page).
   out << "<p class=\"footer\">pictures shown: <span id=\"pictures-shown\">not counted (scripts off)</span></p>\n"
       << "<script>window.addEventListener('load',function(){var i=document.images,n=0;for(var k=0;k<i.length;k++)"
          "if(i[k].complete&&i[k].naturalWidth>0)n++;var e=document.getElementById('pictures-shown');"
-         "e.textContent=n+' of '+i.length;document.body.setAttribute('data-pictures-missing',String(i.length-n));});</script>\n"
+         "e.textContent=n+' of '+i.length;document.body.setAttribute('data-pictures-missing',String(i.length-n));"
+         "var v=document.getElementById('verdict');if(v)document.body.setAttribute('data-verdict-bottom',"
+         "String(Math.round(v.getBoundingClientRect().bottom)));});</script>\n"
       << "</body></html>\n";
   return out.str();
 }

@@ -18,6 +18,7 @@ TEST(HtmlReport, EmbedsPicturesAndRendersTheReport) {
   HtmlReport r;
   r.title = "ctk calibrate";
   r.brief = "calibrated 3 of 4 views <fast> & well";
+  r.next = "ctk diagnose --scan s.json --geometry g.json";
   r.report = {{"summary", {{"median_rms_px", 0.0123456789}, {"views", 4}}},
               {"views",
                {{{"index", 0}, {"status", "ok"}, {"rms_px", 0.01}},
@@ -33,12 +34,17 @@ TEST(HtmlReport, EmbedsPicturesAndRendersTheReport) {
     page = html_report_text(r);
   }
   EXPECT_NE(page.find("calibrated 3 of 4 views &lt;fast&gt; &amp; well"), std::string::npos);
+  // The verdict first: the brief and the next command before any number or picture.
+  const auto verdict = page.find("<div class=\"verdict\"");
+  ASSERT_NE(verdict, std::string::npos);
+  EXPECT_LT(verdict, page.find("calibrated 3 of 4"));
+  EXPECT_LT(page.find("next: <code>ctk diagnose --scan s.json --geometry g.json</code>"), page.find("<img"));
   EXPECT_NE(page.find("<img src=\"data:image/png;base64,iVBORw0KGgo"), std::string::npos);  // PNG's signature
-  EXPECT_NE(page.find("<th>median_rms_px</th><td>0.0123457</td>"), std::string::npos);
-  // One table for the per-view records, a column for every key any record has (in the report's
-  // key order, then those only later records have).
-  EXPECT_NE(page.find("<th>index</th><th>rms_px</th><th>status</th><th>reason</th>"), std::string::npos);
-  EXPECT_NE(page.find("<td>1</td><td></td><td>rejected</td><td>too few spheres</td>"), std::string::npos);
+  EXPECT_NE(page.find("<th>median_rms_px</th><td>0.0123</td>"), std::string::npos);         // three significant digits
+  // One table for the per-view records, a column for every key any record has: what a record is
+  // and its verdict first (index, status, reason), then the others in the report's key order.
+  EXPECT_NE(page.find("<th>index</th><th>status</th><th>reason</th><th>rms_px</th>"), std::string::npos);
+  EXPECT_NE(page.find("<td>1</td><td>rejected</td><td>too few spheres</td><td></td>"), std::string::npos);
   EXPECT_NE(page.find("&hellip; (40 values)"), std::string::npos);
   EXPECT_LT(page.find("results"), page.find("ctk_version"));  // provenance last
   r.pictures = {{"gone", dir / "missing.png"}};

@@ -12,12 +12,13 @@ namespace ctk {
 
 struct HtmlReport {
   std::string title;  // "ctk calibrate"
-  std::string brief;  // the run's one-line summary
+  std::string brief;  // the run's one-line summary: what was found, how sure (the verdict on top)
   /// Rendered section by section: top-level numbers and texts in one table, each object as a
   /// section, lists of objects (per-view records) as tables, `provenance` last.
   nlohmann::json report;
   /// Caption and PNG file. A file still waiting in the active OutputSet is read where it waits.
   std::vector<std::pair<std::string, std::filesystem::path>> pictures;
+  std::string next;  // the command to run next, shown under the verdict ("" for none)
 };
 
 /// The page as text (the pictures read and encoded). Throws std::runtime_error naming a picture
