@@ -74,12 +74,17 @@ TEST(Measurements, AGeometryForAnotherDetectorNamesItsFileAndKey) {
   expect_refused(g, "views[4].index");
 }
 
-TEST(Measurements, CountsGiveLineIntegralsNearTheTruthAndWeights) {
-  const auto dir = testing::scratch_dir();
+// A tiny counts scan of 60000 counts above a dark of 100, simulated into `dir`.
+ScanDescription counts_scan(const std::filesystem::path& dir) {
   ScanSimulation sim = tiny_scan(SimulatedOutput::counts);
   sim.counts = {60000, 100};
   simulate_scan(sim, dir);
-  const ScanDescription scan = read_scan(dir / "scan.json");
+  return read_scan(dir / "scan.json");
+}
+
+TEST(Measurements, CountsGiveLineIntegralsNearTheTruthAndWeights) {
+  const auto dir = testing::scratch_dir();
+  const ScanDescription scan = counts_scan(dir);
   const Measurements m = load_measurements(scan, read_geometry(dir / "truth-geometry.json"));
   ASSERT_EQ(m.weights.views, 6);
   // Open beam: line integral ~ 0 within noise (sigma ~ 1/sqrt(60000)), weight ~ 1.
@@ -92,10 +97,7 @@ TEST(Measurements, CountsGiveLineIntegralsNearTheTruthAndWeights) {
 // NaN: its weight is zero and every weight finite (weight +Inf gave an all-zero WLS-CG volume).
 TEST(Measurements, AnInfiniteCountIsMaskedAndCounted) {
   const auto dir = testing::scratch_dir();
-  ScanSimulation sim = tiny_scan(SimulatedOutput::counts);
-  sim.counts = {60000, 100};
-  simulate_scan(sim, dir);
-  const ScanDescription scan = read_scan(dir / "scan.json");
+  const ScanDescription scan = counts_scan(dir);
   Image view = read_image(scan.projection_path(2));
   const auto at = static_cast<std::size_t>(7 * view.cols + 9);
   view.pixels[at] = std::numeric_limits<float>::infinity();
@@ -112,10 +114,7 @@ TEST(Measurements, AnInfiniteCountIsMaskedAndCounted) {
 // together, -log(sum(I - dark) / sum(flat - dark)), not the mean of their line integrals.
 TEST(Measurements, BinnedCountsAreSummedBeforeTheLogarithm) {
   const auto dir = testing::scratch_dir();
-  ScanSimulation sim = tiny_scan(SimulatedOutput::counts);
-  sim.counts = {60000, 100};
-  simulate_scan(sim, dir);
-  const ScanDescription scan = read_scan(dir / "scan.json");
+  const ScanDescription scan = counts_scan(dir);
   ScanDescription binned = scan;
   bin_scan(binned, 2);
   const Image counts = read_image(scan.projection_path(3)), flat = read_image(scan.resolve(scan.projections.flat[0])),
