@@ -92,7 +92,7 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         m = ctk.load_measurements(import_walnut(args.ctk, args.data, pathlib.Path(tmp)))
     A = m.projector(SHAPE, VOXEL_MM)
-    solve = lambda lam, delta: ctk.os_sqs(A, m.line_integrals, weights=m.weights, epochs=args.epochs, subsets=2, lam=lam,
+    solve = lambda lam, delta: ctk.os_sqs(A, m.line_integrals, weights=m.weights, epochs=args.epochs, subsets=2, lambda_=lam,
                                           regulariser="gradient", huber_delta=delta).x
 
     lightest = solve(WEIGHTS[0], 0.0)

@@ -14,6 +14,7 @@ import dataclasses
 import json
 import logging
 import os
+import warnings
 from typing import Callable, Optional, Sequence
 
 import numpy as np
@@ -83,32 +84,46 @@ def _iteration_hook(method: str, callback: Optional[Callable[[dict], Optional[bo
     return hook
 
 
+def _penalty_weight(lambda_: float, lam: Optional[float]) -> float:
+    """One name for the penalty's weight everywhere, as the command line's --lambda: lambda_
+    (`lam`, its earlier name, still taken with a DeprecationWarning)."""
+    if lam is None:
+        return lambda_
+    warnings.warn("lam is now lambda_ (as reconstruct() and the command line's --lambda)", DeprecationWarning, stacklevel=3)
+    if lambda_ != 0.0 and lambda_ != lam:
+        raise ValueError(f"lambda_ ({lambda_}) and its old name lam ({lam}) disagree: give lambda_ alone")
+    return lam
+
+
 def wls_cg(operator: Operator, b: np.ndarray, *, weights: Optional[np.ndarray] = None,
            x0: Optional[np.ndarray] = None, iterations: int = 30, tolerance: float = 1e-4,
-           lam: float = 0.0, regulariser: str = "identity", preconditioner: str = "none",
-           callback: Optional[Callable[[dict], Optional[bool]]] = None) -> SolveResult:
+           lambda_: float = 0.0, regulariser: str = "identity", preconditioner: str = "none",
+           callback: Optional[Callable[[dict], Optional[bool]]] = None, lam: Optional[float] = None) -> SolveResult:
     """Weighted least squares by conjugate gradients on the normal equations,
-    minimise 1/2 ||W^(1/2) (A x - b)||^2 + 1/2 lam ||G x||^2 with G the identity or the
+    minimise 1/2 ||W^(1/2) (A x - b)||^2 + 1/2 lambda_ ||G x||^2 with G the identity or the
     discrete gradient ('gradient'). One forward and one back projection per iteration.
-    preconditioner 'diagonal': CG preconditioned by the separable curvature A'WA1 + lam c (one
+    preconditioner 'diagonal': CG preconditioned by the separable curvature A'WA1 + lambda_ c (one
     more projection pair at the start, one more volume).
 
     callback(log) is called after every iteration with its log entry; returning False stops the
     solve. Ctrl-C (KeyboardInterrupt) stops it within the iteration under way. Progress goes to
     the 'ctk' logger at INFO level."""
-    x, report = _ctk._wls_cg(operator, b, weights, x0, iterations, tolerance, lam, regulariser, preconditioner,
+    x, report = _ctk._wls_cg(operator, b, weights, x0, iterations, tolerance, _penalty_weight(lambda_, lam), regulariser,
+                             preconditioner,
                              _iteration_hook("wls-cg", callback))
     return SolveResult(x, report["iterations"], report["stop_reason"])
 
 
 def os_sqs(operator: Operator, b: np.ndarray, *, weights: Optional[np.ndarray] = None, x0: Optional[np.ndarray] = None,
-           epochs: int = 8, subsets: int = 12, lam: float = 0.0, regulariser: str = "identity", huber_delta: float = 0.0,
-           non_negative: bool = True, callback: Optional[Callable[[dict], Optional[bool]]] = None) -> SolveResult:
+           epochs: int = 8, subsets: int = 12, lambda_: float = 0.0, regulariser: str = "identity", huber_delta: float = 0.0,
+           non_negative: bool = True, callback: Optional[Callable[[dict], Optional[bool]]] = None,
+           lam: Optional[float] = None) -> SolveResult:
     """OS-SQS with Nesterov momentum on wls_cg's objective (optionally the edge-preserving Huber
-    penalty, huber_delta > 0, weighted by lam): one step per ordered subset, the subsets spread
+    penalty, huber_delta > 0, weighted by lambda_): one step per ordered subset, the subsets spread
     over the views' source directions for a Projector (interleaved by index for other
     operators). One log entry per epoch; callback as for wls_cg (called after each epoch)."""
-    x, report = _ctk._os_sqs(operator, b, weights, x0, epochs, subsets, lam, regulariser, huber_delta, non_negative,
+    x, report = _ctk._os_sqs(operator, b, weights, x0, epochs, subsets, _penalty_weight(lambda_, lam), regulariser, huber_delta,
+                             non_negative,
                              _iteration_hook("os-sqs", callback))
     return SolveResult(x, report["iterations"], report["stop_reason"])
 

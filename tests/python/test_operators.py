@@ -217,3 +217,17 @@ def test_sizes_and_threads_are_refused_as_the_command_line_refuses_them(tmp_path
     assert not (tmp_path / "v.nrrd").exists()
     with pytest.raises(ValueError, match=r"ProjectorOptions.threads: expected 0 .* \(four per processor\), got 100000"):
         ctk.Projector(P, (8, 8, 8), voxel_mm=1, detector_shape=(40, 40), threads=100000)
+
+
+def test_the_penalty_weight_has_the_command_lines_name(small_projector):
+    """lambda_ as reconstruct() and --lambda name it; lam, the earlier name, the same solve with a
+    DeprecationWarning; both at once and different refused."""
+    A = small_projector
+    b = A.forward(np.random.default_rng(3).random(A.volume_shape, dtype=np.float32))
+    new = ctk.wls_cg(A, b, iterations=3, lambda_=2.0)
+    with pytest.warns(DeprecationWarning, match="lam is now lambda_"):
+        old = ctk.wls_cg(A, b, iterations=3, lam=2.0)
+    assert np.array_equal(new.x, old.x)
+    assert not np.array_equal(new.x, ctk.wls_cg(A, b, iterations=3).x)
+    with pytest.raises(ValueError, match="disagree"):
+        ctk.os_sqs(A, b, epochs=1, subsets=2, lambda_=1.0, lam=2.0)
