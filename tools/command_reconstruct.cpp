@@ -174,9 +174,15 @@ void run_reconstruct(const ReconstructOptions& o) {
     throw InputError("--resume", "", "no saved state at " + state_file.string() + " to continue");
 
   // A saved state continues only the run that saved it: the same files, data, volume and solver.
-  const nlohmann::json files_used = {
-      {"scan", fs::absolute(o.scan).lexically_normal().string()},
-      {"geometry", o.geometry.empty() ? std::string("nominal") : fs::absolute(o.geometry).lexically_normal().string()}};
+  // A file is named by where it is (symbolic links and ".." resolved): the same scan spelt
+  // another way is the same scan.
+  const auto place = [](const fs::path& p) {
+    std::error_code ec;
+    const fs::path resolved = fs::weakly_canonical(fs::absolute(p), ec);
+    return (ec ? fs::absolute(p).lexically_normal() : resolved).string();
+  };
+  const nlohmann::json files_used = {{"scan", place(o.scan)},
+                                     {"geometry", o.geometry.empty() ? std::string("nominal") : place(o.geometry)}};
   const auto with_files = [&](nlohmann::json identity) {
     identity.update(files_used);
     return identity;

@@ -2,7 +2,8 @@
 # An interrupted reconstruction continued with --resume gives the volume of an uninterrupted run
 # (to 1e-6 of its largest voxel): stopped by Ctrl-C (the state saved on the spot, exit 130) and
 # killed outright (continued from the last periodic save). A state is refused, naming the option,
-# by a run with other options, and removed once the run completes. Usage: reconstruct_resumes.sh CTK PYTHON
+# by a run with other options, and removed once the run completes; the scan and geometry spelt another
+# way continue it. Usage: reconstruct_resumes.sh CTK PYTHON
 set -u
 . "$(dirname "$0")/signals.sh"
 ctk=$1
@@ -14,6 +15,9 @@ fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
 "$ctk" simulate --out s --views 30 --cols 128 --rows 128 --pitch 3.4 --phantom helix-holder --phantom sample-1 >/dev/null 2>&1 ||
   { echo "simulate failed"; exit 1; }
 recon="$ctk reconstruct --scan s/scan.json --geometry s/truth-geometry.json --size 96"  # no spaces in these paths
+# The same scan spelt another way (a symbolic link, "..") is the same scan to --resume.
+ln -s s s-link
+respelt="$ctk reconstruct --scan ./s-link/scan.json --geometry s-link/../s/truth-geometry.json --size 96"
 
 
 same_volume() {
@@ -51,7 +55,7 @@ for method in wls-cg sirt; do
   code=$?
   { [ "$code" -eq 2 ] && grep -q "kill-$method.state: key 'run.lambda'" refused-$method.log; } ||
     fail "$method: a state continued by a run with another --lambda: exit $code, $(tail -n 1 refused-$method.log)"
-  $recon --method $method --iterations 30 --out kill-$method.nrrd --checkpoint-every 5 --resume > kill-$method.resumed.log 2>&1 ||
+  $respelt --method $method --iterations 30 --out kill-$method.nrrd --checkpoint-every 5 --resume > kill-$method.resumed.log 2>&1 ||
     fail "$method: --resume after a kill failed: $(tail -n 1 kill-$method.resumed.log)"
   grep -q "continuing $method after iteration 10" kill-$method.resumed.log || fail "$method: not continued from the last save (10)"
   same_volume whole-$method.nrrd kill-$method.nrrd || fail "$method: continued after a kill, not the uninterrupted volume"
