@@ -4,6 +4,7 @@
 // NRRD file), PNG previews of the three central slices and a JSON log, published together.
 // Under mpirun the views (or slabs of the volume) are spread over the ranks and the first rank
 // writes.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -12,6 +13,7 @@
 #include "commands.hpp"
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/communicator.hpp"
+#include "ctk/core/chart.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/core/image_io.hpp"
 #include "ctk/core/volume_file.hpp"
@@ -75,6 +77,30 @@ ReconstructionOptions library_options(const ReconstructOptions& o) {
 }
 
 fs::path preview_file(const fs::path& out, const std::string& slice) { return out.parent_path() / (out.stem().string() + slice); }
+
+// The solver's cost along its iterations, on a log scale relative to the start (a table of
+// numbers does not show where a run stopped improving). False when there is nothing to draw
+// (FDK, or one iteration).
+bool write_convergence(const std::vector<IterationLog>& log, const fs::path& png) {
+  if (log.size() < 2 || !(log.front().cost > 0)) return false;
+  std::vector<double> relative;
+  for (const IterationLog& l : log) relative.push_back(std::log10(std::max(l.cost / log.front().cost, 1e-12)));
+  const double low = std::floor(*std::min_element(relative.begin(), relative.end()) * 2) / 2;
+  ChartAxes axes{0,
+                 static_cast<double>(log.back().iteration),
+                 std::min(low, -0.5),
+                 0.1,
+                 "convergence",
+                 "iteration",
+                 "log10(cost / starting cost)"};
+  Chart chart(480, 280, axes);
+  for (std::size_t i = 1; i < log.size(); ++i)
+    chart.line(log[i - 1].iteration, relative[i - 1], log[i].iteration, relative[i], colour::blue, 2);
+  for (std::size_t i = 0; i < log.size(); ++i) chart.dot(log[i].iteration, relative[i], colour::blue, 2.5);
+  chart.ticks(nice_step(axes.x1 - axes.x0, 6), nice_step(axes.y1 - axes.y0, 5));
+  chart.save(png);
+  return true;
+}
 
 void write_previews(const Volume& x, const fs::path& out) {
   const float high = preview_ceiling(x);
@@ -148,7 +174,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   files.output("the HTML report beside --out", page);
   const fs::path state_file = fs::path(o.out).replace_extension(".state");
   files.output("the solver state beside --out", state_file);
-  for (const char* slice : {"_axial.png", "_coronal.png", "_sagittal.png"})
+  for (const char* slice : {"_axial.png", "_coronal.png", "_sagittal.png", "_convergence.png"})
     files.output(std::string("the preview beside --out"), preview_file(o.out, slice));
   files.check();
   OutputSet outputs;  // published together, after the last is written
@@ -257,14 +283,16 @@ void run_reconstruct(const ReconstructOptions& o) {
   log["scan"] = o.scan.string();
   log["geometry"] = o.geometry.empty() ? geometry.origin : geometry.description();
   write_text_atomically(log_file, log.dump(2) + "\n");
-  write_run_page("reconstruct", run.brief(), log,
-                 {preview_file(o.out, "_axial.png"), preview_file(o.out, "_coronal.png"), preview_file(o.out, "_sagittal.png")},
-                 page);
+  std::vector<fs::path> pictures = {preview_file(o.out, "_axial.png"), preview_file(o.out, "_coronal.png"),
+                                    preview_file(o.out, "_sagittal.png")};
+  if (write_convergence(run.solver.iterations, preview_file(o.out, "_convergence.png")))
+    pictures.push_back(preview_file(o.out, "_convergence.png"));
+  write_run_page("reconstruct", run.brief(), log, pictures, page);
   outputs.publish();
   std::error_code ignored;
   fs::remove(state_file, ignored);  // the run is complete: nothing left to continue
-  std::cout << "volume written to " << o.out.string() << ", previews *_axial/_coronal/_sagittal.png, log " << log_file.string()
-            << "\n";
+  std::cout << "volume written to " << o.out.string() << ", previews *_axial/_coronal/_sagittal.png (and _convergence), log "
+            << log_file.string() << "\n";
 }
 
 }  // namespace
