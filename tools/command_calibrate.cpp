@@ -107,6 +107,12 @@ fs::path report_file(const CalibrateOptions& o) {
 }
 
 void run_calibrate(const CalibrateOptions& o) {
+  // Ctrl-C from the very start is a request to stop (exit 130 at the first view boundary), not the
+  // signal's default end; spread over ranks, mpirun passes it on and every rank ends at once.
+  // Watched before the ranks are counted: starting MPI takes a few tenths of a second.
+  std::optional<InterruptionWatch> watch;
+  watch.emplace();
+  if (world().size() > 1) watch.reset();
   const ScanDescription scan = read_scan_binned(o.scan, o.bin);
   RunFiles files;
   require_projection_files(scan, o.scan.string(), "projections.count");
@@ -128,7 +134,6 @@ void run_calibrate(const CalibrateOptions& o) {
   const nlohmann::json run = calibration_run(o, scan);
   std::unique_ptr<CalibrationJournal> journal;
   std::map<int, ViewCalibration> earlier;
-  std::optional<InterruptionWatch> watch;
   BatchControl control;
   if (!spread) {
     if (o.resume) {
@@ -144,7 +149,6 @@ void run_calibrate(const CalibrateOptions& o) {
       journal = std::make_unique<CalibrationJournal>(journal_file, run);
     }
     earlier = journal->done();
-    watch.emplace();
     control.done = &earlier;
     control.on_view = [&](int view, const ViewCalibration& result) { journal->record(view, result); };
     control.stop_requested = [] { return InterruptionWatch::requested(); };
