@@ -285,7 +285,13 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
       if (t.effect != Effect::sphere_positions) return parameter_count(t.effect, o);
       return 3 * static_cast<int>(std::count(t.free_spheres.begin(), t.free_spheres.end(), true));
     };
-    double threshold = 0;  // set below, once the round's trials are counted
+    // The scan's false-acceptance rate, spent over the rounds (round r: rate / 2^r, the sum below
+    // the rate however many rounds run) and shared by the round's trials (Bonferroni): chance
+    // passes any trial of any round with probability at most the rate.
+    const double level =
+        options.false_acceptance_rate / std::ldexp(1.0, std::min(round, 60)) / static_cast<double>(trials.size());
+    const double threshold = one_sided_threshold(level, std::max<std::size_t>(o.views.size(), 2));
+    say("  round " + std::to_string(round) + ": an effect must pass " + std::to_string(threshold) + " standard errors");
     auto passes_held_out = [&](const Trial& t) {
       if (!(t.z > threshold)) return false;
       if (!(current_total - total(t) > free_parameters(t))) return false;
@@ -296,13 +302,6 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
       const double explained2 = current_held.rms_px * current_held.rms_px - t.held.rms_px * t.held.rms_px;
       return explained2 > options.min_image_effect_px * options.min_image_effect_px;
     };
-    // The scan's false-acceptance rate, spent over the rounds (round r: rate / 2^r, the sum below
-    // the rate however many rounds run) and shared by the round's trials (Bonferroni): chance
-    // passes any trial of any round with probability at most the rate.
-    const double level =
-        options.false_acceptance_rate / std::ldexp(1.0, std::min(round, 60)) / static_cast<double>(trials.size());
-    threshold = one_sided_threshold(level, std::max<std::size_t>(o.views.size(), 2));
-    say("  round " + std::to_string(round) + ": an effect must pass " + std::to_string(threshold) + " standard errors");
     // Nested models: with the effect's freedom added, the fit on all views must do at least as well
     // as the model without it, in its whole cost and in the images alone (fitted once per trial
     // that passes the rest, then remembered). A missing effect leaves the images misfitted: adding
@@ -362,7 +361,8 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
         f.effect = t.effect;
         f.z = t.z;
         f.threshold_z = threshold;
-        f.raised_in_sample_cost = raises_in_sample.count(t.effect) > 0 && raises_in_sample[t.effect];
+        const auto judged = raises_in_sample.find(t.effect);
+        f.raised_in_sample_cost = judged != raises_in_sample.end() && judged->second;
         f.before = d.effects.empty() && d.outside.empty() ? d.baseline : d.final_error;
         f.before.heldout_rms_px = current_held.rms_px;
         f.after = f.before;

@@ -1,6 +1,5 @@
 #include "ctk/calib/diagnosis_run.hpp"
 
-#include <iomanip>
 #include <sstream>
 
 #include "ctk/calib/robot_prior.hpp"
@@ -94,16 +93,14 @@ std::string DiagnosisRun::brief() const {
   std::ostringstream b;
   // The verdict first: what was found and how sure, or that nothing was.
   b.precision(3);
-  std::string found;
+  b << "found: ";
+  bool any = false;
   for (const EffectFinding& f : d.effects)
-    if (f.accepted)
-      found += std::string(found.empty() ? "" : ", ") + effect_name(f.effect) + " (held-out t " +
-               (std::ostringstream() << std::setprecision(3) << f.z).str() + " against " +
-               (std::ostringstream() << std::setprecision(3) << f.threshold_z).str() + ")";
-  if (found.empty())
-    b << "found: no effect beyond chance (at most " << 100 * d.false_acceptance_rate << " % false acceptances per scan)";
-  else
-    b << "found: " << found;
+    if (f.accepted) {
+      b << (any ? ", " : "") << effect_name(f.effect) << " (held-out t " << f.z << " against " << f.threshold_z << ")";
+      any = true;
+    }
+  if (!any) b << "no effect beyond chance (at most " << 100 * d.false_acceptance_rate << " % false acceptances per scan)";
   if (!d.unexplained.empty()) b << "; structure no effect explains: " << d.unexplained.front().where;
   b << "\nbaseline " << d.baseline.rms_px << " px RMS (held out " << d.baseline.heldout_rms_px << ")";
   if (observations.setup.robot) b << ", robot prediction error " << d.baseline.fk_translation_rms_mm << " mm RMS";

@@ -10,13 +10,30 @@ namespace ctk {
 
 namespace fs = std::filesystem;
 
-void write_path_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
-  // The rename below would put a regular file where a device, a FIFO or a folder was.
+std::string not_replaceable_by_output(const fs::path& path) {
   std::error_code ec;
-  const fs::file_type existing = fs::status(path, ec).type();
-  if (!ec && existing != fs::file_type::not_found && existing != fs::file_type::regular)
+  switch (fs::status(path, ec).type()) {  // through symbolic links: what the name leads to
+    case fs::file_type::not_found:
+    case fs::file_type::regular:
+      return {};
+    case fs::file_type::directory:
+      return "a folder";
+    case fs::file_type::character:
+    case fs::file_type::block:
+      return "a device";
+    case fs::file_type::fifo:
+      return "a FIFO";
+    case fs::file_type::socket:
+      return "a socket";
+    default:
+      return ec ? std::string() : std::string("not a regular file");
+  }
+}
+
+void write_path_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  if (const std::string kind = not_replaceable_by_output(path); !kind.empty())
     throw InputError(path.string(), "",
-                     "exists and is not a regular file; an output replaces a file whole, so it names only files");
+                     "is " + kind + ", not a regular file; an output replaces a file whole, so it names only files");
   if (path.has_parent_path()) fs::create_directories(path.parent_path());
   const fs::path tmp = temporary_beside(path);
   try {

@@ -11,6 +11,7 @@
 #include <set>
 #include <utility>
 
+#include "ctk/core/atomic_write.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/core/output_set.hpp"
 #include "ctk/geom/scan.hpp"
@@ -49,31 +50,6 @@ bool starts_and_ends(const std::string& s, const std::string& prefix, const std:
 }
 
 std::string named(const std::string& what, const fs::path& p) { return what + " (" + p.string() + ")"; }
-
-// What an existing path is when it is not what an output may replace ("" when it may): outputs are
-// written beside and renamed into place, which would put a regular file where a device, a FIFO or a
-// socket was (`--out /dev/null` run as root replaced the machine's null device).
-std::string not_replaceable(const fs::path& p, bool folder) {
-  std::error_code ec;
-  const fs::file_status s = fs::status(p, ec);  // through symbolic links: what the name leads to
-  if (ec || s.type() == fs::file_type::not_found) return {};
-  if (folder) return s.type() == fs::file_type::directory ? std::string() : std::string("not a folder");
-  switch (s.type()) {
-    case fs::file_type::regular:
-      return {};
-    case fs::file_type::directory:
-      return "a folder";
-    case fs::file_type::character:
-    case fs::file_type::block:
-      return "a device";
-    case fs::file_type::fifo:
-      return "a FIFO";
-    case fs::file_type::socket:
-      return "a socket";
-    default:
-      return "not a regular file";
-  }
-}
 
 // The folder an output goes into, or the nearest of its parents that exists, must take new files:
 // a run that can only write its results after an hour's solve is told before it starts. Asked by
@@ -143,7 +119,7 @@ void RunFiles::check() const {
   }
   std::map<fs::path, const Entry*> written;
   for (const Entry& out : outputs_) {
-    if (const std::string kind = not_replaceable(out.path, false); !kind.empty())
+    if (const std::string kind = not_replaceable_by_output(out.path); !kind.empty())
       throw InputError(out.path.string(), out.what,
                        "is " + kind + ", not a regular file; ctk replaces its outputs whole, so it names only files");
     if (const std::string why = not_writable(out.place); !why.empty())
@@ -161,8 +137,8 @@ void RunFiles::check() const {
       refuse(out, "the output " + named(it->second->what, it->second->path) + " of the same run");
   }
   for (const Entry& folder : output_folders_) {
-    if (const std::string kind = not_replaceable(folder.path, true); !kind.empty())
-      throw InputError(folder.path.string(), folder.what, "is " + kind + "; the run writes its files into a folder there");
+    if (std::error_code ec; fs::exists(folder.path, ec) && !fs::is_directory(folder.path, ec))
+      throw InputError(folder.path.string(), folder.what, "is not a folder; the run writes its files into a folder there");
     if (const std::string why = not_writable(folder.place / "."); !why.empty())
       throw InputError(folder.path.string(), folder.what, "cannot be written: " + why);
     for (const Entry& in : inputs_)

@@ -69,13 +69,19 @@ void write_flat_and_dark(const ScanSimulation& sim, const fs::path& folder) {
 
 namespace {
 
+// One view's line integrals with its own blur and spurious blobs.
+Image view_line_integrals(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view, const RenderOptions& render) {
+  Image image = render_line_integrals(phantom, *view.P, sim.setup.detector, render);
+  if (view.blur_sigma_px > 0) blur_image(image, view.blur_sigma_px);
+  for (const Blob& blob : view.blobs) add_blob(image, blob);
+  return image;
+}
+
 // One view's noise-free signal (counts above dark) through the lab's nuisances: the detector's
 // PSF, the focal spot's penumbra (its FWHM times the magnification less one, at the holder
 // origin), scatter.
 Image expected_signal(const ScanSimulation& sim, const Phantom& phantom, const TrueView& view, const RenderOptions& render) {
-  Image image = render_line_integrals(phantom, *view.P, sim.setup.detector, render);
-  if (view.blur_sigma_px > 0) blur_image(image, view.blur_sigma_px);
-  for (const Blob& blob : view.blobs) add_blob(image, blob);
+  Image image = view_line_integrals(sim, phantom, view, render);
   for (float& p : image.pixels) p = static_cast<float>(sim.counts.flat_counts * std::exp(-double(p)));
   const SimulationEffects& e = sim.effects;
   const double magnification = sim.setup.source_to_detector_mm / sim.setup.source_to_isocentre_mm;
@@ -96,9 +102,7 @@ Image simulated_image(const ScanSimulation& sim, const Phantom& phantom, const T
   const bool nuisances = has_detector_nuisances(sim.effects) && sim.output == SimulatedOutput::counts;
   Image counts;
   if (!nuisances) {
-    Image image = render_line_integrals(phantom, *view.P, sim.setup.detector, render);
-    if (view.blur_sigma_px > 0) blur_image(image, view.blur_sigma_px);
-    for (const Blob& blob : view.blobs) add_blob(image, blob);
+    Image image = view_line_integrals(sim, phantom, view, render);
     if (sim.output == SimulatedOutput::line_integrals) return image;
     counts = expected_counts(image, sim.counts);
   } else {

@@ -4,12 +4,19 @@
 #include <filesystem>
 #include <functional>
 #include <ostream>
+#include <string>
 #include <string_view>
 
 namespace ctk {
 
+/// What an existing `path` is when an output may not replace it ("a device", "a FIFO", "a socket",
+/// "a folder", "not a regular file"), following symbolic links; "" for a regular file or nothing.
+/// The rename that publishes an output would put a regular file in its place.
+std::string not_replaceable_by_output(const std::filesystem::path& path);
+
 /// Calls `write` with a stream to a temporary file, then renames it to `path`.
-/// Throws std::runtime_error (naming the path) when the file cannot be written.
+/// Throws std::runtime_error (naming the path) when the file cannot be written, InputError when
+/// `path` is not replaceable (not_replaceable_by_output).
 void write_file_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& write);
 
 /// Same for a file written by a library that takes a path (OpenImageIO, ...): `write` receives the
