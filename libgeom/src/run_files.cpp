@@ -55,7 +55,7 @@ std::string named(const std::string& what, const fs::path& p) { return what + " 
 // a run that can only write its results after an hour's solve is told before it starts. Asked by
 // creating (and removing) a file there: permission bits do not tell root about a read-only mount,
 // nor anyone about a file system such as /proc.
-std::string not_writable(const fs::path& place) {
+std::string not_writable(const fs::path& place, std::map<fs::path, std::string>& asked) {
   fs::path folder = place.parent_path();
   std::error_code ec;
   while (!folder.empty() && !fs::exists(folder, ec)) {
@@ -63,10 +63,12 @@ std::string not_writable(const fs::path& place) {
     folder = folder.parent_path();
   }
   if (folder.empty()) folder = ".";
-  if (!fs::is_directory(folder, ec)) return folder.string() + " is not a folder";
+  if (const auto it = asked.find(folder); it != asked.end()) return it->second;  // one probe per folder
+  std::string& answer = asked[folder];
+  if (!fs::is_directory(folder, ec)) return answer = folder.string() + " is not a folder";
   const fs::path probe = temporary_beside(folder / ".ctk-probe");
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-  if (fd < 0) return "the folder " + folder.string() + " does not take new files (" + std::strerror(errno) + ")";
+  if (fd < 0) return answer = "the folder " + folder.string() + " does not take new files (" + std::strerror(errno) + ")";
   ::close(fd);
   ::unlink(probe.c_str());
   return {};
@@ -118,11 +120,12 @@ void RunFiles::check() const {
     if (exists) by_identity.emplace(id, &in);
   }
   std::map<fs::path, const Entry*> written;
+  std::map<fs::path, std::string> probed;  // folders asked whether they take new files, and the answer
   for (const Entry& out : outputs_) {
     if (const std::string kind = not_replaceable_by_output(out.path); !kind.empty())
       throw InputError(out.path.string(), out.what,
                        "is " + kind + ", not a regular file; ctk replaces its outputs whole, so it names only files");
-    if (const std::string why = not_writable(out.place); !why.empty())
+    if (const std::string why = not_writable(out.place, probed); !why.empty())
       throw InputError(out.path.string(), out.what, "cannot be written: " + why);
     if (const auto it = by_place.find(out.place); it != by_place.end())
       refuse(out, "the input " + named(it->second->what, it->second->path));
@@ -139,7 +142,7 @@ void RunFiles::check() const {
   for (const Entry& folder : output_folders_) {
     if (std::error_code ec; fs::exists(folder.path, ec) && !fs::is_directory(folder.path, ec))
       throw InputError(folder.path.string(), folder.what, "is not a folder; the run writes its files into a folder there");
-    if (const std::string why = not_writable(folder.place / "."); !why.empty())
+    if (const std::string why = not_writable(folder.place / ".", probed); !why.empty())
       throw InputError(folder.path.string(), folder.what, "cannot be written: " + why);
     for (const Entry& in : inputs_)
       if (inside(in.place, folder.place)) refuse(folder, "the input " + named(in.what, in.path) + ", which lies in it");
