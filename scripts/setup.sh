@@ -9,11 +9,12 @@ run_packages=(
   build-essential cmake pkg-config
   libeigen3-dev          # linear algebra
   libceres-dev           # least squares (pose fits, bundle adjustment)
-  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev   # circle detection, image filters (these modules only)
-  libopenimageio-dev     # TIFF/EXR/PNG I/O
+  libopencv-core-dev libopencv-imgproc-dev   # circle detection, image filters (these modules only)
+  libopenimageio-dev     # image formats beyond plain TIFFs (EXR, tiled TIFF, ...), loaded on first use
   openimageio-tools      # its CMake package file refers to these binaries
   libopenexr-dev         # EXR
   libtiff-dev            # TIFF projections and volumes read and written directly (libdeflate)
+  libpng-dev             # PNG pictures
   libhdf5-dev            # HDF5 volumes, NXtomo
   libgeographiclib-dev   # equal-area map projection
   libhealpix-cxx-dev     # sphere pixelisation

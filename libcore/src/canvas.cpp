@@ -1,10 +1,10 @@
 #include "ctk/core/canvas.hpp"
 
 #include <cairo.h>
+#include <png.h>
 
 #include <algorithm>
 #include <cmath>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <vector>
@@ -140,10 +140,22 @@ cv::Mat Canvas::bgr() const {
 void Canvas::save(const std::filesystem::path& png) const { write_png_atomically(bgr(), png); }
 
 void write_png_atomically(const cv::Mat& picture, const std::filesystem::path& png) {
-  std::vector<unsigned char> bytes;
-  cv::imencode(".png", picture, bytes);
+  if (picture.depth() != CV_8U || (picture.channels() != 1 && picture.channels() != 3))
+    throw std::invalid_argument(png.string() + ": a PNG is written from 8-bit grey or BGR pixels");
+  const cv::Mat pixels = picture.isContinuous() ? picture : picture.clone();
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  image.width = static_cast<png_uint_32>(pixels.cols);
+  image.height = static_cast<png_uint_32>(pixels.rows);
+  image.format = pixels.channels() == 1 ? PNG_FORMAT_GRAY : PNG_FORMAT_BGR;
+  png_alloc_size_t size = 0;
+  if (!png_image_write_get_memory_size(image, size, 0, pixels.data, 0, nullptr))
+    throw std::runtime_error(png.string() + ": cannot encode the PNG: " + image.message);
+  std::vector<unsigned char> bytes(size);
+  if (!png_image_write_to_memory(&image, bytes.data(), &size, 0, pixels.data, 0, nullptr))
+    throw std::runtime_error(png.string() + ": cannot encode the PNG: " + image.message);
   write_file_atomically(png, [&](std::ostream& out) {
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(size));
   });
 }
 

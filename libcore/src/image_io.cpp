@@ -1,28 +1,26 @@
 #include "ctk/core/image_io.hpp"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 #include "ctk/core/atomic_write.hpp"
+#include "ctk/core/canvas.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/core/output_set.hpp"
+#include "image_codec.hpp"
 #include "tiff_reading.hpp"
+#include "tiff_writing.hpp"
 
 namespace ctk {
 
 namespace fs = std::filesystem;
-using OIIO::ImageInput;
-using OIIO::ImageOutput;
-using OIIO::ImageSpec;
-using OIIO::TypeDesc;
 
 namespace {
 
@@ -54,24 +52,28 @@ Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>
     check_header(tiff->cols(), tiff->rows(), 1, tiff->description());
     return tiff->read();
   }
-  auto in = ImageInput::open(file.string());
-  if (!in) throw InputError(file.string(), "", "cannot read the image: " + OIIO::geterror());
-  const ImageSpec& spec = in->spec();
-  check_header(spec.width, spec.height, spec.depth, spec.get_string_attribute("ImageDescription"));
+  std::unique_ptr<CodecReader> in;
+  try {
+    in = image_codec().open(file);
+  } catch (const std::runtime_error& e) {
+    throw InputError(file.string(), "", std::string("cannot read the image: ") + e.what());
+  }
+  const CodecHeader header = in->header();
+  check_header(header.width, header.height, header.depth, header.description);
   Image image;
-  image.cols = spec.width;
-  image.rows = spec.height;
-  image.pixels.resize(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height));
-  // A truncated file may read "successfully" with an error recorded: check both.
-  if (!in->read_image(0, 0, 0, 1, TypeDesc::FLOAT, image.pixels.data()) || in->has_error())
-    throw InputError(file.string(), "", "cannot read the pixels (truncated or damaged?): " + in->geterror());
-  // OIIO scales integer types to [0, 1] when converting to float; keep detector counts instead.
-  const double scale = spec.format == TypeDesc::UINT16   ? 65535.0
-                       : spec.format == TypeDesc::UINT8  ? 255.0
-                       : spec.format == TypeDesc::UINT32 ? 4294967295.0
-                                                         : 1.0;
-  if (scale != 1.0)
+  image.cols = header.width;
+  image.rows = header.height;
+  image.pixels.resize(static_cast<std::size_t>(header.width) * static_cast<std::size_t>(header.height));
+  try {
+    in->read_first_channel(image.pixels.data());
+  } catch (const std::runtime_error& e) {
+    throw InputError(file.string(), "", std::string("cannot read the pixels (truncated or damaged?): ") + e.what());
+  }
+  // The codec scales integer samples to [0, 1]; keep detector counts instead.
+  if (header.integer_bits > 0) {
+    const double scale = std::ldexp(1.0, header.integer_bits) - 1.0;
     for (auto& p : image.pixels) p = static_cast<float>(std::round(p * scale));
+  }
   return image;
 }
 
@@ -85,28 +87,34 @@ Image read_image(const fs::path& file, int cols, int rows, std::string* written_
 
 namespace {
 
-void write_single_image(int cols, int rows, TypeDesc type, const void* pixels, const fs::path& file) {
+// TIFFs through libtiff (tiff_writing.hpp), other formats through the codec module.
+void write_single_image(int cols, int rows, TiffPage::Samples samples, const void* pixels, const fs::path& file) {
+  const std::string description = kWrittenBy + this_run_id();
+  if (has_tiff_extension(file)) {
+    const TiffPage page{static_cast<std::uint32_t>(cols), static_cast<std::uint32_t>(rows), samples, pixels, description, {}, {}};
+    write_tiff_atomically(file, [&](TIFF* out) { write_tiff_page(out, page, file); });
+    return;
+  }
   write_path_atomically(file, [&](const fs::path& tmp) {
-    auto out = ImageOutput::create(file.string());
-    if (!out) throw std::runtime_error(file.string() + ": no writer for this format: " + OIIO::geterror());
-    ImageSpec spec(cols, rows, 1, type);
-    spec.attribute("ImageDescription", kWrittenBy + this_run_id());
-    if (!out->open(tmp.string(), spec) || !out->write_image(type, pixels) || !out->close())
-      throw std::runtime_error(file.string() + ": write failed: " + out->geterror());
+    try {
+      image_codec().write(file, tmp, cols, rows, samples == TiffPage::Samples::uint16 ? 16 : 0, pixels, description);
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(file.string() + ": " + e.what());
+    }
   });
 }
 
 }  // namespace
 
 void write_image_float(const Image& image, const fs::path& file) {
-  write_single_image(image.cols, image.rows, TypeDesc::FLOAT, image.pixels.data(), file);
+  write_single_image(image.cols, image.rows, TiffPage::Samples::float32, image.pixels.data(), file);
 }
 
 void write_image_uint16(const Image& counts, const fs::path& file) {
   std::vector<std::uint16_t> pixels(counts.pixels.size());
   std::transform(counts.pixels.begin(), counts.pixels.end(), pixels.begin(),
                  [](float c) { return static_cast<std::uint16_t>(std::lround(std::clamp(c, 0.0f, 65535.0f))); });
-  write_single_image(counts.cols, counts.rows, TypeDesc::UINT16, pixels.data(), file);
+  write_single_image(counts.cols, counts.rows, TiffPage::Samples::uint16, pixels.data(), file);
 }
 
 Image binned_image(const Image& image, int b) {
@@ -134,21 +142,15 @@ float preview_ceiling(const Volume& volume) {
 void write_slice_png(const Volume& v, int axis, int index, float low, float high, const fs::path& file) {
   const auto& s = v.layout.size;
   const int w = axis == 0 ? s[1] : s[0], h = axis == 2 ? s[1] : s[2];
-  std::vector<unsigned char> pixels(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
+  cv::Mat grey(h, w, CV_8UC1);
   for (int r = 0; r < h; ++r)
     for (int c = 0; c < w; ++c) {
       const int z = h - 1 - r;  // coronal and sagittal slices with z up, as the scanner shows them
       const float value = axis == 0 ? v.at(index, c, z) : axis == 1 ? v.at(c, index, z) : v.at(c, r, index);
       const float g = std::clamp((value - low) / std::max(high - low, 1e-30f), 0.0f, 1.0f);
-      pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(w) + static_cast<std::size_t>(c)] =
-          static_cast<unsigned char>(std::lround(255.0f * g));
+      grey.at<unsigned char>(r, c) = static_cast<unsigned char>(std::lround(255.0f * g));
     }
-  write_path_atomically(file, [&](const fs::path& tmp) {
-    auto out = ImageOutput::create(file.string());
-    if (!out || !out->open(tmp.string(), ImageSpec(w, h, 1, TypeDesc::UINT8)) ||
-        !out->write_image(TypeDesc::UINT8, pixels.data()) || !out->close())
-      throw std::runtime_error(file.string() + ": cannot write PNG");
-  });
+  write_png_atomically(grey, file);
 }
 
 }  // namespace ctk

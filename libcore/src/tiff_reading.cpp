@@ -28,12 +28,6 @@ int keep_message(TIFF*, void* user_data, const char* module, const char* format,
 
 int ignore_message(TIFF*, void*, const char*, const char*, va_list) { return 1; }
 
-bool has_tiff_extension(const fs::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext == ".tif" || ext == ".tiff";
-}
-
 template <typename Sample>
 void widen(const unsigned char* bytes, std::size_t count, float* out) {
   for (std::size_t i = 0; i < count; ++i) {
@@ -44,6 +38,12 @@ void widen(const unsigned char* bytes, std::size_t count, float* out) {
 }
 
 }  // namespace
+
+bool has_tiff_extension(const fs::path& file) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext == ".tif" || ext == ".tiff";
+}
 
 std::optional<PlainTiff> PlainTiff::open(const fs::path& file) {
   if (!has_tiff_extension(file)) return std::nullopt;

@@ -17,6 +17,9 @@ namespace ctk {
 
 /// A strip TIFF with one sample per pixel, 8/16/32-bit unsigned or 32-bit float, opened: its
 /// header is known and no pixel is read yet.
+/// `.tif` or `.tiff`, in any case.
+bool has_tiff_extension(const std::filesystem::path& file);
+
 class PlainTiff {
  public:
   /// `std::nullopt` when the file is not such a TIFF (or libtiff cannot open it): the caller reads

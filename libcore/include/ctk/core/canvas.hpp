@@ -53,7 +53,7 @@ class Canvas {
   std::unique_ptr<Cairo> cairo_;
 };
 
-/// Encodes a BGR picture as PNG and writes it whole or not at all.
+/// Encodes an 8-bit BGR or grey picture as PNG (libpng) and writes it whole or not at all.
 void write_png_atomically(const cv::Mat& picture, const std::filesystem::path& png);
 
 }  // namespace ctk
