@@ -14,7 +14,7 @@ using OIIO::ImageOutput;
 using OIIO::ImageSpec;
 using OIIO::TypeDesc;
 
-int integer_bits(TypeDesc format) {
+int integer_bits(const TypeDesc& format) {
   if (format == TypeDesc::UINT8) return 8;
   if (format == TypeDesc::UINT16) return 16;
   if (format == TypeDesc::UINT32) return 32;
