@@ -84,6 +84,7 @@ fs::path preview_file(const fs::path& out, const std::string& slice) { return ou
 bool write_convergence(const std::vector<IterationLog>& log, const fs::path& png) {
   if (log.size() < 2 || !(log.front().cost > 0)) return false;
   std::vector<double> relative;
+  relative.reserve(log.size());
   for (const IterationLog& l : log) relative.push_back(std::log10(std::max(l.cost / log.front().cost, 1e-12)));
   const double low = std::floor(*std::min_element(relative.begin(), relative.end()) * 2) / 2;
   ChartAxes axes{0,
