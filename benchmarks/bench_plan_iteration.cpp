@@ -9,8 +9,8 @@
 #include <algorithm>
 
 #include "ctk/phantoms/builtin_phantoms.hpp"
-#include "ctk/plan/simulated_acquisition.hpp"
 #include "ctk/plan/plan_trajectory.hpp"
+#include "ctk/plan/simulated_acquisition.hpp"
 
 namespace ctk {
 namespace {

@@ -7,11 +7,11 @@
 #include <random>
 #include <vector>
 
+#include "ctk/core/projection_stack.hpp"
+#include "ctk/geom/projection_matrix.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/phantoms/detector_response.hpp"
 #include "ctk/phantoms/render.hpp"
-#include "ctk/core/projection_stack.hpp"
-#include "ctk/geom/projection_matrix.hpp"
 
 namespace ctk::bench {
 

@@ -14,17 +14,17 @@
 #include <optional>
 
 #include "commands.hpp"
-#include "ctk/core/communicator.hpp"
-#include "ctk/core/output_set.hpp"
-#include "ctk/geom/run_files.hpp"
-#include "option_checks.hpp"
 #include "ctk/calib/calibration_journal.hpp"
 #include "ctk/calib/calibration_pictures.hpp"
 #include "ctk/calib/calibration_run.hpp"
 #include "ctk/core/atomic_write.hpp"
+#include "ctk/core/communicator.hpp"
+#include "ctk/core/output_set.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
+#include "ctk/geom/run_files.hpp"
 #include "ctk/proj/projection_reading.hpp"
 #include "interruption.hpp"
+#include "option_checks.hpp"
 #include "progress.hpp"
 #include "run_page.hpp"
 

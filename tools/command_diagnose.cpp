@@ -5,12 +5,12 @@
 #include <optional>
 
 #include "commands.hpp"
-#include "ctk/core/output_set.hpp"
-#include "ctk/geom/run_files.hpp"
-#include "option_checks.hpp"
 #include "ctk/calib/diagnosis_pictures.hpp"
 #include "ctk/calib/diagnosis_run.hpp"
 #include "ctk/core/atomic_write.hpp"
+#include "ctk/core/output_set.hpp"
+#include "ctk/geom/run_files.hpp"
+#include "option_checks.hpp"
 #include "progress.hpp"
 #include "run_page.hpp"
 

@@ -10,11 +10,11 @@
 #include "commands.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/core/output_set.hpp"
-#include "ctk/geom/run_files.hpp"
 #include "ctk/geom/astra.hpp"
 #include "ctk/geom/geometry_summary.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/rtk_geometry.hpp"
+#include "ctk/geom/run_files.hpp"
 
 namespace ctk::tools {
 

@@ -12,13 +12,14 @@
 
 #include "commands.hpp"
 #include "ctk/core/atomic_write.hpp"
-#include "ctk/core/communicator.hpp"
 #include "ctk/core/chart.hpp"
+#include "ctk/core/communicator.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/core/image_io.hpp"
-#include "ctk/core/volume_file.hpp"
 #include "ctk/core/json_access.hpp"
 #include "ctk/core/output_set.hpp"
+#include "ctk/core/slice_preview.hpp"
+#include "ctk/core/volume_file.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "ctk/proj/slab_split_operator.hpp"
@@ -27,7 +28,6 @@
 #include "measurement_report.hpp"
 #include "option_checks.hpp"
 #include "progress.hpp"
-#include "ctk/core/slice_preview.hpp"
 #include "run_page.hpp"
 
 namespace ctk::tools {

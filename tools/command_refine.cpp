@@ -10,17 +10,17 @@
 #include <optional>
 
 #include "commands.hpp"
-#include "ctk/core/output_set.hpp"
-#include "ctk/geom/run_files.hpp"
-#include "option_checks.hpp"
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/error.hpp"
-#include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/core/image_io.hpp"
+#include "ctk/core/output_set.hpp"
+#include "ctk/core/slice_preview.hpp"
+#include "ctk/geom/nominal_geometry.hpp"
+#include "ctk/geom/run_files.hpp"
 #include "ctk/recon/refine_scan.hpp"
 #include "measurement_report.hpp"
+#include "option_checks.hpp"
 #include "progress.hpp"
-#include "ctk/core/slice_preview.hpp"
 #include "run_page.hpp"
 
 namespace ctk::tools {

@@ -1,10 +1,10 @@
 #pragma once
 // A progress line for long runs: done / total, elapsed time and an estimate of the time left,
 // rewritten in place on a terminal, printed at every 10 % otherwise.
+#include <unistd.h>
 #include <chrono>
 #include <cstdio>
 #include <string>
-#include <unistd.h>
 
 namespace ctk::tools {
 

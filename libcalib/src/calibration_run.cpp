@@ -7,8 +7,8 @@
 #include <sstream>
 #include <vector>
 
-#include "ctk/core/statistics.hpp"
 #include "ctk/core/provenance.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 

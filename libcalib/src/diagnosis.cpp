@@ -8,9 +8,9 @@
 #include <sstream>
 
 #include "ctk/core/error.hpp"
-#include "ctk/geom/panda.hpp"
-#include "ctk/core/statistics.hpp"
 #include "ctk/core/provenance.hpp"
+#include "ctk/core/statistics.hpp"
+#include "ctk/geom/panda.hpp"
 
 namespace ctk {
 

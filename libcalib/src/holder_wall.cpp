@@ -8,8 +8,8 @@
 #include <mutex>
 #include <sstream>
 
-#include "ctk/core/statistics.hpp"
 #include "ctk/core/parallel.hpp"
+#include "ctk/core/statistics.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/projection_reading.hpp"
 #include "small_problem.hpp"

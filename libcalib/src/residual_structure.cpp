@@ -5,8 +5,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "ctk/geom/panda.hpp"
 #include "ctk/core/statistics.hpp"
+#include "ctk/geom/panda.hpp"
 
 namespace ctk {
 

@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
+#include <Eigen/Eigenvalues>
 
-#include "ctk/core/error.hpp"
 #include "ctk/calib/scan_model_fit.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/core/statistics.hpp"
 #include "small_problem.hpp"
 

@@ -6,8 +6,8 @@
 
 #include "ctk/calib/calibration_journal.hpp"
 #include "ctk/core/error.hpp"
-#include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/core/parallel.hpp"
+#include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/proj/projection_reading.hpp"
 
 namespace ctk {

@@ -5,10 +5,10 @@
 #include <sstream>
 #include <string>
 
-#include "ctk/core/error.hpp"
 #include "ctk/calib/pose_fit.hpp"
-#include "ctk/calib/sphere_profile_fit.hpp"
 #include "ctk/calib/sphere_matching.hpp"
+#include "ctk/calib/sphere_profile_fit.hpp"
+#include "ctk/core/error.hpp"
 #include "ctk/core/statistics.hpp"
 
 namespace ctk {

@@ -3,8 +3,8 @@
 #include "ctk/core/nexus_tomo.hpp"
 
 #include <array>
-#include <optional>
 #include <cmath>
+#include <optional>
 #include <utility>
 
 #include "ctk/core/error.hpp"

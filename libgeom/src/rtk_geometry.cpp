@@ -1,5 +1,6 @@
 #include "ctk/geom/rtk_geometry.hpp"
 
+#include <strings.h>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <Eigen/SVD>
@@ -11,7 +12,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <strings.h>
 
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/error.hpp"

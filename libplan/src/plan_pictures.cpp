@@ -5,8 +5,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ctk/core/chart.hpp"
-#include "ctk/geom/sphere_map.hpp"
 #include "ctk/core/image_io.hpp"
+#include "ctk/geom/sphere_map.hpp"
 
 namespace ctk {
 

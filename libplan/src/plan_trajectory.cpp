@@ -1,8 +1,8 @@
 #include "ctk/plan/plan_trajectory.hpp"
 
 #include <algorithm>
-#include <numeric>
 #include <chrono>
+#include <numeric>
 #include <optional>
 
 #include "ctk/core/error.hpp"

@@ -1,8 +1,8 @@
 #include "ctk/plan/planned_scan.hpp"
 
 #include "ctk/core/atomic_write.hpp"
-#include "ctk/geom/scan.hpp"
 #include "ctk/core/provenance.hpp"
+#include "ctk/geom/scan.hpp"
 
 namespace ctk {
 

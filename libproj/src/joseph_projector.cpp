@@ -11,8 +11,8 @@
 
 #include "ctk/core/cancellation.hpp"
 #include "ctk/core/error.hpp"
-#include "slab_lines.hpp"
 #include "ray_table.hpp"
+#include "slab_lines.hpp"
 
 namespace ctk {
 

@@ -3,9 +3,12 @@
 // scalar logarithm was a tenth of a view's calibration (perf on ctk calibrate, 120 views of 720 x 720).
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "line_integrals.cpp"
+// Highway's order, not the alphabet's: foreach_target.h, highway.h, then the -inl headers.
+// clang-format off
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 #include <hwy/contrib/math/math-inl.h>
+// clang-format on
 
 #include <algorithm>
 #include <cmath>

@@ -10,9 +10,9 @@
 #include <sstream>
 
 #include "ctk/core/error.hpp"
+#include "ctk/core/provenance.hpp"
 #include "ctk/core/statistics.hpp"
 #include "ctk/recon/detector_pattern.hpp"
-#include "ctk/core/provenance.hpp"
 
 namespace ctk {
 

@@ -9,6 +9,9 @@
 #include <stdexcept>
 
 #include "ctk/core/error.hpp"
+#include "ctk/core/machine.hpp"
+#include "ctk/core/provenance.hpp"
+#include "ctk/core/statistics.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/proj/slab_split_operator.hpp"
 #include "ctk/proj/view_split_operator.hpp"
@@ -17,9 +20,6 @@
 #include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/wls_cg.hpp"
-#include "ctk/core/machine.hpp"
-#include "ctk/core/provenance.hpp"
-#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 

@@ -3,9 +3,9 @@
 #include <boost/crc.hpp>
 #include <cmath>
 #include <fstream>
-#include <sstream>
 #include <iomanip>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 #include "ctk/core/atomic_write.hpp"

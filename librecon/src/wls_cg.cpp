@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <chrono>
-#include <utility>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "ctk/core/error.hpp"
 #include "ctk/recon/separable_curvature.hpp"

@@ -4,8 +4,8 @@
 
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/json_access.hpp"
-#include "ctk/phantoms/material_attenuation.hpp"
 #include "ctk/core/provenance.hpp"
+#include "ctk/phantoms/material_attenuation.hpp"
 
 namespace ctk {
 

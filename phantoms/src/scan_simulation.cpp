@@ -6,10 +6,10 @@
 
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/output_set.hpp"
+#include "ctk/core/parallel.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/render.hpp"
-#include "ctk/core/parallel.hpp"
 
 namespace ctk {
 

@@ -6,8 +6,8 @@
 #include <random>
 #include <stdexcept>
 
-#include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/core/provenance.hpp"
+#include "ctk/phantoms/builtin_phantoms.hpp"
 
 namespace ctk {
 

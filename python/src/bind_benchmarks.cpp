@@ -11,10 +11,10 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "conversions.hpp"
 #include "ctk/proj/projection_operator.hpp"
 #include "ctk/proj/projector_benchmark.hpp"
 #include "ctk/proj/standard_problem.hpp"
-#include "conversions.hpp"
 #include "interruptible.hpp"
 #include "numpy_arrays.hpp"
 #include "python_bridge.hpp"

@@ -12,15 +12,15 @@
 #include <vector>
 
 #include "bindings.hpp"
-#include "interruptible.hpp"
+#include "conversions.hpp"
 #include "ctk/core/nexus_tomo.hpp"
 #include "ctk/core/volume_file.hpp"
-#include "ctk/geom/nikon_xtekct.hpp"
 #include "ctk/geom/astra.hpp"
-#include "ctk/geom/rtk_geometry.hpp"
 #include "ctk/geom/geometry_file.hpp"
+#include "ctk/geom/nikon_xtekct.hpp"
+#include "ctk/geom/rtk_geometry.hpp"
 #include "ctk/geom/scan.hpp"
-#include "conversions.hpp"
+#include "interruptible.hpp"
 #include "numpy_arrays.hpp"
 
 namespace ctk::python {

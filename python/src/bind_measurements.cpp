@@ -10,11 +10,11 @@
 #include <optional>
 
 #include "bindings.hpp"
-#include "interruptible.hpp"
-#include "ctk/geom/nominal_geometry.hpp"
-#include "ctk/core/image_io.hpp"
-#include "ctk/recon/measurements.hpp"
 #include "conversions.hpp"
+#include "ctk/core/image_io.hpp"
+#include "ctk/geom/nominal_geometry.hpp"
+#include "ctk/recon/measurements.hpp"
+#include "interruptible.hpp"
 #include "numpy_arrays.hpp"
 
 namespace ctk::python {

@@ -9,11 +9,11 @@
 #include <vector>
 
 #include "bindings.hpp"
-#include "interruptible.hpp"
+#include "conversions.hpp"
 #include "ctk/proj/binned_projection.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/proj/weighted_projection.hpp"
-#include "conversions.hpp"
+#include "interruptible.hpp"
 #include "numpy_arrays.hpp"
 
 namespace ctk::python {

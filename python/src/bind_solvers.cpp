@@ -10,7 +10,7 @@
 #include <string>
 
 #include "bindings.hpp"
-#include "interruptible.hpp"
+#include "conversions.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/fdk.hpp"
 #include "ctk/recon/ordered_subsets.hpp"
@@ -18,7 +18,7 @@
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/solver_state.hpp"
 #include "ctk/recon/wls_cg.hpp"
-#include "conversions.hpp"
+#include "interruptible.hpp"
 #include "numpy_arrays.hpp"
 #include "python_bridge.hpp"
 

@@ -15,15 +15,15 @@
 #include <vector>
 
 #include "bindings.hpp"
-#include "interruptible.hpp"
+#include "conversions.hpp"
 #include "ctk/calib/calibration_run.hpp"
 #include "ctk/calib/diagnosis_run.hpp"
-#include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/import_run.hpp"
+#include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/phantoms/simulation_run.hpp"
 #include "ctk/recon/reconstruction_run.hpp"
 #include "ctk/recon/refine_scan.hpp"
-#include "conversions.hpp"
+#include "interruptible.hpp"
 #include "numpy_arrays.hpp"
 #include "python_bridge.hpp"
 

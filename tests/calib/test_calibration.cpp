@@ -7,7 +7,6 @@
 #include <fstream>
 
 #include "../test_support.hpp"
-#include "pose_errors.hpp"
 #include "ctk/calib/calibration_run.hpp"
 #include "ctk/calib/holder_wall.hpp"
 #include "ctk/calib/scan_calibration.hpp"
@@ -16,6 +15,7 @@
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/robot_trajectory.hpp"
 #include "ctk/phantoms/scan_simulation.hpp"
+#include "pose_errors.hpp"
 
 namespace ctk {
 namespace {

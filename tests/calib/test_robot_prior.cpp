@@ -5,8 +5,8 @@
 
 #include "../test_support.hpp"
 #include "ctk/calib/robot_prior.hpp"
-#include "ctk/phantoms/scan_simulation.hpp"
 #include "ctk/geom/trajectory.hpp"
+#include "ctk/phantoms/scan_simulation.hpp"
 #include "pose_errors.hpp"
 
 namespace ctk {

@@ -11,11 +11,11 @@
 #include "../test_support.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/geom/scan.hpp"
-#include "ctk/phantoms/builtin_phantoms.hpp"
-#include "ctk/plan/simulated_acquisition.hpp"
 #include "ctk/geom/trajectory.hpp"
+#include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/plan/plan_trajectory.hpp"
 #include "ctk/plan/planned_scan.hpp"
+#include "ctk/plan/simulated_acquisition.hpp"
 
 namespace ctk {
 namespace {

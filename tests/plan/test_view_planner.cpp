@@ -6,11 +6,11 @@
 
 #include <cmath>
 
+#include "ctk/geom/detector_binning.hpp"
 #include "ctk/plan/absorber_segmentation.hpp"
 #include "ctk/plan/direction_damage.hpp"
 #include "ctk/plan/incremental_reconstruction.hpp"
 #include "ctk/plan/view_planner.hpp"
-#include "ctk/geom/detector_binning.hpp"
 
 namespace ctk {
 namespace {

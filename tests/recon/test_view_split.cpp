@@ -16,8 +16,8 @@
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/proj/slab_split_operator.hpp"
 #include "ctk/proj/view_split_operator.hpp"
-#include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/ordered_subsets.hpp"
+#include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/wls_cg.hpp"
 

@@ -15,8 +15,8 @@
 #include <filesystem>
 #include <string>
 
-#include "ctk/geom/panda.hpp"
 #include "ctk/core/image_io.hpp"
+#include "ctk/geom/panda.hpp"
 
 namespace ctk {
 

@@ -15,8 +15,8 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "ctk/plan/absorber_segmentation.hpp"
 #include "ctk/core/volume.hpp"
+#include "ctk/plan/absorber_segmentation.hpp"
 
 namespace ctk {
 

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "ctk/geom/projection_matrix.hpp"
 #include "ctk/core/projection_stack.hpp"
 #include "ctk/core/volume.hpp"
+#include "ctk/geom/projection_matrix.hpp"
 
 namespace ctk {
 

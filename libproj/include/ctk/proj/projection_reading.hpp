@@ -5,8 +5,8 @@
 #include <cstddef>
 #include <optional>
 
-#include "ctk/geom/scan.hpp"
 #include "ctk/core/image_io.hpp"
+#include "ctk/geom/scan.hpp"
 
 namespace ctk {
 

@@ -6,9 +6,9 @@
 #include <array>
 #include <vector>
 
-#include "ctk/geom/projection_matrix.hpp"
 #include "ctk/core/projection_stack.hpp"
 #include "ctk/core/volume.hpp"
+#include "ctk/geom/projection_matrix.hpp"
 
 namespace ctk {
 

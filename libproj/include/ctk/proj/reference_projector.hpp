@@ -4,9 +4,9 @@
 // right rather than fast (but compiled with the same flags as everything else).
 #include <vector>
 
-#include "ctk/geom/projection_matrix.hpp"
 #include "ctk/core/projection_stack.hpp"
 #include "ctk/core/volume.hpp"
+#include "ctk/geom/projection_matrix.hpp"
 
 namespace ctk {
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "ctk/geom/projection_matrix.hpp"
 #include "ctk/core/volume.hpp"
+#include "ctk/geom/projection_matrix.hpp"
 
 namespace ctk {
 

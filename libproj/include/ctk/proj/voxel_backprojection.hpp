@@ -5,9 +5,9 @@
 // normalised). It is not the adjoint of the Joseph projector; the CG solvers use that one.
 #include <vector>
 
-#include "ctk/geom/projection_matrix.hpp"
 #include "ctk/core/projection_stack.hpp"
 #include "ctk/core/volume.hpp"
+#include "ctk/geom/projection_matrix.hpp"
 
 namespace ctk {
 

@@ -8,8 +8,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "ctk/geom/detector.hpp"
 #include "ctk/core/projection_stack.hpp"
+#include "ctk/geom/detector.hpp"
 #include "ctk/recon/fdk.hpp"
 
 namespace ctk {

@@ -4,8 +4,8 @@
 // detector's field of view.
 #include <vector>
 
-#include "ctk/geom/scan.hpp"
 #include "ctk/core/volume.hpp"
+#include "ctk/geom/scan.hpp"
 
 namespace ctk {
 

@@ -6,10 +6,10 @@
 // generalised to any arc between pi + fan and 2 pi (Wesarg et al. 2002).
 #include <vector>
 
-#include "ctk/geom/detector.hpp"
-#include "ctk/geom/projection_matrix.hpp"
 #include "ctk/core/projection_stack.hpp"
 #include "ctk/core/volume.hpp"
+#include "ctk/geom/detector.hpp"
+#include "ctk/geom/projection_matrix.hpp"
 
 namespace ctk {
 

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "ctk/core/projection_stack.hpp"
 #include "ctk/geom/geometry_file.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/proj/projection_reading.hpp"
-#include "ctk/core/projection_stack.hpp"
 
 namespace ctk {
 

@@ -5,9 +5,9 @@
 // closer to the physics predicts the held-out views better; a wrong one leaves structured residuals.
 #include <vector>
 
-#include "ctk/geom/detector.hpp"
 #include "ctk/core/projection_stack.hpp"
 #include "ctk/core/volume.hpp"
+#include "ctk/geom/detector.hpp"
 #include "ctk/recon/global_geometry.hpp"
 
 namespace ctk {

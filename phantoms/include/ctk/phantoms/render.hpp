@@ -10,12 +10,12 @@
 // thick or dense parts harden the beam (their line integral grows less than their path).
 #include <optional>
 
+#include "ctk/core/image_io.hpp"
+#include "ctk/core/volume.hpp"
 #include "ctk/geom/detector.hpp"
 #include "ctk/geom/projection_matrix.hpp"
 #include "ctk/phantoms/phantom.hpp"
 #include "ctk/phantoms/xray_spectrum.hpp"
-#include "ctk/core/image_io.hpp"
-#include "ctk/core/volume.hpp"
 
 namespace ctk {
 
