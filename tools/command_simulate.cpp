@@ -7,6 +7,7 @@
 #include "commands.hpp"
 #include "ctk/core/error.hpp"
 #include "ctk/phantoms/simulation_run.hpp"
+#include "interruption.hpp"
 #include "option_checks.hpp"
 #include "progress.hpp"
 
@@ -112,8 +113,14 @@ void run_simulate(const SimulateOptions& o) {
   r.seed = o.seed;
   r.effects = simulation_effects_from_json(named_effects(o), Detector{o.cols, o.rows, o.pitch_mm, o.pitch_mm});
   Progress progress("simulate", "views");
-  const SimulationRun run =
-      run_simulation(r, o.out, std::ref(progress), [](const std::string& line) { std::cerr << line << "\n"; });
+  // Ctrl-C stops the views being drawn; the scan, written into a hidden folder, is not published.
+  const InterruptionWatch watch(InterruptionWatch::Stop::the_parallel_loops_too);
+  SimulationRun run;
+  try {
+    run = run_simulation(r, o.out, std::ref(progress), [](const std::string& line) { std::cerr << line << "\n"; });
+  } catch (const Cancelled&) {
+    throw Interrupted("simulate stopped by Ctrl-C: nothing written, " + o.out.string() + " as it was");
+  }
   std::cout << run.brief() << "\n";
   if (run.report.saturated_pixels > 0)
     std::cout << "warning: " << run.report.saturated_pixels << " pixels saturated at 65535 counts\n";

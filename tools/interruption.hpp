@@ -1,15 +1,21 @@
 #pragma once
 // Ctrl-C (SIGINT) or SIGTERM while a long step runs: the first asks that step to stop at its next
-// safe point (a solver saves its state there); a second one ends the process at once.
+// safe point (a solver saves its state there); a second one ends the process at once. A command
+// whose work has no state worth keeping (simulate) has the library's parallel loops stop as well
+// (cancellation.hpp): they skip what is left and end with Cancelled.
 #include <csignal>
 #include <stdexcept>
+
+#include "ctk/core/cancellation.hpp"
 
 namespace ctk::tools {
 
 class InterruptionWatch {
  public:
-  InterruptionWatch() {
+  enum class Stop { at_the_next_safe_point, the_parallel_loops_too };
+  explicit InterruptionWatch(Stop stop = Stop::at_the_next_safe_point) {
     requested_flag() = 0;
+    stops_loops_flag() = stop == Stop::the_parallel_loops_too ? 1 : 0;
     previous_int_ = std::signal(SIGINT, on_signal);
     previous_term_ = std::signal(SIGTERM, on_signal);
   }
@@ -27,9 +33,14 @@ class InterruptionWatch {
     static volatile std::sig_atomic_t flag = 0;
     return flag;
   }
+  static volatile std::sig_atomic_t& stops_loops_flag() {
+    static volatile std::sig_atomic_t flag = 0;
+    return flag;
+  }
   static void on_signal(int signal) {
     requested_flag() = 1;
-    std::signal(signal, SIG_DFL);  // the second one is not asked politely
+    if (stops_loops_flag()) request_stop();  // a lock-free atomic store: safe in a handler
+    std::signal(signal, SIG_DFL);            // the second one is not asked politely
   }
   void (*previous_int_)(int);
   void (*previous_term_)(int);

@@ -1,7 +1,7 @@
 #!/bin/sh
-# A run's outputs are published together or not at all: a simulation killed half way into the
-# folder of an earlier one leaves that scan exactly as it was (no new projections under the old
-# truth), and a reconstruction killed while iterating leaves the earlier volume, its previews and
+# A run's outputs are published together or not at all: a simulation killed half way (or stopped
+# by Ctrl-C, exit 130) into the folder of an earlier one leaves that scan exactly as it was (no new
+# projections under the old truth), and a reconstruction killed while iterating leaves the earlier volume, its previews and
 # its log as they were. A finished simulation replaces the earlier scan as a whole (no stale
 # projections of a longer run), keeps the files it does not own and removes what the killed one
 # left; a projection of another run
@@ -22,6 +22,11 @@ before=$(fingerprint s)
 signal_when sim.log "simulate: [1-9][0-9]* / " KILL "$ctk" simulate --out s --views 200 --cols 512 --rows 512 --pitch 0.85
 grep -q "simulate: [1-9][0-9]* / " sim.log || fail "the simulation was not caught half way: $(tail -n 1 sim.log)"
 [ "$(fingerprint s)" = "$before" ] || fail "a simulation killed half way changed the earlier scan"
+# Ctrl-C: exit 130 soon after, the earlier scan as it was and no hidden folder left behind.
+signal_when sim-int.log "simulate: [1-9][0-9]* / " INT "$ctk" simulate --out s --views 200 --cols 512 --rows 512 --pitch 0.85
+[ "$code" -eq 130 ] || fail "Ctrl-C during a simulation gave exit $code, expected 130: $(tail -n 1 sim-int.log)"
+[ "$(fingerprint s)" = "$before" ] || fail "a simulation stopped by Ctrl-C changed the earlier scan"
+ls -a | grep -q '^\.s\.' && fail "a simulation stopped by Ctrl-C left its hidden folder: $(ls -a | grep '^\.s\.')"
 
 "$ctk" reconstruct --scan s/scan.json --geometry s/truth-geometry.json --out s/v.nrrd --size 16 --iterations 1 >/dev/null 2>&1 ||
   fail "the first reconstruction failed"

@@ -15,6 +15,8 @@ class Cancelled : public std::runtime_error {
 };
 
 namespace detail {
+// Lock-free, so that a signal handler may request a stop (tools/interruption.hpp).
+static_assert(std::atomic<bool>::is_always_lock_free);
 inline std::atomic<bool>& stop_flag() {
   static std::atomic<bool> flag{false};
   return flag;
