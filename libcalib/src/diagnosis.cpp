@@ -11,6 +11,7 @@
 #include "ctk/core/provenance.hpp"
 #include "ctk/core/statistics.hpp"
 #include "ctk/geom/panda.hpp"
+#include "time_and_tilt.hpp"
 
 namespace ctk {
 
@@ -144,7 +145,7 @@ ModelError image_error(const ScanModelFit& all, const HeldOut& h) {
 }
 
 // The gravity load (kOutsideEffects' one member), in the report's words.
-StructureFinding gravity_load_finding(const EffectFinding& f) {
+StructureFinding gravity_load_finding(const EffectFinding& f, const TimeAndTilt& time_tilt) {
   auto sd = [&](int i) { return f.covariance.rows() > i ? std::sqrt(std::max(0.0, f.covariance(i, i))) : 0.0; };
   std::ostringstream what;
   what << "a load that follows gravity explains the residual better than any listed effect (held-out improvement " << f.z
@@ -152,6 +153,9 @@ StructureFinding gravity_load_finding(const EffectFinding& f) {
        << sd(0) / kDegree << " deg (about the axis x gravity) and shifts " << f.parameters.gravity[1] << " +- " << sd(1)
        << " mm (across its axis), less as it tilts towards the vertical, as a holder sagging under its weight does; "
        << "the held-out RMS goes from " << f.before.heldout_rms_px << " to " << f.after.heldout_rms_px << " px";
+  if (time_tilt.confounded())
+    what << "; on this trajectory the tilt changes with time (correlation " << time_tilt.correlation
+         << " with the view index): a drift in time (source_drift) would look alike";
   return {"by gravity", what.str()};
 }
 
@@ -203,6 +207,9 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
   auto say = [&](const std::string& s) {
     if (log) log(s);
   };
+  const TimeAndTilt time_tilt = o.setup.robot ? time_and_tilt(o) : TimeAndTilt{};
+  d.time_tilt_correlation = time_tilt.correlation;
+  d.time_and_tilt_confounded = time_tilt.confounded();
   std::vector<Effect> candidates, outside;
   for (Effect e : kEffects)
     if (o.setup.robot || !needs_robot(e)) candidates.push_back(e);
@@ -397,6 +404,13 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
     f.threshold_z = threshold;
     for (Effect e : equivalent)
       if (e != chosen) f.confounded_with.push_back(e);
+    // A drift in time on a trajectory whose tilt changes with time is as much a load that follows
+    // gravity: named beside it, not chosen between (time_and_tilt.hpp).
+    if (chosen == Effect::source_drift && time_tilt.confounded()) {
+      f.confounded_with.push_back(Effect::gravity_load);
+      say("  source_drift: the holder's tilt changes with time on this trajectory (correlation " +
+          std::to_string(time_tilt.correlation) + "): a load that follows gravity would look alike");
+    }
     f.before = d.accepted.empty() && d.outside.empty() ? d.baseline : d.final_error;
     f.model_before = current;
     d.accepted.push_back(chosen);
@@ -441,7 +455,7 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
     if (f.accepted) in_final_model(f);
   for (EffectFinding& f : d.outside) in_final_model(f);
   // A load found outside the vocabulary is structure the contract's effects do not explain.
-  for (const EffectFinding& f : d.outside) d.unexplained.push_back(gravity_load_finding(f));
+  for (const EffectFinding& f : d.outside) d.unexplained.push_back(gravity_load_finding(f, time_tilt));
   for (StructureFinding& s : find_structure(o, d.after_fit)) d.unexplained.push_back(std::move(s));
   return d;
 }
@@ -578,6 +592,7 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& o) 
       {"noise",
        {{"centre_sigma_px", o.centre_sigma_px}, {"robot_sigma_mm", o.robot_sigma_mm}, {"robot_sigma_deg", o.robot_sigma_deg}}},
       {"false_acceptance_rate", d.false_acceptance_rate},
+      {"time_and_tilt", {{"correlation", d.time_tilt_correlation}, {"confounded", d.time_and_tilt_confounded}}},
       {"criterion",
        "an effect is accepted when, fitted on one half of the views (interleaved) and judged on the other, the mean per-view "
        "improvement of the held-out cost passes threshold_z standard errors (Student's t; round r of the greedy search "
