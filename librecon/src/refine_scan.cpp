@@ -1,5 +1,6 @@
 #include "ctk/recon/refine_scan.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -8,23 +9,24 @@
 #include "ctk/core/error.hpp"
 #include "ctk/recon/default_volume.hpp"
 #include "ctk/recon/measurements.hpp"
+#include "ctk/recon/repeat_exposure.hpp"
 
 namespace ctk {
 
 namespace {
 
 // The axis' column from the data alone (conjugate rays of the row through the principal point):
-// an estimate that does not rest on the yardstick. Full circles at equal steps only; otherwise
-// `why_not` says why there is none.
-std::optional<ConjugateRayEstimate> conjugate_rays(const Measurements& m, const ConsistencyProbe& probe,
-                                                   const ScanDescription& scan, std::string& why_not) {
+// an estimate that does not rest on the yardstick; and, where the scan ends with a new exposure
+// at its first angle, whether the object moved. Full circles at equal steps only; otherwise
+// `s.conjugate_why_not` says why there is none.
+void data_alone_checks(const Measurements& m, const ConsistencyProbe& probe, const ScanDescription& scan, RefineScanSummary& s) {
   const Eigen::Vector2d pp = probe.nominal_principal_point();
   try {
-    const FanSinogram s = row_sinogram(m.line_integrals, probe.orbit(), scan.detector, pp.y(), scan.source_to_detector_mm);
-    return conjugate_ray_u0(s, pp.x(), 30);
+    const FanSinogram sinogram = row_sinogram(m.line_integrals, probe.orbit(), scan.detector, pp.y(), scan.source_to_detector_mm);
+    s.repeat = compare_repeat_exposure(sinogram);
+    s.conjugate = conjugate_ray_u0(sinogram, pp.x(), 30);
   } catch (const std::invalid_argument& e) {
-    why_not = e.what();
-    return std::nullopt;
+    s.conjugate_why_not = e.what();
   }
 }
 
@@ -71,7 +73,14 @@ RefineScanSummary refine_scan(const ScanDescription& scan, Geometry geometry, co
   s.clamped_pixels = m.clamped_pixels;
   s.masked_pixels = m.masked_pixels;
   s.left_out = m.left_out;
-  s.conjugate = conjugate_rays(m, probe, scan, s.conjugate_why_not);
+  data_alone_checks(m, probe, scan, s);
+  if (s.repeat) {
+    std::ostringstream line;
+    line << "views " << s.repeat->first_view << " and " << s.repeat->last_view << " (the same angle): shifted "
+         << s.repeat->shift_px << " +- " << s.repeat->shift_sigma_px << " px, RMS difference " << s.repeat->rms_difference
+         << (s.repeat->moved() ? ": the object moved during the scan" : "");
+    say(line.str());
+  }
   if (s.conjugate) {
     say("conjugate rays put the axis at column " + std::to_string(s.conjugate->u0_px) + " +- " +
         std::to_string(s.conjugate->standard_error_px) + " px: the detector offset's scan starts there");
@@ -94,19 +103,44 @@ RefineScanSummary refine_scan(const ScanDescription& scan, Geometry geometry, co
   return s;
 }
 
+double RefineScanSummary::loop_u0_sigma_px() const {
+  for (const RefinedEffect& e : result.effects)
+    if (e.accepted && e.name == "detector_offset" && e.uncertainty.contains("u0_px") && e.uncertainty.at("u0_px").is_number())
+      return e.uncertainty.at("u0_px").get<double>();
+  return 0;
+}
+
 nlohmann::json RefineScanSummary::report() const {
   nlohmann::json r = refinement_to_json(result);
   if (!conjugate) {
     r["cross_check"] = {{"method", "conjugate rays"}, {"note", "not available: " + conjugate_why_not}};
   } else {
+    // Two estimates of one column: where they differ by more than their stated uncertainties
+    // allow, something neither states (the object moving, the yardstick's own error) is at work,
+    // and both uncertainties are scaled by the ratio (the Particle Data Group's scale factor for
+    // inconsistent measurements, S = sqrt(chi^2 / (N - 1)), N = 2).
+    const double difference = conjugate->u0_px - loop_u0_px;
+    const double loop_sigma = loop_u0_sigma_px();
+    const double combined = std::hypot(conjugate->standard_error_px, loop_sigma);
+    const double scale = combined > 0 ? std::max(1.0, std::abs(difference) / combined) : 1.0;
     r["cross_check"] = {{"method", "conjugate rays: each line measured half a turn apart must agree"},
                         {"u0_px", conjugate->u0_px},
                         {"uncertainty_px", conjugate->standard_error_px},
                         {"rms_mismatch", conjugate->rms_mismatch},
                         {"rms_mismatch_other_sense", conjugate->rms_mismatch_other_sense},
                         {"loop_u0_px", loop_u0_px},
-                        {"difference_px", conjugate->u0_px - loop_u0_px}};
+                        {"difference_px", difference},
+                        {"consistent", scale <= 2.0},
+                        {"scale_factor", scale},
+                        {"loop_uncertainty_scaled_px", loop_sigma * scale},
+                        {"uncertainty_scaled_px", conjugate->standard_error_px * scale}};
   }
+  if (repeat)
+    r["repeat_exposure"] = {{"views", {repeat->first_view, repeat->last_view}},
+                            {"rms_difference", repeat->rms_difference},
+                            {"shift_px", repeat->shift_px},
+                            {"shift_sigma_px", repeat->shift_sigma_px},
+                            {"moved", repeat->moved()}};
   r["seconds"] = seconds;
   return r;
 }

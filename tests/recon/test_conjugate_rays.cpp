@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "../test_support.hpp"
 #include "ctk/proj/projection_reading.hpp"
 #include "ctk/recon/conjugate_rays.hpp"
+#include "ctk/recon/repeat_exposure.hpp"
 
 namespace ctk {
 namespace {
@@ -99,6 +101,27 @@ TEST(ConjugateRays, FollowsTheCommandedDetectorStepsOfARealFanBeamScan) {
   EXPECT_NEAR(std::abs(first), 3.342, 0.2);
   EXPECT_NEAR(std::abs(second), 3.342, 0.2);
   EXPECT_GT(first * second, 0);
+}
+
+// A scan that ends with a new exposure at its first angle: the last row against the first tells a
+// still object (shift within its standard error) from one moved by half a pixel, in noise.
+TEST(RepeatExposure, TellsAStillObjectFromOneMovedByHalfAPixel) {
+  const FanSinogram still = analytic_sinogram(128, 1), moved = analytic_sinogram(128.5, 1);
+  EXPECT_FALSE(compare_repeat_exposure(still).has_value()) << "720 views of half a degree end short of the first angle";
+  std::mt19937 random(7);
+  std::normal_distribution<float> noise(0.0f, 0.002f);
+  for (const auto& [repeat, shift] : {std::pair{&still, 0.0}, std::pair{&moved, 0.5}}) {
+    FanSinogram s = still;
+    s.values.insert(s.values.end(), repeat->values.begin(), repeat->values.begin() + s.cols);
+    ++s.views;
+    for (float& v : s.values) v += noise(random);
+    const auto r = compare_repeat_exposure(s);
+    ASSERT_TRUE(r.has_value());
+    std::cout << "moved by " << shift << " px: found " << r->shift_px << " +- " << r->shift_sigma_px << " px\n";
+    EXPECT_EQ(r->last_view, 720);
+    EXPECT_NEAR(std::abs(r->shift_px), shift, 3 * r->shift_sigma_px + 0.01);
+    EXPECT_EQ(r->moved(), shift > 0);
+  }
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "ctk/geom/scan.hpp"
 #include "ctk/recon/conjugate_rays.hpp"
 #include "ctk/recon/markerless_refinement.hpp"
+#include "ctk/recon/repeat_exposure.hpp"
 
 namespace ctk {
 
@@ -28,11 +29,14 @@ struct RefineScanSummary {
   RefinementResult result;
   std::optional<ConjugateRayEstimate> conjugate;      // the axis' column from conjugate rays, if the scan allows
   std::string conjugate_why_not;                      // why there is none
+  std::optional<RepeatExposure> repeat;               // the last view against the first, at the same angle
   double loop_u0_px = 0;                              // the axis' column the loop found (nominal when not refined)
   Geometry refined;                                   // the geometry given, its ok views' matrices refined
   std::size_t clamped_pixels = 0, masked_pixels = 0;  // counts at or below dark; not finite (weight 0)
   std::vector<std::string> left_out;                  // views not used, with the reason
   double seconds = 0;
+  /// The loop's stated uncertainty of the axis' column (0 when the detector offset was not fitted).
+  double loop_u0_sigma_px() const;
   /// ctk-diagnosis/1 (mode "markerless") with the cross-check; the caller adds file names.
   nlohmann::json report() const;
   /// One line: held-out RMS before -> after and the effects accepted.
