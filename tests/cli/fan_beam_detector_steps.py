@@ -55,6 +55,13 @@ def main():
             failures.append(f"{which}: uncertainty {sigma}")
         if abs(cross["difference_px"]) > 0.3:
             failures.append(f"{which}: the loop and conjugate rays differ by {cross['difference_px']:.3f} px")
+        # The scan ends with a new exposure at 360 deg: compared with the first, with a finite error.
+        repeat = r.get("repeat_exposure")
+        if not repeat or not (math.isfinite(repeat["shift_px"]) and 0 < repeat["shift_sigma_px"] < 0.5):
+            failures.append(f"{which}: no comparison of the repeat exposure with the first view ({repeat})")
+        else:
+            print(f"{which}: view {repeat['views'][1]} against view 0 shifted {repeat['shift_px']:+.3f} +- "
+                  f"{repeat['shift_sigma_px']:.3f} px; scale factor of the two estimates {cross['scale_factor']:.2f}")
         if "v0_px" not in [n["parameter"] for n in r["not_observable"]] or "v0_px" in effect["parameters"]:
             failures.append(f"{which}: v0 is fitted on a one-row detector")
         u0[which] = loop_u0
