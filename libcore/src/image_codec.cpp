@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "ctk/core/error.hpp"
+
 namespace ctk {
 
 namespace fs = std::filesystem;
@@ -64,6 +66,14 @@ const ImageCodec& image_codec() {
   static const ImageCodec* codec = nullptr;
   std::call_once(once, [] { codec = load(); });
   return *codec;
+}
+
+std::unique_ptr<CodecReader> open_with_codec(const fs::path& file, const std::string& what) {
+  try {
+    return image_codec().open(file);
+  } catch (const std::runtime_error& e) {
+    throw InputError(file.string(), "", "cannot read the " + what + ": " + e.what());
+  }
 }
 
 }  // namespace ctk

@@ -45,4 +45,8 @@ class ImageCodec {
 /// looked when it cannot be loaded.
 const ImageCodec& image_codec();
 
+/// `file` opened through the codec; InputError naming the file ("cannot read the <what>: ...")
+/// when it cannot be.
+std::unique_ptr<CodecReader> open_with_codec(const std::filesystem::path& file, const std::string& what);
+
 }  // namespace ctk

@@ -52,12 +52,7 @@ Image read_checked(const fs::path& file, const std::optional<std::pair<int, int>
     check_header(tiff->cols(), tiff->rows(), 1, tiff->description());
     return tiff->read();
   }
-  std::unique_ptr<CodecReader> in;
-  try {
-    in = image_codec().open(file);
-  } catch (const std::runtime_error& e) {
-    throw InputError(file.string(), "", std::string("cannot read the image: ") + e.what());
-  }
+  const std::unique_ptr<CodecReader> in = open_with_codec(file, "image");
   const CodecHeader header = in->header();
   check_header(header.width, header.height, header.depth, header.description);
   Image image;

@@ -48,12 +48,7 @@ void write_tiff(const VolumeSlabs& v, const fs::path& file) {
 }
 
 Volume read_tiff(const fs::path& file) {
-  std::unique_ptr<CodecReader> in;
-  try {
-    in = image_codec().open(file);
-  } catch (const std::runtime_error& e) {
-    throw InputError(file.string(), "", std::string("cannot read the TIFF: ") + e.what());
-  }
+  const std::unique_ptr<CodecReader> in = open_with_codec(file, "TIFF");
   const CodecHeader first = in->header();
   if (first.channels != 1 || first.depth > 1)
     throw InputError(file.string(), "page 0", "expected one channel per page, one page per z slice");
