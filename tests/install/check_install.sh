@@ -25,6 +25,10 @@ touch "$work/dpkg/status" "$work/dpkg/available"
 dpkg --instdir="$work/root" --admindir="$work/dpkg" --log=/dev/null --force-depends --force-not-root --force-script-chrootless \
   -i "$deb" > "$work/dpkg.log" 2>&1
 "$work/root/usr/bin/ctk" --version
+# EXR goes through the OpenImageIO module the package puts in /usr/lib/ctk.
+"$work/root/usr/bin/ctk" simulate --out "$work/exr" --views 2 --cols 16 --rows 16 --pitch 24 --output line-integrals > /dev/null
+test -s "$work/exr/projections/proj_0001.exr"
+test -f "$work/root/usr/lib/ctk/libctk_image_codec_oiio.so"
 # The Python module where Debian's python3 looks without PYTHONPATH: under /usr (the package) in
 # lib/python3/dist-packages, under the default prefix /usr/local in lib/python3.X/dist-packages.
 python=/usr/bin/python3
