@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Seeded mutation test of every file the tool reads. A small valid scan is simulated once; each
 case copies it, damages one file (a flipped or deleted byte, a cut, a number swapped for an extreme
-one, a JSON value replaced by one of another type or removed, a TIFF header field overwritten) and
-runs the command that reads that file. Every case must end with exit 0 or 2 within its time limit,
+one, a JSON value replaced by one of another type or removed, a TIFF's or HDF5 file's header or
+directory bytes overwritten) and runs the command that reads that file; with --vendor, a Nikon
+folder's .xtekct and an NXtomo file are damaged and imported too. Every case must end with exit 0 or 2 within its time limit,
 never a signal, a hang or exit 1 (an internal error), and an exit 2 must name the damaged file.
-Usage: fuzz_readers.py CTK [--cases N] [--seed S] [--jobs J] [--keep]"""
+Usage: fuzz_readers.py CTK [--cases N] [--seed S] [--jobs J] [--keep] [--vendor WRITE_VENDOR_SCANS]"""
 import argparse
 import concurrent.futures
 import json
@@ -75,7 +76,8 @@ def json_mutation(data: bytes, rng: random.Random) -> bytes:
     return json.dumps(doc).encode()
 
 
-def tiff_mutation(data: bytes, rng: random.Random) -> bytes:
+def binary_mutation(data: bytes, rng: random.Random) -> bytes:
+    """A TIFF's or an HDF5 file's bytes: their headers at the start, directories also at the end."""
     kind = rng.randrange(4)
     n = len(data)
     b = bytearray(data)
@@ -96,8 +98,9 @@ def tiff_mutation(data: bytes, rng: random.Random) -> bytes:
     return bytes(rng.randrange(256) for _ in range(rng.randrange(0, 64)))  # not an image at all
 
 
-def targets(base: pathlib.Path):
-    """(file to damage, mutation, command) — the command reads the file, paths relative to a case."""
+def targets(vendor: bool):
+    """(file to damage, mutation, command) — the command reads the file, paths relative to a case;
+    files under v/ are the vendor scans (a Nikon folder, an NXtomo file), when they were written."""
     recon = ["reconstruct", "--scan", "s/scan.json", "--geometry", "s/truth-geometry.json", "--out", "out/v.nrrd", "--size", "8",
              "--iterations", "1"]
     geometry = ["geometry", "--scan", "s/scan.json", "--out", "out/g.json"]
@@ -111,24 +114,29 @@ def targets(base: pathlib.Path):
         ("s/truth-geometry.json", json_mutation, recon),
         ("s/truth-geometry.json", json_mutation, ["simulate", "--out", "out/sim", "--poses", "s/truth-geometry.json", "--cols", "16",
                                                   "--rows", "16", "--pitch", "27"]),
-        ("s/projections/proj_0001.tif", tiff_mutation, recon),
-        ("s/flat.tif", tiff_mutation, recon),
-        ("s/dark.tif", tiff_mutation, ["calibrate", "--scan", "s/scan.json", "--out", "out/g.json"]),
+        ("s/projections/proj_0001.tif", binary_mutation, recon),
+        ("s/flat.tif", binary_mutation, recon),
+        ("s/dark.tif", binary_mutation, ["calibrate", "--scan", "s/scan.json", "--out", "out/g.json"]),
         ("s/cone_vec.txt", text_mutation, ["import", "cone-vec", "--out", "out/scan.json", "--vectors", "s/cone_vec.txt", "--files",
                                            "s/projections/proj_%04d.tif", "--count", "4", "--kind", "counts", "--flat", "s/flat.tif", "--dark",
                                            "s/dark.tif", "--detector", "48", "48", "--pitch", "9"]),
         ("s/phantom.json", json_mutation, ["simulate", "--out", "out/sim", "--views", "2", "--cols", "16", "--rows", "16", "--pitch",
                                            "27", "--phantom", "s/phantom.json"]),
-    ]
+    ] + ([
+        ("v/nikon/ball.xtekct", text_mutation, ["import", "nikon", "--xtekct", "v/nikon/ball.xtekct", "--out", "out/scan.json"]),
+        ("v/nxtomo/scan.nx", binary_mutation, ["import", "nxtomo", "--nexus", "v/nxtomo/scan.nx", "--out", "out/nx.json"]),
+    ] if vendor else [])
 
 
-def run_case(ctk: str, base: pathlib.Path, work: pathlib.Path, index: int, seed: int):
+def run_case(ctk: str, base: pathlib.Path, vendor, work: pathlib.Path, index: int, seed: int):
     rng = random.Random(seed * 1_000_003 + index)
-    cases = targets(base)
+    cases = targets(vendor is not None)
     target, mutate, command = cases[index % len(cases)]
     folder = work / f"case-{index:04d}"
     shutil.rmtree(folder, ignore_errors=True)
     shutil.copytree(base, folder / "s")
+    if target.startswith("v/"):
+        shutil.copytree(vendor, folder / "v")
     (folder / "out").mkdir()
     damaged = folder / target
     original = damaged.read_bytes()
@@ -159,6 +167,7 @@ def main():
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--jobs", type=int, default=os.cpu_count())
     parser.add_argument("--keep", action="store_true", help="keep the case folders (default: only the failing ones)")
+    parser.add_argument("--vendor", help="the test tool write_vendor_scans: damage a Nikon folder and an NXtomo file too")
     a = parser.parse_args()
     ctk = str(pathlib.Path(a.ctk).resolve())
     work = pathlib.Path("fuzz-readers").resolve()
@@ -171,9 +180,13 @@ def main():
     (base / "phantom.json").write_text(json.dumps({"format": "ctk-phantom/1", "primitives": [
         {"type": "sphere", "center_mm": [0, 0, 0], "radius_mm": 20, "attenuation_per_mm": 0.02},
         {"type": "sphere", "center_mm": [5, 0, 10], "radius_mm": 5, "attenuation_per_mm": 0.05}]}))
+    vendor = None
+    if a.vendor:
+        vendor = work / "vendor"
+        subprocess.run([a.vendor, "write", str(vendor)], check=True, stdout=subprocess.DEVNULL)
     failures = []
     with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
-        jobs = [pool.submit(run_case, ctk, base, work, i, a.seed) for i in range(a.cases)]
+        jobs = [pool.submit(run_case, ctk, base, vendor, work, i, a.seed) for i in range(a.cases)]
         for job in jobs:
             folder, what, failure = job.result()
             if failure:
