@@ -7,6 +7,7 @@
 
 #include "ctk/core/cancellation.hpp"
 #include "ctk/core/error.hpp"
+#include "ctk/core/output_set.hpp"
 
 namespace ctk {
 
@@ -83,16 +84,30 @@ ImportedScan import_nxtomo(const NxTomo& scan, const NxTomoPlan& plan, const fs:
   const int total = static_cast<int>(plan.projections.size() + plan.flats.size() + plan.darks.size());
   int written = 0;
   const NxTomoFrames frames(scan);
+  // The frames are written into a hidden folder beside their folder and put in its place in one
+  // step once all are there: a kill leaves the earlier import's frames whole (the next import
+  // removes what it left), never two imports' frames mixed under one scan.json. Everything in the
+  // folder is the import's: an earlier import's frames go as a whole. The frames name this run,
+  // as the scan does, so that frames and a scan of different runs are refused by the readers.
+  std::vector<std::string> earlier;
+  std::error_code absent;
+  for (fs::directory_iterator it(folder, absent), end; !absent && it != end; it.increment(absent))
+    earlier.push_back(it->path().filename().string());
+  StagedFolder staged(folder, earlier);
+  const OutputSet::Outside at_once;  // written into the hidden folder now, not held for the run's outputs
+  auto write = [&](const Image& image, const std::string& name, bool counts) {
+    if (counts)
+      write_image_uint16(image, staged.path() / name);
+    else
+      write_image_float(image, staged.path() / name);
+    return (folder / name).string();
+  };
   auto copy = [&](int frame, const std::string& name) {
     const Image image = frames.read(frame);
-    const fs::path file = folder / name;
-    if (scan.integer_data && fits_16_bits(image))
-      write_image_uint16(image, file);
-    else
-      write_image_float(image, file);
+    const std::string file = write(image, name, scan.integer_data && fits_16_bits(image));
     if (progress) progress(++written, total);
     throw_if_stop_requested();  // a caller's stop (Python's Ctrl-C) between frames
-    return file.string();
+    return file;
   };
   auto numbered = [](const char* stem, std::size_t i) {
     char buffer[64];
@@ -110,11 +125,13 @@ ImportedScan import_nxtomo(const NxTomo& scan, const NxTomoPlan& plan, const fs:
     if (plan.darks.empty()) {
       const Image zero{scan.cols, scan.rows,
                        std::vector<float>(static_cast<std::size_t>(scan.cols) * static_cast<std::size_t>(scan.rows), 0.0f)};
-      write_image_uint16(zero, folder / "dark_zero.tif");
-      set.dark.push_back((folder / "dark_zero.tif").string());
+      set.dark.push_back(write(zero, "dark_zero.tif", true));
     }
   }
-  return import_matrices(plan.orbit.detector, circular_matrices(plan.orbit), set, scan_file);
+  staged.commit();
+  ImportedScan imported = import_matrices(plan.orbit.detector, circular_matrices(plan.orbit), set, scan_file);
+  imported.scan.written_by_run = this_run_id();
+  return imported;
 }
 
 }  // namespace ctk

@@ -5,8 +5,10 @@ and files that point outside themselves, or declare what they do not store, are 
 the dataset."""
 import json
 import os
+import signal
 import subprocess
 import sys
+import time
 
 import h5py
 import numpy as np
@@ -26,7 +28,7 @@ def string_of(kind: str, text: str):
     }[kind]()
 
 
-def write_nxtomo(path, strings="str", data=None, units=None, definition=None):
+def write_nxtomo(path, strings="str", data=None, units=None, definition=None, frames=FRAMES):
     s = lambda text: string_of(strings, text)
     with h5py.File(path, "w") as f:
         entry = f.create_group("entry")
@@ -34,10 +36,10 @@ def write_nxtomo(path, strings="str", data=None, units=None, definition=None):
         entry["definition"] = s("NXtomo") if definition is None else definition
         detector = entry.create_group("instrument/detector")
         if data is None:
-            detector["data"] = np.random.default_rng(1).integers(100, 1000, (FRAMES, 8, 10)).astype(np.uint16)
+            detector["data"] = np.random.default_rng(1).integers(100, 1000, (frames, 8, 10)).astype(np.uint16)
         else:
             data(detector)
-        detector["image_key"] = np.array([1, 2] + [0] * (FRAMES - 2), dtype=np.int32)
+        detector["image_key"] = np.array([1, 2] + [0] * (frames - 2), dtype=np.int32)
         for name, value in (("x_pixel_size", 0.2), ("y_pixel_size", 0.25), ("distance", 300.0)):
             detector[name] = value
             detector[name].attrs["units"] = s("mm") if units is None else units
@@ -46,7 +48,7 @@ def write_nxtomo(path, strings="str", data=None, units=None, definition=None):
         source["distance"] = -0.2
         source["distance"].attrs["units"] = s("m")
         sample = entry.create_group("sample")
-        sample["rotation_angle"] = np.linspace(0, 360, FRAMES, endpoint=False)
+        sample["rotation_angle"] = np.linspace(0, 360, frames, endpoint=False)
         sample["rotation_angle"].attrs["units"] = s("degree")
 
 
@@ -117,3 +119,34 @@ def virtual_layout():
 def partly_written(detector):
     data = detector.create_dataset("data", (200000, 8, 10), np.uint16, chunks=(1, 8, 10), compression="gzip")
     data[:FRAMES] = 500
+
+
+def test_an_import_killed_half_way_leaves_the_earlier_one_whole(tmp_path, ctk_command):
+    """The frames go into a hidden folder put in place in one step: an import killed while it
+    writes them leaves the earlier import's scan and frames exactly as they were, and the next
+    import removes what the killed one left."""
+    nexus = tmp_path / "many.nx"
+    write_nxtomo(nexus, frames=3000)
+    out = tmp_path / "scan.json"
+    assert ctk_import(ctk_command, nexus, out).returncode == 0
+
+    def fingerprint():
+        files = [out, tmp_path / "scan.matrices.json"] + sorted((tmp_path / "scan.frames").iterdir())
+        return [(f.name, f.read_bytes()) for f in files]
+
+    before = fingerprint()
+    hidden = lambda: [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+    run = subprocess.Popen([ctk_command, "import", "nxtomo", "--nexus", str(nexus), "--out", str(out)],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 30
+    while run.poll() is None and time.monotonic() < deadline:
+        if any(p.is_dir() and sum(1 for _ in p.iterdir()) >= 200 for p in hidden()):
+            run.kill()
+            break
+        time.sleep(0.002)
+    assert run.wait() == -signal.SIGKILL, "the import ended before it could be killed half way"
+    assert hidden(), "the killed import left no hidden folder: it did not write into one"
+    assert fingerprint() == before
+    assert ctk_import(ctk_command, nexus, out).returncode == 0
+    assert not hidden(), [p.name for p in hidden()]
+
