@@ -7,8 +7,8 @@
 #include <numeric>
 #include <sstream>
 
+#include "ctk/core/diagnosis_report.hpp"
 #include "ctk/core/error.hpp"
-#include "ctk/core/provenance.hpp"
 #include "ctk/core/statistics.hpp"
 #include "ctk/geom/panda.hpp"
 #include "time_and_tilt.hpp"
@@ -551,53 +551,44 @@ void error_json(nlohmann::json& j, const ModelError& before, const ModelError& a
 }  // namespace
 
 nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& o) {
-  nlohmann::json baseline = {
-      {"rms_px", d.baseline.rms_px}, {"heldout_rms_px", d.baseline.heldout_rms_px}, {"views_ok", d.views_ok}};
+  DiagnosisReport report;
+  report.baseline = {{"rms_px", d.baseline.rms_px}, {"heldout_rms_px", d.baseline.heldout_rms_px}, {"views_ok", d.views_ok}};
   if (o.setup.robot) {
-    baseline["fk_translation_rms_mm"] = d.baseline.fk_translation_rms_mm;
-    baseline["fk_rotation_rms_deg"] = d.baseline.fk_rotation_rms_deg;
+    report.baseline["fk_translation_rms_mm"] = d.baseline.fk_translation_rms_mm;
+    report.baseline["fk_rotation_rms_deg"] = d.baseline.fk_rotation_rms_deg;
   }
-  nlohmann::json effects = nlohmann::json::array();
   for (const EffectFinding& f : d.effects) {
-    nlohmann::json j = {{"name", effect_name(f.effect)},
-                        {"accepted", f.accepted},
-                        {"heldout_improvement_z", f.z},
-                        {"threshold_z", f.threshold_z},
-                        {"raises_in_sample_cost", f.raised_in_sample_cost}};
-    nlohmann::json parameters = nlohmann::json::object(), uncertainty = nlohmann::json::object();
-    if (f.accepted) effect_parameters_json(f, o, parameters, uncertainty);
-    j["parameters"] = parameters;
-    j["uncertainty"] = uncertainty;
-    nlohmann::json confounded = nlohmann::json::array();
-    for (Effect e : f.confounded_with) confounded.push_back(effect_name(e));
-    j["confounded_with"] = confounded;
-    error_json(j, f.before, f.after, o.setup.robot);
-    effects.push_back(j);
+    ReportedEffect e;
+    e.name = effect_name(f.effect);
+    e.accepted = f.accepted;
+    e.heldout_improvement_z = f.z;
+    if (f.accepted) effect_parameters_json(f, o, e.parameters, e.uncertainty);
+    for (Effect c : f.confounded_with) e.confounded_with.push_back(effect_name(c));
+    e.figures = {{"threshold_z", f.threshold_z}, {"raises_in_sample_cost", f.raised_in_sample_cost}};
+    error_json(e.figures, f.before, f.after, o.setup.robot);
+    report.effects.push_back(std::move(e));
   }
-  std::string note;
-  for (const auto& s : d.unexplained) note += (note.empty() ? "" : " | ") + s.where + ": " + s.what;
-  if (note.empty()) note = "residuals consistent with detection noise and robot repeatability";
-  nlohmann::json after = {{"rms_px", d.final_error.rms_px}, {"heldout_rms_px", d.final_error.heldout_rms_px}};
+  for (const auto& s : d.unexplained)
+    report.unexplained_note += (report.unexplained_note.empty() ? "" : " | ") + s.where + ": " + s.what;
+  if (report.unexplained_note.empty())
+    report.unexplained_note = "residuals consistent with detection noise and robot repeatability";
+  report.structured = !d.unexplained.empty();
+  report.final_error = {{"rms_px", d.final_error.rms_px}, {"heldout_rms_px", d.final_error.heldout_rms_px}};
   if (o.setup.robot) {
-    after["fk_translation_rms_mm"] = d.final_error.fk_translation_rms_mm;
-    after["fk_rotation_rms_deg"] = d.final_error.fk_rotation_rms_deg;
+    report.final_error["fk_translation_rms_mm"] = d.final_error.fk_translation_rms_mm;
+    report.final_error["fk_rotation_rms_deg"] = d.final_error.fk_rotation_rms_deg;
   }
-  return {
-      {"format", "ctk-diagnosis/1"},
-      {"provenance", provenance()},
-      {"baseline", baseline},
-      {"final", after},
-      {"effects", effects},
-      {"unexplained", {{"structured", !d.unexplained.empty()}, {"note", note}}},
+  report.criterion =
+      "an effect is accepted when, fitted on one half of the views (interleaved) and judged on the other, the mean per-view "
+      "improvement of the held-out cost passes threshold_z standard errors (Student's t; round r of the greedy search "
+      "spends false_acceptance_rate / 2^r, shared by its candidates, so chance accepts anything in a scan with probability "
+      "at most false_acceptance_rate) and its fit on all views does not raise the in-sample cost of the model it extends";
+  report.extra = {
       {"noise",
        {{"centre_sigma_px", o.centre_sigma_px}, {"robot_sigma_mm", o.robot_sigma_mm}, {"robot_sigma_deg", o.robot_sigma_deg}}},
       {"false_acceptance_rate", d.false_acceptance_rate},
-      {"time_and_tilt", {{"correlation", d.time_tilt_correlation}, {"confounded", d.time_and_tilt_confounded}}},
-      {"criterion",
-       "an effect is accepted when, fitted on one half of the views (interleaved) and judged on the other, the mean per-view "
-       "improvement of the held-out cost passes threshold_z standard errors (Student's t; round r of the greedy search "
-       "spends false_acceptance_rate / 2^r, shared by its candidates, so chance accepts anything in a scan with probability "
-       "at most false_acceptance_rate) and its fit on all views does not raise the in-sample cost of the model it extends"}};
+      {"time_and_tilt", {{"correlation", d.time_tilt_correlation}, {"confounded", d.time_and_tilt_confounded}}}};
+  return report.to_json();
 }
 
 ScanDescription corrected_scan(const ScanDescription& scan, const Diagnosis& d) {

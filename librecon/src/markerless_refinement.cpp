@@ -9,8 +9,8 @@
 #include <optional>
 #include <sstream>
 
+#include "ctk/core/diagnosis_report.hpp"
 #include "ctk/core/error.hpp"
-#include "ctk/core/provenance.hpp"
 #include "ctk/core/statistics.hpp"
 #include "ctk/recon/detector_pattern.hpp"
 
@@ -441,39 +441,33 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
 
 nlohmann::json refinement_to_json(const RefinementResult& r) {
   using nlohmann::json;
-  json effects = json::array();
+  DiagnosisReport report;
+  report.mode = "markerless";
   for (const auto& e : r.effects) {
-    json j = {{"name", e.name},
-              {"accepted", e.accepted},
-              {"parameters", e.parameters},
-              {"uncertainty", e.uncertainty},
-              {"confounded_with", e.confounded_with},
-              {"heldout_projection_rms_before", e.heldout_rms_before},
-              {"heldout_projection_rms_after", e.heldout_rms_after},
-              {"heldout_improvement_z", e.z}};
+    ReportedEffect reported{e.name, e.accepted, e.z, e.parameters, e.uncertainty, e.confounded_with, json::object()};
+    json& j = reported.figures;
+    j["heldout_projection_rms_before"] = e.heldout_rms_before;
+    j["heldout_projection_rms_after"] = e.heldout_rms_after;
     if (e.accepted) {
       j["round"] = e.round;
       j["sharpness_per_mm_before"] = e.sharpness_before;
       j["sharpness_per_mm_after"] = e.sharpness_after;
     }
     if (!e.note.empty()) j["note"] = e.note;
-    effects.push_back(j);
+    report.effects.push_back(std::move(reported));
   }
   json not_observable = json::array();
   for (const auto& [what, why] : r.not_observable) not_observable.push_back({{"parameter", what}, {"reason", why}});
-  return {{"format", "ctk-diagnosis/1"},
-          {"provenance", provenance()},
-          {"mode", "markerless"},
-          {"baseline",
-           {{"views_ok", r.views}, {"heldout_projection_rms", r.heldout_rms_before}, {"sharpness_per_mm", r.sharpness_before}}},
-          {"final", {{"heldout_projection_rms", r.heldout_rms_after}, {"sharpness_per_mm", r.sharpness_after}}},
-          {"effects", effects},
-          {"yardstick", {{"prediction_smoothing", r.prediction_smoothing}}},
-          {"not_observable", not_observable},
-          {"criterion",
-           "fitted on views 1 mod 4, judged on views 3 mod 4 of a reconstruction from the even views; accepted when the mean "
-           "per-view held-out cost falls by more than z standard errors of the paired differences"},
-          {"unexplained", {{"structured", r.structured}, {"note", r.unexplained_note}}}};
+  report.baseline = {
+      {"views_ok", r.views}, {"heldout_projection_rms", r.heldout_rms_before}, {"sharpness_per_mm", r.sharpness_before}};
+  report.final_error = {{"heldout_projection_rms", r.heldout_rms_after}, {"sharpness_per_mm", r.sharpness_after}};
+  report.structured = r.structured;
+  report.unexplained_note = r.unexplained_note;
+  report.criterion =
+      "fitted on views 1 mod 4, judged on views 3 mod 4 of a reconstruction from the even views; accepted when the mean "
+      "per-view held-out cost falls by more than z standard errors of the paired differences";
+  report.extra = {{"yardstick", {{"prediction_smoothing", r.prediction_smoothing}}}, {"not_observable", not_observable}};
+  return report.to_json();
 }
 
 }  // namespace ctk
