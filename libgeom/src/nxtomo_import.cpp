@@ -104,7 +104,7 @@ ImportedScan import_nxtomo(const NxTomo& scan, const NxTomoPlan& plan, const fs:
   };
   auto copy = [&](int frame, const std::string& name) {
     const Image image = frames.read(frame);
-    const std::string file = write(image, name, scan.integer_data && fits_16_bits(image));
+    std::string file = write(image, name, scan.integer_data && fits_16_bits(image));
     if (progress) progress(++written, total);
     throw_if_stop_requested();  // a caller's stop (Python's Ctrl-C) between frames
     return file;
