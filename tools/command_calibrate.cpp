@@ -115,8 +115,7 @@ void run_calibrate(const CalibrateOptions& o) {
   if (world().size() > 1) watch.reset();
   const ScanDescription scan = read_scan_binned(o.scan, o.bin);
   RunFiles files;
-  require_projection_files(scan, o.scan.string(), "projections.count");
-  files.scan("--scan", o.scan, scan);
+  files.scan_to_read("--scan", o.scan, scan);
   files.output("--out", o.out);
   files.output("--report", report_file(o));
   files.output("the HTML report beside --report", fs::path(report_file(o)).replace_extension(".html"));

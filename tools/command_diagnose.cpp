@@ -30,8 +30,7 @@ void run_diagnose(const DiagnoseOptions& o) {
   const fs::path stem = fs::path(o.out).replace_extension("");
   const fs::path corrected_file = o.corrected.empty() ? fs::path(stem.string() + ".corrected-scan.json") : o.corrected;
   RunFiles files;
-  require_projection_files(scan, o.scan.string(), "projections.count");
-  files.scan("--scan", o.scan, scan);
+  files.scan_to_read("--scan", o.scan, scan);
   files.input("--geometry", o.geometry);
   files.output("--out", o.out);
   files.output("--corrected-scan", corrected_file);

@@ -165,8 +165,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   const bool spread = ranks.size() > 1;
   const ScanDescription scan = read_scan_binned(o.scan, o.bin);
   RunFiles files;
-  require_projection_files(scan, o.scan.string(), "projections.count");
-  files.scan("--scan", o.scan, scan);
+  files.scan_to_read("--scan", o.scan, scan);
   files.input("--geometry", o.geometry);
   for (const fs::path& written : volume_files(o.out)) files.output("--out", written);
   const fs::path log_file = fs::path(o.out).replace_extension(".log.json");

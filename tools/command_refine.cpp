@@ -74,8 +74,7 @@ void run_refine(const RefineOptions& o) {
   o.options.validate();
   const ScanDescription scan = read_scan(o.scan);
   RunFiles files;
-  require_projection_files(scan, o.scan.string(), "projections.count");
-  files.scan("--scan", o.scan, scan);
+  files.scan_to_read("--scan", o.scan, scan);
   files.input("--geometry", o.geometry);
   files.output("--out", o.out);
   for (const char* suffix : {".geometry.json", ".scan.json", ".before.png", ".after.png", ".difference.png", ".pattern.png",

@@ -89,6 +89,11 @@ void RunFiles::scan(const std::string& what, const fs::path& scan_file, const Sc
   if (s.matrices) input(what + ": pose_source.file", s.resolve(s.matrices->file));
 }
 
+void RunFiles::scan_to_read(const std::string& what, const fs::path& scan_file, const ScanDescription& s) {
+  require_projection_files(s, scan_file.string(), "projections.count");
+  scan(what, scan_file, s);
+}
+
 void RunFiles::input_folder(std::string what, const fs::path& folder) {
   if (!folder.empty()) input_folders_.push_back({std::move(what), folder, place_of(folder), ""});
 }

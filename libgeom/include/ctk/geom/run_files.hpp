@@ -17,6 +17,10 @@ class RunFiles {
   /// Every file a scan reads: the scan file itself, its projections, flats, darks, joint log and
   /// matrices.
   void scan(const std::string& what, const std::filesystem::path& scan_file, const ScanDescription& scan);
+  /// The same for a scan whose projections the run reads: its declared count is first checked
+  /// against the files (require_projection_files, InputError naming projections.count), before a
+  /// name per view is listed or any structure per view built.
+  void scan_to_read(const std::string& what, const std::filesystem::path& scan_file, const ScanDescription& scan);
   /// Every file below `folder` is input (a folder the run reads from).
   void input_folder(std::string what, const std::filesystem::path& folder);
 
