@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <memory>
 #include <stdexcept>
-#include <vector>
 
 #include "ctk/core/atomic_write.hpp"
 
@@ -39,14 +38,15 @@ void write_tiff_page(TIFF* t, const TiffPage& page, const fs::path& file) {
   }
   if (!page.description.empty()) TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, page.description.c_str());
   const std::string which = page.page_of ? "page " + std::to_string(page.page_of->first) : std::string("the image");
-  // libtiff may encode in place (the predictor does): each strip is copied before it is handed over.
-  std::vector<unsigned char> strip;
-  const auto* bytes = static_cast<const unsigned char*>(page.pixels);
+  // libtiff takes a non-const buffer but, writing in the machine's byte order, leaves it as it was:
+  // the predictor works on a copy of its own (libtiff 4.5: a uint16 image with the horizontal
+  // predictor, compared before and after TIFFWriteEncodedStrip).
+  auto* bytes = static_cast<unsigned char*>(const_cast<void*>(page.pixels));
   const std::size_t row_bytes = std::size_t{page.cols} * bytes_per_sample;
   for (std::uint32_t row = 0; row < page.rows; row += rows_per_strip) {
     const std::uint32_t count = std::min(rows_per_strip, page.rows - row);
-    strip.assign(bytes + std::size_t{row} * row_bytes, bytes + (std::size_t{row} + count) * row_bytes);
-    if (TIFFWriteEncodedStrip(t, TIFFComputeStrip(t, row, 0), strip.data(), static_cast<tmsize_t>(strip.size())) < 0)
+    if (TIFFWriteEncodedStrip(t, TIFFComputeStrip(t, row, 0), bytes + std::size_t{row} * row_bytes,
+                              static_cast<tmsize_t>(std::size_t{count} * row_bytes)) < 0)
       throw std::runtime_error(file.string() + ": cannot write " + which + " (disk full?)");
   }
   if (!TIFFWriteDirectory(t)) throw std::runtime_error(file.string() + ": cannot write " + which + " (disk full?)");
