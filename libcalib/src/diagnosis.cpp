@@ -209,7 +209,6 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
   };
   const TimeAndTilt time_tilt = o.setup.robot ? time_and_tilt(o) : TimeAndTilt{};
   d.time_tilt_correlation = time_tilt.correlation;
-  d.time_and_tilt_confounded = time_tilt.confounded();
   std::vector<Effect> candidates, outside;
   for (Effect e : kEffects)
     if (o.setup.robot || !needs_robot(e)) candidates.push_back(e);
@@ -587,7 +586,8 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& o) 
       {"noise",
        {{"centre_sigma_px", o.centre_sigma_px}, {"robot_sigma_mm", o.robot_sigma_mm}, {"robot_sigma_deg", o.robot_sigma_deg}}},
       {"false_acceptance_rate", d.false_acceptance_rate},
-      {"time_and_tilt", {{"correlation", d.time_tilt_correlation}, {"confounded", d.time_and_tilt_confounded}}}};
+      {"time_and_tilt",
+       {{"correlation", d.time_tilt_correlation}, {"confounded", TimeAndTilt{d.time_tilt_correlation}.confounded()}}}};
   return report.to_json();
 }
 

@@ -1,5 +1,6 @@
 #include "time_and_tilt.hpp"
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <vector>
 
@@ -17,26 +18,13 @@ TimeAndTilt time_and_tilt(const ScanObservations& o) {
     time.push_back(v.view);
     tilt.push_back((g - g.dot(axis) * axis).norm());
   }
-  TimeAndTilt t;
-  t.views = static_cast<int>(time.size());
-  if (t.views < 3) return t;
-  const double n = t.views;
-  double mt = 0, ms = 0;
-  for (int i = 0; i < t.views; ++i) {
-    mt += time[static_cast<std::size_t>(i)] / n;
-    ms += tilt[static_cast<std::size_t>(i)] / n;
-  }
-  double stt = 0, sss = 0, sts = 0;
-  for (int i = 0; i < t.views; ++i) {
-    const double a = time[static_cast<std::size_t>(i)] - mt, b = tilt[static_cast<std::size_t>(i)] - ms;
-    stt += a * a;
-    sss += b * b;
-    sts += a * b;
-  }
+  if (time.size() < 3) return {};
+  const Eigen::Map<const Eigen::VectorXd> t(time.data(), static_cast<Eigen::Index>(time.size())),
+      s(tilt.data(), static_cast<Eigen::Index>(tilt.size()));
+  const Eigen::VectorXd a = t.array() - t.mean(), b = s.array() - s.mean();
   // A tilt constant to rounding (a joint-7 orbit) has no correlation to speak of.
-  if (stt <= 0 || sss <= 1e-12 * n) return t;
-  t.correlation = sts / std::sqrt(stt * sss);
-  return t;
+  if (a.squaredNorm() <= 0 || b.squaredNorm() <= 1e-12 * static_cast<double>(b.size())) return {};
+  return {a.dot(b) / (a.norm() * b.norm())};
 }
 
 }  // namespace ctk

@@ -12,7 +12,6 @@ struct TimeAndTilt {
   /// holder axis' angle to the vertical (what a cantilever's sag scales with); 0 when the tilt
   /// does not change (a joint-7 orbit keeps it) or fewer than 3 views have joints.
   double correlation = 0;
-  int views = 0;
   /// At 0.9 the tilt accounts for 81 % of the time order's variance: what is left to tell a
   /// drift from a sag is a fifth of the scan's lever arm.
   static constexpr double kConfounded = 0.9;

@@ -76,8 +76,8 @@ RefineScanSummary refine_scan(const ScanDescription& scan, Geometry geometry, co
   data_alone_checks(m, probe, scan, s);
   if (s.repeat) {
     std::ostringstream line;
-    line << "views " << s.repeat->first_view << " and " << s.repeat->last_view << " (the same angle): shifted "
-         << s.repeat->shift_px << " +- " << s.repeat->shift_sigma_px << " px, RMS difference " << s.repeat->rms_difference
+    line << "views 0 and " << s.repeat->last_view << " (the same angle): shifted " << s.repeat->shift_px << " +- "
+         << s.repeat->shift_sigma_px << " px, RMS difference " << s.repeat->rms_difference
          << (s.repeat->moved() ? ": the object moved during the scan" : "");
     say(line.str());
   }
@@ -136,7 +136,7 @@ nlohmann::json RefineScanSummary::report() const {
                         {"uncertainty_scaled_px", conjugate->standard_error_px * scale}};
   }
   if (repeat)
-    r["repeat_exposure"] = {{"views", {repeat->first_view, repeat->last_view}},
+    r["repeat_exposure"] = {{"views", {0, repeat->last_view}},
                             {"rms_difference", repeat->rms_difference},
                             {"shift_px", repeat->shift_px},
                             {"shift_sigma_px", repeat->shift_sigma_px},

@@ -75,10 +75,9 @@ struct EffectFinding {
 struct Diagnosis {
   int views_ok = 0;
   double false_acceptance_rate = 0;  // the family-wise rate the acceptance held (DiagnosisOptions)
-  // Correlation of the view index with the holder's tilt to gravity; confounded where a drift in
-  // time and a load that follows gravity cannot be told apart (both then named).
+  // Correlation of the view index with the holder's tilt to gravity: where it is high, a drift in
+  // time and a load that follows gravity cannot be told apart (both are then named).
   double time_tilt_correlation = 0;
-  bool time_and_tilt_confounded = false;
   ModelError baseline, final_error;
   std::vector<EffectFinding> effects;  // every candidate, accepted ones first in order of acceptance
   EffectParameters model;              // all accepted effects and the loads outside the vocabulary

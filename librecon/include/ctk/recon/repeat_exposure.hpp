@@ -10,7 +10,7 @@
 namespace ctk {
 
 struct RepeatExposure {
-  int first_view = 0, last_view = 0;
+  int last_view = 0;          // compared with view 0
   double shift_px = 0;        // the last row's shift along the row that best matches the first
   double shift_sigma_px = 0;  // its standard error from the noise left after the shift (Cramer-Rao)
   double rms_difference = 0;  // first against last, as measured (line-integral units)
