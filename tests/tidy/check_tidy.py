@@ -16,13 +16,15 @@ import datetime
 import json
 import os
 import pathlib
-import platform
 import re
 import shlex
 import shutil
 import subprocess
 import sys
 import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "benchmarks"))
+from diagnosis_population import cpu_name  # noqa: E402  (the benchmarks' one description of the CPU)
 
 PRODUCT = ("libcore", "libgeom", "libproj", "librecon", "libplan", "libcalib", "phantoms", "tools", "python")
 
@@ -54,16 +56,6 @@ def dependencies(build, command):
         return None
     text = depfile.read_text().replace("\\\n", " ")
     return {pathlib.Path(p).resolve() for p in text.split(":", 1)[1].split()}
-
-
-def cpu_name():
-    try:
-        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor()
 
 
 def main():
