@@ -41,7 +41,8 @@ struct ReconstructOptions {
   int bin = 1;
   std::string method = "wls-cg";
   int iterations = 0;  // 0: the method's default
-  int subsets = 0;     // OS-SQS: 0 chosen from the views
+  int held_out_every = ReconstructionOptions{}.held_out_every;
+  int subsets = 0;  // OS-SQS: 0 chosen from the views
   double lambda = 0, tolerance = 1e-4, huber_delta = 0;
   std::string regulariser = "identity";
   std::string preconditioner = "none";
@@ -59,6 +60,7 @@ ReconstructionOptions library_options(const ReconstructOptions& o) {
   r.method = reconstruction_method(o.method);
   r.subsets = o.subsets;
   r.iterations = o.iterations;
+  r.held_out_every = o.held_out_every;
   r.lambda = o.lambda;
   r.tolerance = o.tolerance;
   r.regulariser = regulariser_from_string(o.regulariser);
@@ -318,8 +320,15 @@ void register_reconstruct(CLI::App& app) {
                   "fdk (circular scans only)")
       ->check(CLI::IsMember({"wls-cg", "os-sqs", "sirt", "fdk"}))
       ->capture_default_str();
-  cmd->add_option("--iterations", o->iterations, "Iterations (default: 30 for wls-cg, 8 epochs for os-sqs, 100 for sirt)")
+  cmd->add_option("--iterations", o->iterations,
+                  "Iterations on every view (default: until the views held out by --held-out-every stop fitting better, "
+                  "at most 30 for wls-cg, 8 epochs for os-sqs, 100 for sirt)")
       ->check(CLI::Range(1, 100000));
+  cmd->add_option("--held-out-every", o->held_out_every,
+                  "Without --iterations: one view in n is held out of the solve, and the run stops with its best iterate "
+                  "once their fit stops improving; 0 runs the default count on every view")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
   cmd->add_option("--subsets", o->subsets, "os-sqs: ordered subsets (default: about 15 views each, at most 24)")
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--lambda", o->lambda, "Regularisation weight")->check(non_negative_number)->capture_default_str();

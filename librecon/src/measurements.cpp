@@ -165,6 +165,56 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
   return m;
 }
 
+namespace {
+
+// Moves the views at `positions` (ascending) of `from` into `to`, and compacts the rest of `from`.
+void split_stack(ProjectionStack& from, const std::vector<int>& positions, ProjectionStack& to) {
+  if (from.views == 0) return;
+  const std::size_t n = from.pixels_per_view();
+  to = ProjectionStack(static_cast<int>(positions.size()), from.rows, from.cols);
+  int kept = 0;
+  std::size_t next = 0;
+  for (int v = 0; v < from.views; ++v) {
+    if (next < positions.size() && positions[next] == v) {
+      std::copy_n(from.view(v), n, to.view(static_cast<int>(next++)));
+      continue;
+    }
+    if (kept != v) std::copy_n(from.view(v), n, from.view(kept));
+    ++kept;
+  }
+  from.views = kept;
+  from.data.resize(static_cast<std::size_t>(kept) * n);
+}
+
+}  // namespace
+
+Measurements take_views(Measurements& m, const std::vector<int>& positions) {
+  const int views = static_cast<int>(m.view_indices.size());
+  for (std::size_t k = 0; k < positions.size(); ++k)
+    if (positions[k] < 0 || positions[k] >= views || (k > 0 && positions[k] <= positions[k - 1]))
+      throw std::invalid_argument("take_views: positions must ascend within the " + std::to_string(views) + " views");
+  Measurements out;
+  split_stack(m.line_integrals, positions, out.line_integrals);
+  split_stack(m.weights, positions, out.weights);
+  std::vector<int> kept_indices;
+  std::vector<ProjectionMatrix> kept_matrices;
+  std::size_t next = 0;
+  for (int v = 0; v < views; ++v) {
+    const std::size_t k = static_cast<std::size_t>(v);
+    if (next < positions.size() && positions[next] == v) {
+      out.view_indices.push_back(m.view_indices[k]);
+      out.matrices.push_back(m.matrices[k]);
+      ++next;
+    } else {
+      kept_indices.push_back(m.view_indices[k]);
+      kept_matrices.push_back(m.matrices[k]);
+    }
+  }
+  m.view_indices = std::move(kept_indices);
+  m.matrices = std::move(kept_matrices);
+  return out;
+}
+
 void require_views_left(const Measurements& m, const std::string& geometry_source) {
   if (m.view_indices.empty() && !m.left_out.empty())
     throw InputError(geometry_source, json_key("views"), "every ok view was left out: " + m.left_out.front());

@@ -56,7 +56,8 @@ void OsSqsOptions::validate() const {
 
 SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
                           const std::vector<std::vector<int>>& subsets, const OsSqsOptions& o,
-                          const IterationCallback& on_iteration, const std::function<bool()>& stop_requested) {
+                          const IterationCallback& on_iteration, const std::function<bool()>& stop_requested,
+                          const StoppingRule& stopping) {
   o.validate();
   detail::require_problem_shapes("solve_os_sqs", A, b, x);
   if (weights && weights->data.size() != b.data.size())
@@ -144,6 +145,10 @@ SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b,
       t = t_next;
     }
     report.iterations.push_back(cost_now(o.exact_cost ? exact_data_term() : A.sum_over_range(seen), epoch));
+    if (auto done = stopping ? stopping() : std::nullopt) {
+      report.stop_reason = std::move(*done);
+      return report;
+    }
     if (epoch < o.epochs && stop_requested && stop_requested()) {
       report.stop_reason = kStoppedWithoutState;
       return report;

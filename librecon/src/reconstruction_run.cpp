@@ -16,6 +16,7 @@
 #include "ctk/proj/slab_split_operator.hpp"
 #include "ctk/proj/view_split_operator.hpp"
 #include "ctk/recon/default_volume.hpp"
+#include "ctk/recon/held_out_fit.hpp"
 #include "ctk/recon/ordered_subsets.hpp"
 #include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/sirt.hpp"
@@ -137,11 +138,16 @@ void ReconstructionOptions::validate() const {
   require_choice(preconditioner == CgPreconditioner::none || method == ReconstructionMethod::wls_cg,
                  "ReconstructionOptions.preconditioner", "none unless the method is wls-cg", to_string(preconditioner));
   require_option(subsets >= 0, "ReconstructionOptions.subsets", "0 (chosen from the views) or more", subsets);
+  require_option(held_out_every >= 0, "ReconstructionOptions.held_out_every", "0 (no views held out) or more", held_out_every);
   require_option(lambda >= 0 && std::isfinite(lambda), "ReconstructionOptions.lambda", "a finite number of 0 or more", lambda);
   require_option(tolerance >= 0 && tolerance < 1, "ReconstructionOptions.tolerance", "a number in [0, 1)", tolerance);
   for (int n : size) require_option(n >= 0, "ReconstructionOptions.size", "voxel counts of 0 (default) or more", n);
   require_option(voxel_mm >= 0 && std::isfinite(voxel_mm), "ReconstructionOptions.voxel_mm",
                  "a finite length of 0 (default) or more", voxel_mm);
+}
+
+bool ReconstructionOptions::stops_on_held_out_views() const {
+  return iterations == 0 && held_out_every > 0 && method != ReconstructionMethod::fdk;
 }
 
 int ReconstructionOptions::iteration_count() const {
@@ -188,6 +194,7 @@ nlohmann::json ReconstructionRun::report() const {
       {"solver", to_json(solver)},
       {"peak_resident_bytes_per_rank", peak_resident_bytes},
       {"seconds", seconds}};
+  if (!held_out.is_null()) r["held_out"] = held_out;
   const DistributionPlan& d = plan.distribution;
   if (d.ranks > 1) {
     r["distribution"] = {{"ranks", d.ranks},
@@ -234,8 +241,13 @@ ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geomet
     plan.layout = VolumeLayout::centred(size, plan.layout.voxel_mm);
   }
   plan.available_bytes = available_memory_bytes();
-  const SolverShape solver{o.method,      o.lambda,      o.regulariser,
-                           o.huber_delta, plan.weighted, o.preconditioner == CgPreconditioner::diagonal};
+  const SolverShape solver{o.method,
+                           o.lambda,
+                           o.regulariser,
+                           o.huber_delta,
+                           plan.weighted,
+                           o.preconditioner == CgPreconditioner::diagonal,
+                           o.stops_on_held_out_views() ? o.held_out_every : 0};
   const int subsets = o.subsets > 0 ? o.subsets : default_subset_count(plan.views);
   plan.distribution = plan_distribution(solver, plan.layout, ok, scan.detector.rows, scan.detector.cols, subsets, ranks, rank,
                                         plan.available_bytes, o.decomposition);
@@ -278,7 +290,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   // Views split, the run's views are every rank's, in the geometry's order; in slabs every rank
   // read them all (each its rows), and found the same in them.
   const bool views_split = spread && !slabs;
-  const SpreadViews views = views_split ? gather_views(geometry, m, ranks) : SpreadViews{m.view_indices, m.matrices, {}};
+  SpreadViews views = views_split ? gather_views(geometry, m, ranks) : SpreadViews{m.view_indices, m.matrices, {}};
   Measurements whole;  // views split, what the hooks and the report see: the whole run's numbers, no images
   if (views_split) {
     whole.view_indices = views.indices;
@@ -293,14 +305,33 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   run.masked_pixels = found.masked_pixels;
   run.views_left_out = found.left_out;
   run.notes = found.notes;
-  run.views_used = views.indices;
   run.distortion_note = m.distortion_note;
+
+  const auto& n = plan.layout.size;
+  const Eigen::Vector3d volume_centre =
+      0.5 * (plan.layout.centre_of(0, 0, 0) + plan.layout.centre_of(n[0] - 1, n[1] - 1, n[2] - 1));
+  // Default iterations: one view in `held_out_every`, spread over the directions, is kept out of
+  // the solve to say when the image stops improving. Every rank holds out the same views.
+  std::optional<HeldOutFit> judge;
+  std::vector<int> held_indices;
+  if (o.stops_on_held_out_views())
+    if (const std::vector<int> chosen = held_out_positions(views.matrices, o.held_out_every, volume_centre); !chosen.empty()) {
+      std::vector<int> here = views_split ? views.local_positions(chosen) : chosen;
+      std::sort(here.begin(), here.end());
+      for (int p : chosen) held_indices.push_back(views.indices[static_cast<std::size_t>(p)]);
+      Measurements held = take_views(m, here);
+      views = views_split ? gather_views(geometry, m, ranks) : SpreadViews{m.view_indices, m.matrices, {}};
+      judge.emplace(spread_operator(plan, geometry, held, ranks, scan.detector), std::move(held.line_integrals),
+                    std::move(held.weights));
+    }
+  run.views_used = views.indices;
 
   run.volume = Volume(slabs ? slab_layout(plan.layout, ranks.rank(), ranks.size()) : plan.layout);
   const int iterations = o.iteration_count();
   std::vector<std::size_t> bytes_at;  // what this rank had handed to the others at each iteration
   const auto on_iteration = [&](const IterationLog& l) {
     bytes_at.push_back(ranks.bytes_sent());
+    if (judge) judge->observe(l.iteration, run.volume);
     if (l.iteration > 0 && hooks.iterating) hooks.iterating(l.iteration, iterations);
   };
   if (plan.method == ReconstructionMethod::fdk) {
@@ -326,25 +357,23 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
     const std::function<bool()> stop_requested = spread ? std::function<bool()>() : hooks.stop_requested;
     const std::shared_ptr<const ProjectionOperator> split = spread_operator(plan, geometry, m, ranks, scan.detector);
     const ProjectionOperator& A = *split;
+    const StoppingRule stopping = judge ? judge->rule() : StoppingRule();
     if (plan.method == ReconstructionMethod::os_sqs) {
       OsSqsOptions os;
       os.epochs = iterations;
       os.lambda = o.lambda;
       os.regulariser = o.regulariser;
       os.huber_delta = o.huber_delta;
-      const auto& n = plan.layout.size;
-      const Eigen::Vector3d volume_centre =
-          0.5 * (plan.layout.centre_of(0, 0, 0) + plan.layout.centre_of(n[0] - 1, n[1] - 1, n[2] - 1));
       const int count = o.subsets > 0 ? o.subsets : default_subset_count(static_cast<int>(views.matrices.size()));
       // The subsets of the whole run's views, each rank taking its views of every subset.
       std::vector<std::vector<int>> subsets = ordered_subsets(views.matrices, count, volume_centre);
       if (views_split)
         for (auto& subset : subsets) subset = views.local_positions(subset);
       run.solver = solve_os_sqs(A, m.line_integrals, plan.weighted ? &m.weights : nullptr, run.volume, subsets, os, on_iteration,
-                                stop_requested);
+                                stop_requested, stopping);
     } else if (plan.method == ReconstructionMethod::sirt) {
-      run.solver =
-          solve_sirt(A, m.line_integrals, run.volume, {iterations, 1.0, true}, on_iteration, spread ? nullptr : &checkpointing);
+      run.solver = solve_sirt(A, m.line_integrals, run.volume, {iterations, 1.0, true}, on_iteration,
+                              spread ? nullptr : &checkpointing, stopping);
     } else {
       WlsOptions w;
       w.iterations = iterations;
@@ -353,7 +382,12 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
       w.regulariser = o.regulariser;
       w.preconditioner = o.preconditioner;
       run.solver = solve_wls_cg(A, m.line_integrals, plan.weighted ? &m.weights : nullptr, run.volume, w, on_iteration,
-                                spread ? nullptr : &checkpointing);
+                                spread ? nullptr : &checkpointing, stopping);
+    }
+    if (judge) {
+      judge->restore_best(run.volume);
+      run.held_out = judge->report();
+      run.held_out["view_indices"] = held_indices;
     }
   }
   if (spread && bytes_at.size() > 1) {

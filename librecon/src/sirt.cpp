@@ -23,7 +23,7 @@ void SirtOptions::validate() const {
 }
 
 SolverReport solve_sirt(const ProjectionOperator& A, const ProjectionStack& b, Volume& x, const SirtOptions& o,
-                        const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
+                        const IterationCallback& on_iteration, const Checkpointing* checkpointing, const StoppingRule& stopping) {
   o.validate();
   detail::require_problem_shapes("solve_sirt", A, b, x);
   auto start = std::chrono::steady_clock::now();
@@ -64,6 +64,10 @@ SolverReport solve_sirt(const ProjectionOperator& A, const ProjectionStack& b, V
     start = std::chrono::steady_clock::now();
     report.iterations.push_back(log);
     if (on_iteration) on_iteration(log);
+    if (auto done = stopping ? stopping() : std::nullopt) {
+      report.stop_reason = std::move(*done);
+      return report;
+    }
     if (it == o.iterations) break;
 #pragma omp parallel for schedule(static)
     for (std::ptrdiff_t i = 0; i < n_rays; ++i)

@@ -52,7 +52,8 @@ void WlsOptions::validate() const {
 }
 
 SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
-                          const WlsOptions& o, const IterationCallback& on_iteration, const Checkpointing* checkpointing) {
+                          const WlsOptions& o, const IterationCallback& on_iteration, const Checkpointing* checkpointing,
+                          const StoppingRule& stopping) {
   detail::require_problem_shapes("solve_wls_cg", A, b, x);
   ProjectionStack residual(b.views, b.rows, b.cols);
   if (!(checkpointing && checkpointing->resume)) {  // a continued run takes its residual from the state
@@ -61,12 +62,12 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
     if (!cold) A.apply(x, residual);
     axpy(-1.0, b.data, residual.data);
   }
-  return solve_wls_cg(A, b, weights, x, residual, o, on_iteration, checkpointing);
+  return solve_wls_cg(A, b, weights, x, residual, o, on_iteration, checkpointing, stopping);
 }
 
 SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
                           ProjectionStack& residual, const WlsOptions& o, const IterationCallback& on_iteration,
-                          const Checkpointing* checkpointing) {
+                          const Checkpointing* checkpointing, const StoppingRule& stopping) {
   o.validate();
   detail::require_problem_shapes("solve_wls_cg", A, b, x);
   if (weights && weights->data.size() != b.data.size())
@@ -148,6 +149,7 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
     axpy(alpha, Ad.data, residual.data);
     if (it == o.iterations && !o.gradient_after_last) {
       report.iterations.push_back(log_point(it, g_norm, g0));
+      if (auto done = stopping ? stopping() : std::nullopt) report.stop_reason = std::move(*done);
       break;
     }
     detail::weighted_copy(Ad.data, w, scratch.data);
@@ -160,6 +162,10 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
     report.iterations.push_back(log_point(it, g_norm, g0));
     if (g_norm <= o.tolerance * g0) {
       report.stop_reason = "gradient fell below the tolerance after " + std::to_string(it) + " iterations";
+      return report;
+    }
+    if (auto done = stopping ? stopping() : std::nullopt) {
+      report.stop_reason = std::move(*done);
       return report;
     }
     const double beta = gz_new / gz;

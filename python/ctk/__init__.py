@@ -314,20 +314,26 @@ class ReconstructionResult:
 
 
 def reconstruct(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] = None, *, method: str = "wls-cg",
-                iterations: int = 0, subsets: int = 0, lambda_: float = 0.0, regulariser: str = "identity",
-                huber_delta: float = 0.0, tolerance: float = 1e-4, preconditioner: str = "none",
+                iterations: int = 0, held_out_every: Optional[int] = None, subsets: int = 0, lambda_: float = 0.0,
+                regulariser: str = "identity", huber_delta: float = 0.0, tolerance: float = 1e-4, preconditioner: str = "none",
                 weighted: bool = True, undistort: bool = True, size: Optional[tuple[int, int, int]] = None,
                 voxel_mm: float = 0.0, progress: Optional[Callable[[int, int], None]] = None) -> ReconstructionResult:
     """`ctk reconstruct` without files out: the scan's ok views (of `geometry`, or the scan's
     nominal geometry) read, the memory plan checked, and WLS-CG or OS-SQS (Poisson weights for
-    counts unless weighted=False), SIRT or FDK (circular scans) run. iterations 0: 30 for WLS-CG,
-    8 epochs of OS-SQS (subsets 0: about 15 views each, at most 24), 100 for SIRT. huber_delta > 0
+    counts unless weighted=False), SIRT or FDK (circular scans) run. iterations 0: at most 30 for
+    WLS-CG, 8 epochs of OS-SQS (subsets 0: about 15 views each, at most 24), 100 for SIRT, ended
+    once the fit of one view in held_out_every (None: 32, as the command line), held out of the
+    solve, stops improving, with the best iterate (report["held_out"]); held_out_every=0 runs the
+    count on every view; iterations n > 0 runs exactly n on every view. huber_delta > 0
     (OS-SQS only): an edge-preserving Huber penalty weighted by lambda_ instead of the quadratic one.
     preconditioner 'diagonal' (WLS-CG only): CG preconditioned by the separable curvature.
     size (z, y, x) voxels and voxel_mm default to the holder (or the field of view) at a detector
     pixel seen at the holder origin. progress(done, total) while reading and while iterating;
     Ctrl-C stops it within the current iteration (KeyboardInterrupt)."""
-    d = _ctk._reconstruct(os.fspath(scan), None if geometry is None else os.fspath(geometry), method, iterations, subsets,
+    if held_out_every is not None and held_out_every < 0:
+        raise ValueError(f"held_out_every: expected 0 (no views held out) or more, got {held_out_every}")
+    d = _ctk._reconstruct(os.fspath(scan), None if geometry is None else os.fspath(geometry), method, iterations,
+                          -1 if held_out_every is None else held_out_every, subsets,
                           lambda_, regulariser, huber_delta, tolerance, preconditioner, weighted, undistort, None if size is None else tuple(size), voxel_mm,
                           progress)
     _log.info("%s", d["brief"])

@@ -199,13 +199,14 @@ py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, cons
 }
 
 py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& geometry_file, const std::string& method,
-                     int iterations, int subsets, double lambda, const std::string& regulariser, double huber_delta,
-                     double tolerance, const std::string& preconditioner, bool weighted, bool undistort,
+                     int iterations, int held_out_every, int subsets, double lambda, const std::string& regulariser,
+                     double huber_delta, double tolerance, const std::string& preconditioner, bool weighted, bool undistort,
                      const std::optional<std::array<int, 3>>& size, double voxel_mm, const py::object& progress) {
   ReconstructionOptions o;
   o.method = reconstruction_method(method);  // std::invalid_argument (ValueError) naming the others
   o.subsets = subsets;
   o.iterations = iterations;
+  if (held_out_every >= 0) o.held_out_every = held_out_every;  // -1: the library's default
   o.lambda = lambda;
   o.regulariser = regulariser_from_string(regulariser);
   o.huber_delta = huber_delta;
@@ -324,9 +325,9 @@ images beside it). Returns the scan as read back; keys read and not modelled are
         py::arg("kvp"), py::arg("filter_al_mm"), py::arg("robot_noise_mm"), py::arg("robot_noise_deg"), py::arg("seed"),
         py::arg("effects"), py::arg("progress"), py::arg("log"));
   m.def("_reconstruct", &reconstruct, py::arg("scan"), py::arg("geometry"), py::arg("method"), py::arg("iterations"),
-        py::arg("subsets"), py::arg("lambda_"), py::arg("regulariser"), py::arg("huber_delta"), py::arg("tolerance"),
-        py::arg("preconditioner"), py::arg("weighted"), py::arg("undistort"), py::arg("size"), py::arg("voxel_mm"),
-        py::arg("progress"));
+        py::arg("held_out_every"), py::arg("subsets"), py::arg("lambda_"), py::arg("regulariser"), py::arg("huber_delta"),
+        py::arg("tolerance"), py::arg("preconditioner"), py::arg("weighted"), py::arg("undistort"), py::arg("size"),
+        py::arg("voxel_mm"), py::arg("progress"));
   m.def("_refine", &refine, py::arg("scan"), py::arg("geometry"), py::arg("effects"), py::arg("coarsening"),
         py::arg("blur_arc_deg"), py::arg("z"), py::arg("log"));
 }

@@ -2,6 +2,7 @@
 // What an iterative solver reports after each iteration, and why it stopped.
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,10 @@ struct SolverReport {
 };
 
 using IterationCallback = std::function<void(const IterationLog&)>;
+
+/// Asked after every iteration, once the callback has seen it: a reason ends the run there as done
+/// (the result stopped improving: held_out_fit.hpp). Unlike a stop on request, nothing is saved.
+using StoppingRule = std::function<std::optional<std::string>()>;
 
 nlohmann::json to_json(const SolverReport& report);
 

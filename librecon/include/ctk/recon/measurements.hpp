@@ -58,6 +58,11 @@ constexpr double kMostMaskedFraction = 0.01;
 Measurements load_measurements(const ScanDescription& scan, const Geometry& geometry, const MeasurementOptions& options = {},
                                const std::function<void(int, int)>& progress = {});
 
+/// Moves the stack views at `positions` (ascending, each < the stack's views) out of `m` into the
+/// result, which also carries their indices and matrices; `m` keeps the others in their order,
+/// compacted in place (its buffers are not reallocated). Counts and notes stay with `m`.
+Measurements take_views(Measurements& m, const std::vector<int>& positions);
+
 /// Throws InputError naming `geometry_source` (key "views") when views were left out and none
 /// remains to reconstruct from.
 void require_views_left(const Measurements& m, const std::string& geometry_source);

@@ -34,6 +34,9 @@ struct SolverShape {
   double huber_delta = 0;
   bool weighted = false;
   bool preconditioned = false;  // WLS-CG's diagonal preconditioner: one more volume
+  /// Stopped by one view in this many held out (held_out_fit.hpp; 0: not): the best iterate, one
+  /// more volume, and the held-out views' data, weights and residual.
+  int held_out_every = 0;
 };
 
 /// CG: x, gradient, direction, H direction (and the preconditioner); b, residual, scratch, and

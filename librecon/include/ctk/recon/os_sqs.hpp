@@ -45,8 +45,10 @@ inline constexpr const char* kStoppedWithoutState = "stopped on request after an
 /// `subsets` partition A's views (every view in exactly one; std::invalid_argument otherwise).
 /// `x` is the start (A's domain layout; zeros for a cold start) and receives the result. `b` has
 /// A's range shape; `weights` may be null (unit weights). The log has one entry per epoch.
+/// `stopping` may end the run before `epochs` (its reason becomes the stop reason).
 SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
                           const std::vector<std::vector<int>>& subsets, const OsSqsOptions& options,
-                          const IterationCallback& on_iteration = {}, const std::function<bool()>& stop_requested = {});
+                          const IterationCallback& on_iteration = {}, const std::function<bool()>& stop_requested = {},
+                          const StoppingRule& stopping = {});
 
 }  // namespace ctk

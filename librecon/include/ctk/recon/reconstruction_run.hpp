@@ -32,9 +32,15 @@ namespace ctk {
 
 struct ReconstructionOptions {
   ReconstructionMethod method = ReconstructionMethod::wls_cg;
-  int iterations = 0;  // 0: 30 for WLS-CG, 8 epochs for OS-SQS, 100 for SIRT (FDK has none)
-  int subsets = 0;     // OS-SQS: 0 chooses from the view count (default_subset_count)
-  double lambda = 0;   // WLS-CG's regularisation weight
+  /// 0: the method's default, at most 30 for WLS-CG, 8 epochs for OS-SQS, 100 for SIRT (FDK has
+  /// none), ended earlier by `held_out_every`; n > 0: exactly n on every view.
+  int iterations = 0;
+  /// Default iterations: one view in this many is held out of the solve and the run stops once
+  /// their fit stops improving beyond their noise, with the last iterate that improved it
+  /// (held_out_fit.hpp). 0, or fewer views: every view is used for the method's default count.
+  int held_out_every = 32;
+  int subsets = 0;    // OS-SQS: 0 chooses from the view count (default_subset_count)
+  double lambda = 0;  // WLS-CG's regularisation weight
   Regulariser regulariser = Regulariser::identity;
   double huber_delta = 0;   // OS-SQS: > 0 weighs the edge-preserving Huber penalty instead (huber_penalty.hpp)
   double tolerance = 1e-4;  // WLS-CG stops when the gradient has fallen by this factor
@@ -46,6 +52,7 @@ struct ReconstructionOptions {
   Decomposition decomposition = Decomposition::automatic;    // over several ranks (distribution_plan.hpp)
   void validate() const;                                     // std::invalid_argument naming the field
   int iteration_count() const;                               // `iterations`, or the method's default
+  bool stops_on_held_out_views() const;                      // default iterations, ended by held-out views
 };
 
 /// OS-SQS's subsets when none are asked for: about 15 views each, at most 24 (12 to 24 subsets of
@@ -88,6 +95,10 @@ struct ReconstructionRun {
   std::string distortion_note;
   std::optional<CircularTrajectory> circle;  // FDK: the orbit fitted to the matrices
   SolverReport solver;
+  /// Views held out (ReconstructionOptions::held_out_every): HeldOutFit::report() and their scan
+  /// indices ("view_indices"); the volume is the last iterate that improved their fit. Null when
+  /// no view was held out.
+  nlohmann::json held_out;
   /// Spread over ranks: the bytes this rank handed to the others per iteration, counted (the
   /// median over the iterations), against the plan's model.
   std::size_t counted_bytes_per_iteration = 0;

@@ -18,6 +18,7 @@ struct SirtOptions {
 
 /// `b` has A's range shape, `x` (the start, and the result) A's domain layout.
 SolverReport solve_sirt(const ProjectionOperator& A, const ProjectionStack& b, Volume& x, const SirtOptions& options,
-                        const IterationCallback& on_iteration = {}, const Checkpointing* checkpointing = nullptr);
+                        const IterationCallback& on_iteration = {}, const Checkpointing* checkpointing = nullptr,
+                        const StoppingRule& stopping = {});
 
 }  // namespace ctk

@@ -39,15 +39,16 @@ struct WlsOptions {
 
 /// `x` is the starting point (zeros for a cold start, A's domain layout) and receives the result.
 /// `b` has A's range shape; `weights` may be null (unit weights), otherwise the same shape as `b`.
+/// `stopping` may end the run before `iterations` (its reason becomes the stop reason).
 SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
                           const WlsOptions& options, const IterationCallback& on_iteration = {},
-                          const Checkpointing* checkpointing = nullptr);
+                          const Checkpointing* checkpointing = nullptr, const StoppingRule& stopping = {});
 
 /// The same for a caller that keeps the residual A x - b between calls (an incremental
 /// reconstruction that adds views): `residual` holds it on entry and on return, so the start
 /// costs no forward projection.
 SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
                           ProjectionStack& residual, const WlsOptions& options, const IterationCallback& on_iteration = {},
-                          const Checkpointing* checkpointing = nullptr);
+                          const Checkpointing* checkpointing = nullptr, const StoppingRule& stopping = {});
 
 }  // namespace ctk
