@@ -16,12 +16,15 @@ std::vector<int> held_out_positions(const std::vector<ProjectionMatrix>& views, 
   return chosen;
 }
 
-HeldOutFit::HeldOutFit(std::shared_ptr<const ProjectionOperator> A, ProjectionStack b, ProjectionStack w)
+HeldOutFit::HeldOutFit(std::shared_ptr<const ProjectionOperator> A, ProjectionStack b, ProjectionStack w, int views,
+                       std::size_t pixels_per_view)
     : A_(std::move(A)),
       b_(std::move(b)),
       w_(std::move(w)),
       projected_(b_.views, b_.rows, b_.cols),
-      previous_(b_.views, b_.rows, b_.cols) {}
+      previous_(b_.views, b_.rows, b_.cols),
+      views_(views > 0 ? views : b_.views),
+      rays_(double(views_) * double(pixels_per_view > 0 ? pixels_per_view : b_.pixels_per_view())) {}
 
 void HeldOutFit::observe(int iteration, const Volume& x) {
   A_->apply(x, projected_);
@@ -53,8 +56,7 @@ void HeldOutFit::observe(int iteration, const Volume& x) {
   // The held-out data's noise n (variance c / w per ray) moves the change of the misfit by
   // sum w (A dx) n, of variance c sum w (A dx)^2; c is at most the misfit per ray of the best
   // iterate. An improvement within kHeldOutSignificance of that is not the image getting better.
-  const double rays = A_->sum_over_range(static_cast<double>(b_.data.size()));
-  const double noise_per_ray = 2 * std::min(best_fit_, fit) / std::max(rays, 1.0);
+  const double noise_per_ray = 2 * std::min(best_fit_, fit) / std::max(rays_, 1.0);
   const double improvement = fits_[fits_.size() - 2] - fit;
   significant_ = improvement > kHeldOutSignificance * std::sqrt(noise_per_ray * moved);
   if (significant_) {
@@ -67,13 +69,10 @@ void HeldOutFit::observe(int iteration, const Volume& x) {
 StoppingRule HeldOutFit::rule() const {
   return [this]() -> std::optional<std::string> {
     if (significant_) return std::nullopt;
-    return "the fit of " + std::to_string(held_out_views()) +
-           " held-out views stopped improving beyond their noise after iteration " + std::to_string(best_iteration_) +
-           " (its iterate is the result)";
+    return "the fit of " + std::to_string(views_) + " held-out views stopped improving beyond their noise after iteration " +
+           std::to_string(best_iteration_) + " (its iterate is the result)";
   };
 }
-
-int HeldOutFit::held_out_views() const { return static_cast<int>(A_->sum_over_range(static_cast<double>(b_.views))); }
 
 int HeldOutFit::restore_best(Volume& x) {
   if (best_iteration_ >= 0 && best_iteration_ != last_iteration_) std::swap(x, best_);
@@ -82,7 +81,7 @@ int HeldOutFit::restore_best(Volume& x) {
 }
 
 nlohmann::json HeldOutFit::report() const {
-  return {{"views", held_out_views()}, {"iterations", iterations_}, {"fit", fits_}, {"best_iteration", best_iteration_}};
+  return {{"views", views_}, {"iterations", iterations_}, {"fit", fits_}, {"best_iteration", best_iteration_}};
 }
 
 }  // namespace ctk

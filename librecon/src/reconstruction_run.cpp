@@ -322,7 +322,8 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
       Measurements held = take_views(m, here);
       views = views_split ? gather_views(geometry, m, ranks) : SpreadViews{m.view_indices, m.matrices, {}};
       judge.emplace(spread_operator(plan, geometry, held, ranks, scan.detector), std::move(held.line_integrals),
-                    std::move(held.weights));
+                    std::move(held.weights), static_cast<int>(chosen.size()),
+                    static_cast<std::size_t>(scan.detector.rows) * static_cast<std::size_t>(scan.detector.cols));
     }
   run.views_used = views.indices;
 

@@ -129,6 +129,29 @@ def main():
         if r.returncode or read_nrrd(again) != read_nrrd(work / f"spherical-wls-cg-{decomposition}-2.nrrd"):
             failures.append(f"a spread run by {decomposition} repeated gave other bits (exit {r.returncode})")
 
+    # Default iterations hold the same views out on every rank and stop at the same iteration.
+    def held_out_run(runner, out, *more):
+        return runner("reconstruct", "--scan", scans["circular"] / "scan.json", "--geometry",
+                      scans["circular"] / "truth-geometry.json", "--out", out, "--size", "40", *more)
+    one = work / "held-out-1.nrrd"
+    r = held_out_run(ctk, one)
+    stop = lambda log: json.loads(log.with_suffix(".log.json").read_text())["held_out"]
+    if r.returncode:
+        failures.append(f"default iterations on one process: {r.stderr[-400:]}")
+    else:
+        for decomposition in ("views", "slabs"):
+            out = work / f"held-out-{decomposition}-2.nrrd"
+            r = held_out_run(lambda *args: spread(2, *args), out, "--decomposition", decomposition)
+            largest = relative_difference(read_nrrd(one), read_nrrd(out))[0] if r.returncode == 0 else float("inf")
+            if r.returncode or stop(out)["best_iteration"] != stop(one)["best_iteration"] or \
+                    stop(out)["view_indices"] != stop(one)["view_indices"] or largest > 1e-5:
+                failures.append(f"default iterations over 2 ranks by {decomposition}: exit {r.returncode}, largest "
+                                f"difference {largest:.3g}, {r.stderr[-400:]}")
+            else:
+                print(f"default iterations over 2 ranks by {decomposition}: the same {len(stop(one)['view_indices'])} "
+                      f"views held out, stopped after iteration {stop(one)['best_iteration']}, largest difference "
+                      f"{largest:.2e}")
+
     # Calibration over ranks writes the single-process geometry.
     cal = work / "calibration"
     r = ctk("simulate", "--out", cal, "--trajectory", "random", "--views", "18", "--cols", "240", "--rows", "240", "--pitch",

@@ -11,6 +11,7 @@
 // iteration their misfit is measured, and the run ends at the first iteration whose improvement is
 // not significant (kHeldOutSignificance), with the last iterate that improved as its result.
 #include <Eigen/Core>
+#include <cstddef>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <vector>
@@ -37,8 +38,9 @@ class HeldOutFit {
  public:
   /// `A` projects onto the held-out views, whose line integrals are `b` and weights `w` (no views:
   /// unit weights). An operator spread over ranks sums the misfit over them, so every rank
-  /// decides alike.
-  HeldOutFit(std::shared_ptr<const ProjectionOperator> A, ProjectionStack b, ProjectionStack w);
+  /// decides alike; it then holds `views` held-out views of `pixels_per_view` in all (0: `b`'s).
+  HeldOutFit(std::shared_ptr<const ProjectionOperator> A, ProjectionStack b, ProjectionStack w, int views = 0,
+             std::size_t pixels_per_view = 0);
 
   /// After iteration `iteration` (0: the start): the misfit of `x`; `x` is kept as the result when
   /// it improved on the one before by more than the held-out data's noise can explain.
@@ -52,9 +54,10 @@ class HeldOutFit {
   nlohmann::json report() const;
 
  private:
-  int held_out_views() const;  // over every rank
   std::shared_ptr<const ProjectionOperator> A_;
-  ProjectionStack b_, w_, projected_, previous_;  // data, weights, A x now and at the iterate before
+  ProjectionStack b_, w_, projected_, previous_;
+  int views_ = 0;
+  double rays_ = 0;  // data, weights, A x now and at the iterate before
   std::vector<int> iterations_;
   std::vector<double> fits_;
   int best_iteration_ = -1, last_iteration_ = -1;
