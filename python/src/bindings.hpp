@@ -11,5 +11,6 @@ void bind_measurements(pybind11::module_& m);  // a scan's line integrals, weigh
 void bind_workflows(pybind11::module_& m);     // import of a circular scan, the markerless loop
 void bind_benchmarks(pybind11::module_& m);    // the standard problem; C++-side timing
 void bind_planning(pybind11::module_& m);      // view planning, simulated and in a lab
+void bind_phantoms(pybind11::module_& m);      // the simulator's phantoms voxelised (a truth)
 
 }  // namespace ctk::python

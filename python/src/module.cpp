@@ -54,4 +54,5 @@ PYBIND11_MODULE(_ctk, m) {
   ctk::python::bind_workflows(m);
   ctk::python::bind_benchmarks(m);
   ctk::python::bind_planning(m);
+  ctk::python::bind_phantoms(m);
 }
