@@ -224,3 +224,28 @@ def test_vendor_scans_import_from_python_as_from_the_command_line(tmp_path, ctk_
     with pytest.raises(KeyboardInterrupt):
         ctk.import_nxtomo(nexus, tmp_path / "interrupted.json", progress=ctrl_c)
     assert sorted(p.name for p in tmp_path.glob("interrupted*")) == []
+
+
+def test_voxelise_puts_a_phantom_where_read_volume_says_its_voxels_are(tmp_path):
+    # One sphere of radius 2 mm at (5, -3, 10) mm: on a 1 mm grid whose voxel 0 is centred at
+    # (-8, -8, 0), the voxel around its centre is (x 13, y 5, z 10), as (z, y, x) in the array;
+    # every voxel 3 mm or more from the centre (all 8 sample points outside) is air.
+    phantom = tmp_path / "sphere.json"
+    phantom.write_text(json.dumps({"format": "ctk-phantom/1", "primitives": [
+        {"type": "sphere", "center_mm": [5, -3, 10], "radius_mm": 2, "attenuation_per_mm": 0.1}]}))
+    v = ctk.voxelise([str(phantom)], (16, 12, 20), (1.0, 1.0, 1.0), (-8.0, -8.0, 0.0))
+    assert v.shape == (16, 12, 20) and v.dtype == np.float32
+    assert v[10, 5, 13] == pytest.approx(0.1)
+    z, y, x = np.indices(v.shape)
+    far = (x - 8 - 5) ** 2 + (y - 8 + 3) ** 2 + (z - 10) ** 2 >= 9
+    assert np.all(v[far] == 0) and v.sum() == pytest.approx(0.1 * 4 / 3 * np.pi * 8, rel=0.1)
+    # Written and read back, the same voxels sit at the same places.
+    out = tmp_path / "v.nrrd"
+    ctk.write_volume(v, out, (1.0, 1.0, 1.0), (-8.0, -8.0, 0.0))
+    back, layout = ctk.read_volume(out)
+    np.testing.assert_array_equal(back, v)
+    assert tuple(layout["origin_mm"]) == (-8.0, -8.0, 0.0)
+    with pytest.raises(ValueError, match="shape"):
+        ctk.voxelise([str(phantom)], (0, 2, 2), (1.0, 1.0, 1.0), (0.0, 0.0, 0.0))
+    with pytest.raises(ctk.InputError, match="not a built-in phantom"):
+        ctk.voxelise(["no-such-phantom"], (2, 2, 2), (1.0, 1.0, 1.0), (0.0, 0.0, 0.0))
