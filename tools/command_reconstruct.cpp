@@ -39,7 +39,7 @@ namespace fs = std::filesystem;
 struct ReconstructOptions {
   fs::path scan, geometry, out;
   int bin = 1;
-  std::string method = "wls-cg";
+  std::string method = to_string(ReconstructionOptions{}.method);
   int iterations = 0;  // 0: the method's default
   int held_out_every = ReconstructionOptions{}.held_out_every;
   int subsets = 0;  // OS-SQS: 0 chosen from the views
@@ -316,8 +316,8 @@ void register_reconstruct(CLI::App& app) {
       ->required()
       ->check(volume_file_name);
   cmd->add_option("--method", o->method,
-                  "wls-cg; os-sqs (ordered subsets with momentum, the same objective in fewer passes over the data); sirt; "
-                  "fdk (circular scans only)")
+                  "os-sqs (weighted least squares by ordered subsets with momentum); wls-cg (the same objective by "
+                  "conjugate gradients, in more passes over the data, continued by --resume); sirt; fdk (circular scans only)")
       ->check(CLI::IsMember({"wls-cg", "os-sqs", "sirt", "fdk"}))
       ->capture_default_str();
   cmd->add_option("--iterations", o->iterations,

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "ctk/calib/marginal_covariance.hpp"
 #include "ctk/core/parallel.hpp"
 #include "small_problem.hpp"
 
@@ -415,21 +416,13 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
       out.covariance_offsets[a] = size;
       size += active[a] == Effect::sphere_positions ? 3 * static_cast<int>(g.p.spheres.size()) : block_size(active[a]);
     }
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    co.null_space_rank = -1;  // the sphere gauge and confounded effects may leave directions unfixed
-    co.num_threads = 2;
     // The globals' covariance with every per-view pose free (marginalised), not held at its
     // optimum: a pose and a global effect trade off (a base offset against each view's depth), and
     // holding the poses understated the globals' uncertainty (3 sigma errors in a population).
-    ceres::Covariance covariance(co);
-    if (static_cast<int>(blocks.size()) > 0 && covariance.Compute(blocks, &problem)) {
-      out.covariance.resize(size, size);
-      if (!covariance.GetCovarianceMatrixInTangentSpace(blocks, out.covariance.data()))
-        out.covariance.resize(0, 0);
-      else
-        out.covariance.transposeInPlace();  // Ceres writes row-major
-    }
+    std::vector<double*> pose_blocks;
+    for (auto& pose : poses) pose_blocks.push_back(pose.data());
+    if (!blocks.empty() && (!marginal_covariance(problem, pose_blocks, blocks, out.covariance) || out.covariance.rows() != size))
+      out.covariance.resize(0, 0);
   }
   return out;
 }

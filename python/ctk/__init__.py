@@ -314,13 +314,13 @@ class ReconstructionResult:
     brief: str
 
 
-def reconstruct(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] = None, *, method: str = "wls-cg",
+def reconstruct(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] = None, *, method: str = "os-sqs",
                 iterations: int = 0, held_out_every: Optional[int] = None, subsets: int = 0, lambda_: float = 0.0,
                 regulariser: str = "identity", huber_delta: float = 0.0, tolerance: float = 1e-4, preconditioner: str = "none",
                 weighted: bool = True, undistort: bool = True, size: Optional[tuple[int, int, int]] = None,
                 voxel_mm: float = 0.0, progress: Optional[Callable[[int, int], None]] = None) -> ReconstructionResult:
     """`ctk reconstruct` without files out: the scan's ok views (of `geometry`, or the scan's
-    nominal geometry) read, the memory plan checked, and WLS-CG or OS-SQS (Poisson weights for
+    nominal geometry) read, the memory plan checked, and OS-SQS or WLS-CG (Poisson weights for
     counts unless weighted=False), SIRT or FDK (circular scans) run. iterations 0: at most 30 for
     WLS-CG, 8 epochs of OS-SQS (subsets 0: about 15 views each, at most 24), 100 for SIRT, ended
     once the fit of one view in held_out_every (None: 32, as the command line), held out of the

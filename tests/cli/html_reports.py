@@ -62,7 +62,7 @@ check(work / "cal.report.html", len(report["pictures"]),
 
 run("reconstruct", "--scan", scan, "--geometry", work / "cal.json", "--out", work / "v.nrrd", "--size", 48, "--iterations", 2)
 log = json.loads((work / "v.log.json").read_text())
-check(work / "v.report.html", 4, ["ctk reconstruct", "iteration limit (2) reached", "stop_reason", "ctk_version", "convergence"])
+check(work / "v.report.html", 4, ["ctk reconstruct", "epoch limit (2) reached", "stop_reason", "ctk_version", "convergence"])
 
 said = run("diagnose", "--scan", scan, "--geometry", work / "cal.json", "--out", work / "d.json")
 diagnosis = json.loads((work / "d.json").read_text())

@@ -31,7 +31,7 @@ ls -a | grep -q '^\.s\.' && fail "a simulation stopped by Ctrl-C left its hidden
 "$ctk" reconstruct --scan s/scan.json --geometry s/truth-geometry.json --out s/v.nrrd --size 16 --iterations 1 >/dev/null 2>&1 ||
   fail "the first reconstruction failed"
 before=$(cat s/v.nrrd s/v.log.json s/v_axial.png | md5sum)
-signal_when recon.log "wls-cg: [1-9][0-9]* / " KILL "$ctk" reconstruct --scan s/scan.json --geometry s/truth-geometry.json --out s/v.nrrd --size 96 --iterations 400
+signal_when recon.log "wls-cg: [1-9][0-9]* / " KILL "$ctk" reconstruct --scan s/scan.json --geometry s/truth-geometry.json --out s/v.nrrd --size 96 --method wls-cg --iterations 400
 grep -q "wls-cg: [1-9][0-9]* / " recon.log || fail "the reconstruction was not caught iterating: $(tail -n 1 recon.log)"
 [ "$(cat s/v.nrrd s/v.log.json s/v_axial.png | md5sum)" = "$before" ] || fail "a reconstruction killed while iterating changed the earlier outputs"
 

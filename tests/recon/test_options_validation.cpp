@@ -52,7 +52,14 @@ TEST(OptionsValidation, ReconstructionOptions) {
       ReconstructionOptions{}, [](auto& o) { o.voxel_mm = -0.5; }, "ReconstructionOptions.voxel_mm");
   // A Huber penalty only with the method that minimises it.
   testing::expect_option_refused(
-      ReconstructionOptions{}, [](auto& o) { o.huber_delta = 0.001; }, "ReconstructionOptions.huber_delta");
+      ReconstructionOptions{},
+      [](auto& o) {
+        o.method = ReconstructionMethod::wls_cg;
+        o.huber_delta = 0.001;
+      },
+      "ReconstructionOptions.huber_delta");
+  testing::expect_option_refused(
+      ReconstructionOptions{}, [](auto& o) { o.held_out_every = -1; }, "ReconstructionOptions.held_out_every");
   ReconstructionOptions huber;
   huber.method = ReconstructionMethod::os_sqs;
   huber.huber_delta = 0.001;
