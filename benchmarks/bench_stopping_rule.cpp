@@ -91,19 +91,12 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "JSON to write");
   CLI11_PARSE(app, argc, argv);
 
-  const StandardProblem p =
-      standard_problem(trajectory == "spherical" ? StandardTrajectory::spherical : StandardTrajectory::circular, views, scale);
-  const Detector detector{p.cols, p.rows, 1.6 * scale, 1.6 * scale};
-  const double half_mm = 0.42 * p.layout.size[0] * p.layout.voxel_mm.x();
-  const Phantom phantom =
-      phantom_name == "shepp-logan" ? shepp_logan_phantom(half_mm, 0.02 * 24.0 / half_mm) : builtin_phantom(phantom_name);
-  std::cerr << "rendering " << p.views.size() << " views of " << p.cols << " x " << p.rows << " ...\n";
-  const bench::SimulatedViews data = bench::simulate_views(phantom, p.views, detector, counts, 1000);
-  Volume truth(p.layout);
-  for (int k = 0; k < p.layout.size[2]; ++k)
-    for (int j = 0; j < p.layout.size[1]; ++j)
-      for (int i = 0; i < p.layout.size[0]; ++i)
-        truth.at(i, j, k) = static_cast<float>(phantom.attenuation_at(p.layout.centre_of(i, j, k)));
+  const bench::StandardProblemData problem =
+      bench::standard_problem_data(trajectory == "spherical" ? StandardTrajectory::spherical : StandardTrajectory::circular,
+                                   views, scale, counts, phantom_name);
+  const StandardProblem& p = problem.problem;
+  const bench::SimulatedViews& data = problem.views;
+  const Volume& truth = problem.truth;
 
   // The product's choice of views to hold out (ReconstructionOptions::held_out_every).
   const std::vector<int> held = held_out_positions(p.views, holdout_every);

@@ -89,21 +89,13 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--out", out, "JSON to write");
   CLI11_PARSE(app, argc, argv);
-  const StandardProblem p =
-      standard_problem(trajectory == "spherical" ? StandardTrajectory::spherical : StandardTrajectory::circular, views, scale);
-  const Detector detector{p.cols, p.rows, 1.6 * scale, 1.6 * scale};
-  const double half_mm = 0.42 * p.layout.size[0] * p.layout.voxel_mm.x();
-  const Phantom phantom = shepp_logan_phantom(half_mm, 0.02 * 24.0 / half_mm);  // about 2 line-integral units across
-
-  std::cerr << "rendering " << p.views.size() << " views of " << p.cols << " x " << p.rows << " ...\n";
-  const bench::SimulatedViews data = bench::simulate_views(phantom, p.views, detector, 1e4, 1000);
-  const ProjectionStack& b = data.b;
-  const ProjectionStack& w = data.w;
-  Volume truth(p.layout);
-  for (int k = 0; k < p.layout.size[2]; ++k)
-    for (int j = 0; j < p.layout.size[1]; ++j)
-      for (int i = 0; i < p.layout.size[0]; ++i)
-        truth.at(i, j, k) = static_cast<float>(phantom.attenuation_at(p.layout.centre_of(i, j, k)));
+  const bench::StandardProblemData problem = bench::standard_problem_data(
+      trajectory == "spherical" ? StandardTrajectory::spherical : StandardTrajectory::circular, views, scale, 1e4);
+  const StandardProblem& p = problem.problem;
+  const Detector& detector = problem.detector;
+  const ProjectionStack& b = problem.views.b;
+  const ProjectionStack& w = problem.views.w;
+  const Volume& truth = problem.truth;
 
   const JosephOperator A(p.views, p.layout, p.rows, p.cols);
   // The same penalty for every method. A weak one lets CG pass a better iterate on its way to a

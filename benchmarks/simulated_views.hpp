@@ -4,14 +4,18 @@
 // share of the open beam's counts), and the phantom's voxelised truth.
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "ctk/core/projection_stack.hpp"
 #include "ctk/geom/projection_matrix.hpp"
 #include "ctk/geom/trajectory.hpp"
+#include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/detector_response.hpp"
 #include "ctk/phantoms/render.hpp"
+#include "ctk/proj/standard_problem.hpp"
 
 namespace ctk::bench {
 
@@ -64,6 +68,36 @@ inline double rmse(const Volume& x, const Volume& truth) {
   for (std::ptrdiff_t i = 0; i < n; ++i)
     sum += std::pow(double(x.data[static_cast<std::size_t>(i)]) - truth.data[static_cast<std::size_t>(i)], 2);
   return std::sqrt(sum / double(n));
+}
+
+/// The solver benchmarks' problem: the standard problem's geometry (`scale` divides its sizes),
+/// its detector, a Shepp-Logan filling about 84 % of the volume (about 2 line-integral units
+/// across) or a built-in sample by name, its views at `flat_counts`, and the truth sampled at the
+/// voxel centres.
+struct StandardProblemData {
+  StandardProblem problem;
+  Detector detector;
+  Phantom phantom;
+  SimulatedViews views;
+  Volume truth;
+};
+
+inline StandardProblemData standard_problem_data(StandardTrajectory trajectory, int views, int scale, double flat_counts,
+                                                 const std::string& phantom = "shepp-logan") {
+  StandardProblemData d;
+  d.problem = standard_problem(trajectory, views, scale);
+  const StandardProblem& p = d.problem;
+  d.detector = Detector{p.cols, p.rows, 1.6 * scale, 1.6 * scale};
+  const double half_mm = 0.42 * p.layout.size[0] * p.layout.voxel_mm.x();
+  d.phantom = phantom == "shepp-logan" ? shepp_logan_phantom(half_mm, 0.02 * 24.0 / half_mm) : builtin_phantom(phantom);
+  std::cerr << "rendering " << p.views.size() << " views of " << p.cols << " x " << p.rows << " ...\n";
+  d.views = simulate_views(d.phantom, p.views, d.detector, flat_counts, 1000);
+  d.truth = Volume(p.layout);
+  for (int k = 0; k < p.layout.size[2]; ++k)
+    for (int j = 0; j < p.layout.size[1]; ++j)
+      for (int i = 0; i < p.layout.size[0]; ++i)
+        d.truth.at(i, j, k) = static_cast<float>(d.phantom.attenuation_at(p.layout.centre_of(i, j, k)));
+  return d;
 }
 
 }  // namespace ctk::bench

@@ -10,7 +10,7 @@ against the phantoms voxelised on its grid (and, for scale, the RMSE of the volu
 from the true matrices).
 
     /usr/bin/python3 benchmarks/thesis_pipeline.py --ctk build/tools/ctk --work /tmp/thesis \
-        [--views 900] [--pixels 720] [--reconstruct-args "--method os-sqs"] [--out F.json]
+        [--views 900] [--pixels 720] [--reconstruct-args "..."] [--references] [--keep-scan] [--out F.json]
 
 --pixels scales the detector (the same field of view: the pitch grows as the pixels shrink), so a
 smaller run checks the script; the JSON records what was run. PYTHONPATH must reach the ctk module
@@ -66,6 +66,9 @@ def main():
     p.add_argument("--pixels", type=int, default=720)
     p.add_argument("--reconstruct-args", default="", help="added to ctk reconstruct (default: none, its defaults)")
     p.add_argument("--keep-scan", action="store_true", help="reuse a scan already simulated in --work")
+    p.add_argument("--references", action="store_true",
+                   help="also reconstruct (from the calibrated matrices, every view) by 30 WLS-CG iterations and by OS-SQS "
+                        "for 1 to 3 epochs past where the default stopped, for the quality the default is held to")
     p.add_argument("--out", help="JSON to write (default: benchmarks/results/thesis_pipeline-<cpu>.json)")
     a = p.parse_args()
     ctk_command = os.path.abspath(a.ctk)
@@ -88,6 +91,18 @@ def main():
     # For scale, not part of the pipeline: the same reconstruction from the true matrices.
     timed([ctk_command, "reconstruct", "--scan", scan / "scan.json", "--geometry", scan / "truth-geometry.json", "--out",
            work / "volume-true-geometry.nrrd"] + extra, work / "reconstruct-true-geometry.log")
+
+    references = {}
+    if a.references:
+        def reference(name, options):
+            out = work / f"reference-{name}.nrrd"
+            f = timed([ctk_command, "reconstruct", "--scan", scan / "scan.json", "--geometry", work / "calibrated.json", "--out",
+                       out] + options, work / f"reference-{name}.log")
+            references[name] = {"wall_s": f["wall_s"], "rmse_per_mm": rmse_against_truth(out, ["helix-holder", "sample-1"])[0]}
+        reference("wls-cg-30", ["--method", "wls-cg", "--iterations", "30"])
+        stopped = json.loads((work / "volume.log.json").read_text())["held_out"]["iterations"][-1]
+        for epochs in range(1, stopped + 4):
+            reference(f"os-sqs-{epochs}", ["--method", "os-sqs", "--iterations", str(epochs)])
 
     calibration = calibration_figures(scan, "../calibrated.json", a.pixels)
     diagnosis = json.loads((work / "diagnosis.json").read_text())
@@ -118,7 +133,12 @@ def main():
         "reconstruction": {"method": log["method"], "volume": log["volume"], "stop_reason": log["solver"]["stop_reason"],
                            "memory_plan": log["memory_plan"], "rmse_per_mm": rmse, "truth_peak_per_mm": peak,
                            "rmse_from_true_matrices_per_mm": rmse_true},
+        "references": references,
     }
+    if references:
+        best = min(r["rmse_per_mm"] for k, r in references.items() if k.startswith("os-sqs"))
+        result["reconstruction"]["rmse_over_best_os_sqs_epoch"] = rmse / best
+        result["reconstruction"]["rmse_over_30_wls_cg_iterations"] = rmse / references["wls-cg-30"]["rmse_per_mm"]
     out = pathlib.Path(a.out) if a.out else pathlib.Path(__file__).parent / "results" / f"thesis_pipeline-{cpu_slug()}.json"
     out.write_text(json.dumps(result, indent=1) + "\n")
     for s in pipeline:
@@ -130,6 +150,8 @@ def main():
           f"accepted {accepted} (truth: {sorted(truth_effects)}; spheres named {sorted(found)}, errors "
           f"{[None if x['error_mm'] is None else round(x['error_mm'], 3) for x in spheres]} mm); volume RMSE {rmse:.3g} /mm (from the true matrices {rmse_true:.3g}, truth peak {peak:.3g}); "
           f"{log['solver']['stop_reason']}")
+    for name, r in references.items():
+        print(f"reference {name}: {r['wall_s']} s, RMSE {r['rmse_per_mm']:.4g} /mm")
     print(f"written {out}")
 
 

@@ -68,6 +68,7 @@ TEST(OptionsValidation, ReconstructionOptions) {
   testing::expect_option_refused(
       huber, [](auto& o) { o.preconditioner = CgPreconditioner::diagonal; }, "ReconstructionOptions.preconditioner");
   ReconstructionOptions preconditioned;
+  preconditioned.method = ReconstructionMethod::wls_cg;
   preconditioned.preconditioner = CgPreconditioner::diagonal;
   EXPECT_NO_THROW(preconditioned.validate());
   EXPECT_THROW(cg_preconditioner_from_string("jacobi"), std::invalid_argument);
