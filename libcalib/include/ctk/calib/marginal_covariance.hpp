@@ -1,10 +1,10 @@
 #pragma once
 // The covariance of a least-squares problem's global parameters with its per-view parameters
 // marginalised, by the Schur complement of the per-view blocks in J'J: each view's block is
-// eliminated on its own, so the cost grows with the views, not with their cube. For a scan of
-// 900 views (5,400 pose parameters) Ceres' dense SVD of the whole Jacobian took longer than a
-// quarter of an hour on one core; this takes well under a second
-// (benchmarks/thesis_pipeline.py, docs/results.md).
+// eliminated on its own, so the cost grows with the views, not with their cube. On a scan of 897
+// views (5,400 pose parameters) Ceres' dense SVD of the whole Jacobian had held one core for 7
+// minutes and 11.6 GB inside one diagnosis step when it was stopped; with this the whole
+// diagnosis took 33 s (benchmarks/thesis_pipeline.py, docs/reconstruction-quality.md).
 #include <ceres/problem.h>
 
 #include <Eigen/Core>
