@@ -50,11 +50,17 @@ def timed(command, log):
             "read_gb": round(int(blocks_in) * 512 / 1e9, 3), "written_gb": round(int(blocks_out) * 512 / 1e9, 3)}
 
 
+_truths = {}  # voxelised once per grid
+
+
 def rmse_against_truth(volume_file, phantoms):
     import numpy as np
     import ctk
     volume, layout = ctk.read_volume(volume_file)
-    truth = ctk.voxelise(phantoms, volume.shape, layout["voxel_mm"], layout["origin_mm"])
+    grid = (tuple(phantoms), volume.shape, tuple(layout["voxel_mm"]), tuple(layout["origin_mm"]))
+    if grid not in _truths:
+        _truths[grid] = ctk.voxelise(phantoms, volume.shape, layout["voxel_mm"], layout["origin_mm"])
+    truth = _truths[grid]
     return float(np.sqrt(np.mean((volume.astype(np.float64) - truth) ** 2))), float(np.abs(truth).max())
 
 
