@@ -215,8 +215,14 @@ std::string ReconstructionRun::brief() const {
   std::ostringstream s;
   s << to_string(plan.method) << " on " << views_used.size() << " views, " << plan.layout.size[0] << " x " << plan.layout.size[1]
     << " x " << plan.layout.size[2] << " voxels: " << solver.stop_reason;
-  if (plan.method != ReconstructionMethod::fdk && !solver.iterations.empty())
-    s << "; cost " << solver.iterations.front().cost << " -> " << solver.iterations.back().cost;
+  if (plan.method != ReconstructionMethod::fdk && !solver.iterations.empty()) {
+    // Stopped by held-out views, the volume is the iterate they judged best: its cost, not the last's.
+    const int kept = held_out.is_null() ? solver.iterations.back().iteration : held_out["best_iteration"].get<int>();
+    const auto at = std::find_if(solver.iterations.begin(), solver.iterations.end(),
+                                 [kept](const IterationLog& l) { return l.iteration == kept; });
+    s << "; cost " << solver.iterations.front().cost << " -> "
+      << (at != solver.iterations.end() ? *at : solver.iterations.back()).cost;
+  }
   s << " (" << seconds << " s)";
   return s.str();
 }
