@@ -86,7 +86,7 @@ std::optional<double> edge_at_noise(std::vector<Tried> huber, double noise) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   std::string phantom_name = "shepp-logan", out, pictures;
   std::vector<int> view_counts{30, 40, 60};
   int size = 96, epochs = 20;
@@ -199,4 +199,7 @@ int main(int argc, char** argv) {
   }
   if (!out.empty()) write_text_atomically(out, result.dump(1) + "\n");
   return 0;
+} catch (const std::exception& e) {  // a file that cannot be written, a phantom that is not there
+  std::cerr << e.what() << "\n";
+  return 1;
 }

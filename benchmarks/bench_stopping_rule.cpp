@@ -69,7 +69,7 @@ double distance(const Volume& a, const Volume& b) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   std::string trajectory = "circular", phantom_name = "shepp-logan", out;
   int scale = 2, views = 360, epochs = 16, cg_iterations = 40, holdout_every = 32;
   double counts = 1e4, lambda = 0;
@@ -106,6 +106,7 @@ int main(int argc, char** argv) {
     if (!std::binary_search(held.begin(), held.end(), v)) trained.push_back(v);
   }
   std::vector<ProjectionMatrix> held_views;
+  held_views.reserve(held.size());
   for (int v : held) held_views.push_back(p.views[static_cast<std::size_t>(v)]);
   const auto A_held = std::make_shared<JosephOperator>(held_views, p.layout, p.rows, p.cols);
 
@@ -113,6 +114,7 @@ int main(int argc, char** argv) {
   for (const bool hold : {true, false}) {
     const std::vector<int>& used = hold ? trained : all;
     std::vector<ProjectionMatrix> used_views;
+    used_views.reserve(used.size());
     for (int v : used) used_views.push_back(p.views[static_cast<std::size_t>(v)]);
     const JosephOperator A(used_views, p.layout, p.rows, p.cols);
     const ProjectionStack b = views_of(data.b, used), w = views_of(data.w, used);
@@ -189,4 +191,7 @@ int main(int argc, char** argv) {
   }
   if (!out.empty()) write_text_atomically(out, result.dump(1) + "\n");
   return 0;
+} catch (const std::exception& e) {  // a file that cannot be written, a phantom that is not there
+  std::cerr << e.what() << "\n";
+  return 1;
 }

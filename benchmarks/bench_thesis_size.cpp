@@ -51,6 +51,7 @@ std::vector<ProjectionMatrix> thesis_views(const std::string& trajectory, int n,
   else
     directions = random_directions(views, 2026);
   std::vector<ProjectionMatrix> out;
+  out.reserve(directions.size());
   for (const auto& d : directions)
     out.push_back(ProjectionMatrix::compose(K, make_rigid(rotation_looking_along(d), Eigen::Vector3d(0, 0, 1000.0))));
   return out;
@@ -90,7 +91,7 @@ Quality epochs_to_quality(const nlohmann::json& r, int subsets) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   std::string trajectory = "circular", quality_file, out;
   int n = 720, views = 900, sample = 36;
   CLI::App app{"The thesis' size planned and measured on a sample of its views"};
@@ -107,6 +108,7 @@ int main(int argc, char** argv) {
   const VolumeLayout layout = VolumeLayout::centred({n, n, n}, Eigen::Vector3d::Constant(256.0 / n));
   const std::vector<ProjectionMatrix> all = thesis_views(trajectory, n, views);
   std::vector<ProjectionMatrix> sampled;
+  sampled.reserve(static_cast<std::size_t>(sample));
   for (int k = 0; k < sample; ++k) sampled.push_back(all[static_cast<std::size_t>(k * views / sample)]);
 
   // The plans for the whole scan, weighted as counts are.
@@ -216,4 +218,7 @@ int main(int argc, char** argv) {
   }
   if (!out.empty()) write_text_atomically(out, result.dump(1) + "\n");
   return 0;
+} catch (const std::exception& e) {  // a file that cannot be written, a phantom that is not there
+  std::cerr << e.what() << "\n";
+  return 1;
 }

@@ -69,7 +69,7 @@ Curve follow(const std::string& method, int subsets, const Volume& x, const Volu
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   std::string trajectory = "circular", out;
   int scale = 1, views = 360, cg_iterations = 30, epochs = 8;
   double lambda = -1;  // the gradient penalty's weight; default: 80 * scale^2
@@ -207,4 +207,7 @@ int main(int argc, char** argv) {
   }
   if (!out.empty()) write_text_atomically(out, result.dump(1) + "\n");
   return 0;
+} catch (const std::exception& e) {  // a file that cannot be written, a phantom that is not there
+  std::cerr << e.what() << "\n";
+  return 1;
 }

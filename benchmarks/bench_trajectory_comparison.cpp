@@ -36,7 +36,7 @@ nlohmann::json figures(const TrajectoryQuality& q) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   std::string phantom_name = "brick-and-plate", out, pictures;
   std::vector<double> sods{100, 150, 250, 500};
   int nside = 5, size = 112, iterations = 30;
@@ -134,4 +134,7 @@ int main(int argc, char** argv) {
   }
   if (!out.empty()) write_text_atomically(out, result.dump(1) + "\n");
   return 0;
+} catch (const std::exception& e) {  // a file that cannot be written, a phantom that is not there
+  std::cerr << e.what() << "\n";
+  return 1;
 }

@@ -420,6 +420,7 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
     // optimum: a pose and a global effect trade off (a base offset against each view's depth), and
     // holding the poses understated the globals' uncertainty (3 sigma errors in a population).
     std::vector<double*> pose_blocks;
+    pose_blocks.reserve(poses.size());
     for (auto& pose : poses) pose_blocks.push_back(pose.data());
     if (!blocks.empty() && (!marginal_covariance(problem, pose_blocks, blocks, out.covariance) || out.covariance.rows() != size))
       out.covariance.resize(0, 0);
