@@ -180,10 +180,11 @@ int main(int argc, char** argv) try {
       j["fixed_count_rmse_over_every_view_best"] = every.rmse[static_cast<std::size_t>(fixed)] / best(every.rmse);
       j["rule_seconds_over_fixed_count"] = c.seconds[static_cast<std::size_t>(c.rule_stops >= 0 ? c.rule_stops : result_at)] /
                                            every.seconds[static_cast<std::size_t>(fixed)];
-      std::cout << trajectory << " " << phantom_name << " " << counts << " counts, " << views << " views, " << c.method
-                << ": stops after " << c.rule_stops << " with iterate " << result_at << ", RMSE " << rule_rmse << " = "
-                << j["rule_rmse_over_own_best"].get<double>() << " x its own best, "
-                << j["rule_rmse_over_every_view_best"].get<double>() << " x every view's best (fixed count " << fixed << ": "
+      std::cout << trajectory << " " << phantom_name << " " << counts << " counts, " << views << " views, " << c.method << ": "
+                << (c.rule_stops >= 0 ? "stops after " + std::to_string(c.rule_stops) : std::string("runs to the limit"))
+                << " with iterate " << result_at << ", RMSE " << rule_rmse << " = " << j["rule_rmse_over_own_best"].get<double>()
+                << " x its own best, " << j["rule_rmse_over_every_view_best"].get<double>()
+                << " x every view's best (fixed count " << fixed << ": "
                 << j["fixed_count_rmse_over_every_view_best"].get<double>() << "), in "
                 << j["rule_seconds_over_fixed_count"].get<double>() << " of the fixed count's time\n";
     }
