@@ -16,14 +16,15 @@ std::vector<int> held_out_positions(const std::vector<ProjectionMatrix>& views, 
   return chosen;
 }
 
-HeldOutFit::HeldOutFit(std::shared_ptr<const ProjectionOperator> A, ProjectionStack b, ProjectionStack w, int views,
-                       std::size_t pixels_per_view)
+HeldOutFit::HeldOutFit(std::shared_ptr<const ProjectionOperator> A, ProjectionStack b, ProjectionStack w,
+                       std::vector<int> view_indices, std::size_t pixels_per_view)
     : A_(std::move(A)),
       b_(std::move(b)),
       w_(std::move(w)),
       projected_(b_.views, b_.rows, b_.cols),
       previous_(b_.views, b_.rows, b_.cols),
-      views_(views > 0 ? views : b_.views),
+      view_indices_(std::move(view_indices)),
+      views_(view_indices_.empty() ? b_.views : static_cast<int>(view_indices_.size())),
       rays_(double(views_) * double(pixels_per_view > 0 ? pixels_per_view : b_.pixels_per_view())) {}
 
 void HeldOutFit::observe(int iteration, const Volume& x) {
@@ -44,21 +45,15 @@ void HeldOutFit::observe(int iteration, const Volume& x) {
   const double fit = 0.5 * A_->sum_over_range(misfit);
   moved = A_->sum_over_range(moved);
   std::swap(projected_, previous_);
-  iterations_.push_back(iteration);
-  fits_.push_back(fit);
-  last_iteration_ = iteration;
-  if (first) {
-    best_iteration_ = iteration;
-    best_fit_ = fit;
-    best_ = x;
-    return;
-  }
   // The held-out data's noise n (variance c / w per ray) moves the change of the misfit by
   // sum w (A dx) n, of variance c sum w (A dx)^2; c is at most the misfit per ray of the best
   // iterate. An improvement within kHeldOutSignificance of that is not the image getting better.
-  const double noise_per_ray = 2 * std::min(best_fit_, fit) / std::max(rays_, 1.0);
-  const double improvement = fits_[fits_.size() - 2] - fit;
-  significant_ = improvement > kHeldOutSignificance * std::sqrt(noise_per_ray * moved);
+  if (!first) {
+    const double noise_per_ray = 2 * std::min(best_fit_, fit) / std::max(rays_, 1.0);
+    significant_ = fits_.back() - fit > kHeldOutSignificance * std::sqrt(noise_per_ray * moved);
+  }
+  iterations_.push_back(iteration);
+  fits_.push_back(fit);
   if (significant_) {
     best_iteration_ = iteration;
     best_fit_ = fit;
@@ -75,13 +70,15 @@ StoppingRule HeldOutFit::rule() const {
 }
 
 int HeldOutFit::restore_best(Volume& x) {
-  if (best_iteration_ >= 0 && best_iteration_ != last_iteration_) std::swap(x, best_);
+  if (best_iteration_ >= 0 && best_iteration_ != iterations_.back()) std::swap(x, best_);
   best_ = Volume();
   return best_iteration_;
 }
 
 nlohmann::json HeldOutFit::report() const {
-  return {{"views", views_}, {"iterations", iterations_}, {"fit", fits_}, {"best_iteration", best_iteration_}};
+  nlohmann::json r = {{"views", views_}, {"iterations", iterations_}, {"fit", fits_}, {"best_iteration", best_iteration_}};
+  if (!view_indices_.empty()) r["view_indices"] = view_indices_;
+  return r;
 }
 
 }  // namespace ctk

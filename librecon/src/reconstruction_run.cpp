@@ -296,7 +296,10 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   // Views split, the run's views are every rank's, in the geometry's order; in slabs every rank
   // read them all (each its rows), and found the same in them.
   const bool views_split = spread && !slabs;
-  SpreadViews views = views_split ? gather_views(geometry, m, ranks) : SpreadViews{m.view_indices, m.matrices, {}};
+  const auto spread_views = [&] {
+    return views_split ? gather_views(geometry, m, ranks) : SpreadViews{m.view_indices, m.matrices, {}};
+  };
+  SpreadViews views = spread_views();
   Measurements whole;  // views split, what the hooks and the report see: the whole run's numbers, no images
   if (views_split) {
     whole.view_indices = views.indices;
@@ -319,16 +322,16 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   // Default iterations: one view in `held_out_every`, spread over the directions, is kept out of
   // the solve to say when the image stops improving. Every rank holds out the same views.
   std::optional<HeldOutFit> judge;
-  std::vector<int> held_indices;
   if (o.stops_on_held_out_views())
     if (const std::vector<int> chosen = held_out_positions(views.matrices, o.held_out_every, volume_centre); !chosen.empty()) {
       std::vector<int> here = views_split ? views.local_positions(chosen) : chosen;
       std::sort(here.begin(), here.end());
+      std::vector<int> held_indices;
       for (int p : chosen) held_indices.push_back(views.indices[static_cast<std::size_t>(p)]);
       Measurements held = take_views(m, here);
-      views = views_split ? gather_views(geometry, m, ranks) : SpreadViews{m.view_indices, m.matrices, {}};
+      views = spread_views();
       judge.emplace(spread_operator(plan, geometry, held, ranks, scan.detector), std::move(held.line_integrals),
-                    std::move(held.weights), static_cast<int>(chosen.size()),
+                    std::move(held.weights), std::move(held_indices),
                     static_cast<std::size_t>(scan.detector.rows) * static_cast<std::size_t>(scan.detector.cols));
     }
   run.views_used = views.indices;
@@ -394,7 +397,6 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
     if (judge) {
       judge->restore_best(run.volume);
       run.held_out = judge->report();
-      run.held_out["view_indices"] = held_indices;
     }
   }
   if (spread && bytes_at.size() > 1) {

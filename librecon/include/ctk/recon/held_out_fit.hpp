@@ -38,9 +38,10 @@ class HeldOutFit {
  public:
   /// `A` projects onto the held-out views, whose line integrals are `b` and weights `w` (no views:
   /// unit weights). An operator spread over ranks sums the misfit over them, so every rank
-  /// decides alike; it then holds `views` held-out views of `pixels_per_view` in all (0: `b`'s).
-  HeldOutFit(std::shared_ptr<const ProjectionOperator> A, ProjectionStack b, ProjectionStack w, int views = 0,
-             std::size_t pixels_per_view = 0);
+  /// decides alike; `view_indices` are then every rank's held-out views (their scan indices, for
+  /// the report; empty: `b`'s views), of `pixels_per_view` each (0: `b`'s).
+  HeldOutFit(std::shared_ptr<const ProjectionOperator> A, ProjectionStack b, ProjectionStack w,
+             std::vector<int> view_indices = {}, std::size_t pixels_per_view = 0);
 
   /// After iteration `iteration` (0: the start): the misfit of `x`; `x` is kept as the result when
   /// it improved on the one before by more than the held-out data's noise can explain.
@@ -49,18 +50,19 @@ class HeldOutFit {
   StoppingRule rule() const;
   /// `x` becomes the last iterate that improved (unchanged if it is the last); its iteration.
   int restore_best(Volume& x);
-  /// {"views": the held-out view count, "iterations", "fit": 1/2 ||W^(1/2) (A x - b)||^2 at each,
-  /// "best_iteration"}.
+  /// {"views": the held-out view count, "view_indices" (when given), "iterations", "fit":
+  /// 1/2 ||W^(1/2) (A x - b)||^2 at each, "best_iteration"}.
   nlohmann::json report() const;
 
  private:
   std::shared_ptr<const ProjectionOperator> A_;
   ProjectionStack b_, w_, projected_, previous_;
+  std::vector<int> view_indices_;
   int views_ = 0;
   double rays_ = 0;  // data, weights, A x now and at the iterate before
   std::vector<int> iterations_;
   std::vector<double> fits_;
-  int best_iteration_ = -1, last_iteration_ = -1;
+  int best_iteration_ = -1;
   double best_fit_ = 0;
   bool significant_ = true;  // the last iteration improved the fit beyond the held-out data's noise
   Volume best_;
