@@ -30,9 +30,10 @@ void bind_phantoms(py::module_& m) {
         l.voxel_mm = {voxel_mm[0], voxel_mm[1], voxel_mm[2]};
         l.origin_mm = {origin_mm[0], origin_mm[1], origin_mm[2]};
         const Phantom phantom = sample_of(phantoms);
-        py::gil_scoped_release unlocked;
-        Volume v = voxelised(phantom, l);
-        py::gil_scoped_acquire locked;
+        Volume v = [&] {
+          py::gil_scoped_release unlocked;
+          return voxelised(phantom, l);
+        }();
         return to_numpy(std::move(v));
       },
       py::arg("phantoms"), py::arg("shape"), py::arg("voxel_mm"), py::arg("origin_mm"),
