@@ -60,10 +60,13 @@ void run_diagnose(const DiagnoseOptions& o) {
   for (const nlohmann::json& name : report["pictures"])
     pictures.push_back(fs::path(o.out).parent_path() / name.get<std::string>());
   // With an effect accepted, the corrected scan is calibrated again; without, the calibration stands.
-  const std::string next = run.diagnosis.accepted.empty() ? "ctk reconstruct --scan " + o.scan.string() + " --geometry " +
-                                                                o.geometry.string() + " --out volume.nrrd"
-                                                          : "ctk calibrate --scan " + corrected_file.string() + " --out " +
-                                                                (fs::path(o.out).parent_path() / "recalibrated.json").string();
+  const std::string next =
+      whole_holder_off(run.diagnosis)
+          ? "ctk holder measure --scan " + o.scan.string() + " --geometry " + o.geometry.string() + " --out holder.json"
+      : run.diagnosis.accepted.empty()
+          ? "ctk reconstruct --scan " + o.scan.string() + " --geometry " + o.geometry.string() + " --out volume.nrrd"
+          : "ctk calibrate --scan " + corrected_file.string() + " --out " +
+                (fs::path(o.out).parent_path() / "recalibrated.json").string();
   write_run_page("diagnose", run.brief(), report, pictures, stem.string() + ".html", next);
 
   outputs.publish();

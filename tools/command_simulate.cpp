@@ -18,6 +18,7 @@ namespace {
 struct SimulateOptions {
   std::filesystem::path out = "simulated-scan";
   std::vector<std::string> phantoms{"helix-holder"};
+  std::string holder = "reference";
   std::string trajectory = "circular";
   int views = 360, nside = 3;
   std::vector<double> cap_deg{5.0, 90.0};
@@ -37,6 +38,8 @@ struct SimulateOptions {
   std::optional<double> distortion_k1;
   std::optional<int> displaced_spheres;
   double displacement_mm = 0.2;
+  std::optional<double> sphere_jitter_mm;
+  std::uint64_t holder_seed = 1;
   std::vector<double> base_translation_mm, base_rotation_deg, mount_translation_mm, mount_rotation_deg, joint_offsets_deg,
       source_drift_mm;
   std::optional<double> holder_sag_deg;
@@ -63,6 +66,10 @@ nlohmann::json named_effects(const SimulateOptions& o) {
   if (o.displaced_spheres) {
     put("displaced_spheres", *o.displaced_spheres);
     put("displacement_mm", o.displacement_mm);
+  }
+  if (o.sphere_jitter_mm) {
+    put("sphere_jitter_mm", *o.sphere_jitter_mm);
+    put("holder_seed", o.holder_seed);
   }
   put_list("base_translation_mm", o.base_translation_mm);
   put_list("base_rotation_deg", o.base_rotation_deg);
@@ -93,6 +100,7 @@ void run_simulate(const SimulateOptions& o) {
         "expected the least angle first, got " + std::to_string(o.cap_deg[0]) + " before " + std::to_string(o.cap_deg[1]));
   SimulationRequest r;
   r.phantoms = o.phantoms;
+  r.holder = o.holder;
   r.trajectory = o.trajectory;
   r.views = o.views;
   r.nside = o.nside;
@@ -137,6 +145,9 @@ void register_simulate(CLI::App& app) {
   cmd->add_option("--phantom", o->phantoms,
                   "Phantoms in the beam: built-in names (helix-holder, shepp-logan, brick-and-plate, sample-1, sample-2, "
                   "walnut) or ctk-phantom/1 files (.json); repeat to combine")
+      ->capture_default_str();
+  cmd->add_option("--holder", o->holder,
+                  "The holder the scan declares and helix-holder draws: reference, thesis-first, or a ctk-holder/1 file")
       ->capture_default_str();
   auto* poses = cmd->add_option("--poses", o->poses, "Per-view matrices (ctk-geometry/1) instead of a robot trajectory")
                     ->check(CLI::ExistingFile);
@@ -199,6 +210,14 @@ void register_simulate(CLI::App& app) {
       ->group(effects);
   cmd->add_option("--displacement-mm", o->displacement_mm, "How far each displaced sphere is off")
       ->check(positive_number)
+      ->capture_default_str()
+      ->group(effects);
+  auto* jitter = cmd->add_option("--sphere-jitter-mm", o->sphere_jitter_mm,
+                                 "A printed holder: every sphere off its declared centre, Gaussian of this sigma per axis")
+                     ->check(CLI::Range(1e-6, 10.0))
+                     ->group(effects);
+  cmd->add_option("--holder-seed", o->holder_seed, "The printed holder's own seed (scans of one holder share it)")
+      ->needs(jitter)
       ->capture_default_str()
       ->group(effects);
   cmd->add_option("--base-translation-mm", o->base_translation_mm, "Robot base-frame offset (base axes)")

@@ -11,6 +11,7 @@ void register_phantom(CLI::App& app);
 void register_reconstruct(CLI::App& app);
 void register_calibrate(CLI::App& app);
 void register_diagnose(CLI::App& app);
+void register_holder(CLI::App& app);
 void register_import(CLI::App& app);
 void register_refine(CLI::App& app);
 void register_plan(CLI::App& app);

@@ -55,6 +55,7 @@ int run(int argc, char** argv) {
   ctk::tools::register_geometry(app);
   ctk::tools::register_calibrate(app);
   ctk::tools::register_diagnose(app);
+  ctk::tools::register_holder(app);
   ctk::tools::register_refine(app);
   ctk::tools::register_plan(app);
   ctk::tools::register_reconstruct(app);

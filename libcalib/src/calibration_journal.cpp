@@ -51,7 +51,8 @@ nlohmann::json view_calibration_to_json(const ViewCalibration& v) {
                       {"fitted_px", points(v.fitted_px)},
                       {"spheres", v.spheres},
                       {"outlier_spheres", v.outlier_spheres},
-                      {"outlier_detected_px", points(v.outlier_detected_px)}};
+                      {"outlier_detected_px", points(v.outlier_detected_px)},
+                      {"residual_decides", v.residual_decides}};
   if (v.P) {
     nlohmann::json rows = nlohmann::json::array();
     for (int r = 0; r < 3; ++r)
@@ -87,6 +88,7 @@ ViewCalibration view_calibration_from_json(const nlohmann::json& json, const std
   v.spheres = integers_from(node.at("spheres"));
   v.outlier_spheres = integers_from(node.at("outlier_spheres"));
   v.outlier_detected_px = points_from(node.at("outlier_detected_px"));
+  if (auto decides = node.find("residual_decides")) v.residual_decides = decides->boolean();
   if (auto P = node.find("P")) {
     Matrix34d m;
     for (int r = 0; r < 3; ++r) {

@@ -92,6 +92,7 @@ nlohmann::json CalibrationRun::summary() const {
           {"rejected", rejected},
           {"skipped", skipped},
           {"median_rms_px", median(rms)},
+          {"residual_limit_px", c.residual_limit_px},
           {"median_translation_sigma_across_beam_mm", median(across_sigma)},
           {"median_translation_sigma_along_beam_mm", median(depth_sigma)},
           {"seconds", c.seconds},
@@ -141,6 +142,11 @@ std::string CalibrationRun::brief() const {
     << " views/s); median reprojection RMS " << s.at("median_rms_px").get<double>() << " px; median pose uncertainty "
     << s.at("median_translation_sigma_across_beam_mm").get<double>() * 1000 << " um across the beam, "
     << s.at("median_translation_sigma_along_beam_mm").get<double>() * 1000 << " um along it";
+  if (calibration.residual_limit_px > options.max_rms_px)
+    b << "\nevery view's residual is high (a holder whose spheres are each a little off, or a detector effect the model "
+         "lacks): views rejected above "
+      << calibration.residual_limit_px << " px, twice the scan's median, instead of " << options.max_rms_px
+      << " px; ctk diagnose tells which";
   return b.str();
 }
 

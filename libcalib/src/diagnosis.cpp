@@ -17,6 +17,10 @@ namespace ctk {
 
 namespace {
 
+bool all_spheres_free(const EffectParameters& p) {
+  return !p.free_spheres.empty() && std::find(p.free_spheres.begin(), p.free_spheres.end(), false) == p.free_spheres.end();
+}
+
 constexpr double kDegree = M_PI / 180.0;
 
 std::vector<std::size_t> all_views(const ScanObservations& o) {
@@ -257,14 +261,16 @@ Diagnosis diagnose(const ScanObservations& o, const DiagnosisOptions& options,
         // (offsets spread over all spheres absorb other errors and noise instead).
         start.free_spheres = misplaced_spheres(o, active, current);
         if (start.free_spheres.empty()) {
-          say("  sphere_positions: no sphere stands out from the others");
-          trials.push_back(Trial{e, current_held, 0, {}});
-          continue;
+          // None stands out: every sphere a little off (a printed holder) is the holder's geometry
+          // as a whole, tried with every centre free under the gauge.
+          start.free_spheres.assign(o.setup.holder.spheres_mm.size(), true);
+          say("  sphere_positions: no sphere stands out from the others; every sphere tried (the holder as a whole)");
+        } else {
+          std::string which;
+          for (std::size_t k = 0; k < start.free_spheres.size(); ++k)
+            if (start.free_spheres[k]) which += " " + std::to_string(k);
+          say("  sphere_positions: spheres standing out:" + which);
         }
-        std::string which;
-        for (std::size_t k = 0; k < start.free_spheres.size(); ++k)
-          if (start.free_spheres[k]) which += " " + std::to_string(k);
-        say("  sphere_positions: spheres standing out:" + which);
       }
       Trial t{e, held_out(o, active, start), 0, start.free_spheres};
       t.z = paired_z(current_held.cost, t.held.cost);
@@ -527,6 +533,14 @@ void effect_parameters_json(const EffectFinding& f, const ScanObservations& o, n
       }
       parameters = {{"spheres", spheres}};
       uncertainty = {{"spheres", sigmas}};
+      // Fitted with every sphere free: the holder's geometry as a whole is off (a printed holder),
+      // which one scan of it measures sphere by sphere (ctk holder measure).
+      if (f.accepted && all_spheres_free(f.parameters)) {
+        parameters["whole_holder"] = true;
+        parameters["next"] =
+            "measure the holder once from a scan of 60 or more well-spread views (ctk holder measure) and declare the holder "
+            "file it writes";
+      }
       break;
     }
     case Effect::gravity_load:
@@ -548,6 +562,11 @@ void error_json(nlohmann::json& j, const ModelError& before, const ModelError& a
 }
 
 }  // namespace
+
+bool whole_holder_off(const Diagnosis& d) {
+  return std::find(d.accepted.begin(), d.accepted.end(), Effect::sphere_positions) != d.accepted.end() &&
+         all_spheres_free(d.model);
+}
 
 nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& o) {
   DiagnosisReport report;

@@ -115,6 +115,9 @@ std::string DiagnosisRun::brief() const {
         b << ")";
       }
     }
+  if (whole_holder_off(d))
+    b << "\nevery sphere of the holder is off its declared centre (a printed holder): measure it once (ctk holder measure) "
+         "and declare the holder file it writes";
   return b.str();
 }
 

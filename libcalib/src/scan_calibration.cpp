@@ -103,6 +103,9 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
     }
   });
   if (ranks.size() > 1) share_views(mine, ranks, result.views);
+  result.residual_limit_px = residual_limit_px(result.views, options);
+  for (ViewCalibration& v : result.views)
+    if (v.residual_decides) judge_residual(v, result.residual_limit_px);
   result.left_undone = left_undone;
   result.taken_over = static_cast<int>(std::count(finished.begin(), finished.end(), 2));
 

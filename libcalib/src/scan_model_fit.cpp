@@ -349,7 +349,10 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
     ordering->AddElementToGroup(poses.back().data(), 0);
   }
   const bool spheres_free = std::find(active.begin(), active.end(), Effect::sphere_positions) != active.end();
-  const bool sphere_subset = spheres_free && !start.free_spheres.empty();
+  // Every sphere free, listed or not, is the whole holder under the gauge; a subset is held in
+  // place by the rest.
+  const bool sphere_subset =
+      spheres_free && std::find(start.free_spheres.begin(), start.free_spheres.end(), false) != start.free_spheres.end();
   if (spheres_free && !sphere_subset) {
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     for (const auto& X : o.setup.holder.spheres_mm) centroid += X;

@@ -425,15 +425,32 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   }
   if (!fit.converged) {
     out.reason = "pose fit did not converge";
-  } else if (fit.rms_px > o.max_rms_px) {
-    std::ostringstream r;
-    r << "residual above threshold: " << fit.rms_px << " px RMS over " << out.spheres_used << " spheres (threshold "
-      << o.max_rms_px << " px)";
-    out.reason = r.str();
   } else {
-    out.status = ViewStatus::ok;
+    out.residual_decides = true;
+    judge_residual(out, o.max_rms_px);
   }
   return out;
+}
+
+void judge_residual(ViewCalibration& view, double limit_px) {
+  if (view.rms_px <= limit_px) {
+    view.status = ViewStatus::ok;
+    view.reason.clear();
+    return;
+  }
+  std::ostringstream r;
+  r << "residual above threshold: " << view.rms_px << " px RMS over " << view.spheres_used << " spheres (threshold " << limit_px
+    << " px)";
+  view.status = ViewStatus::rejected;
+  view.reason = r.str();
+}
+
+double residual_limit_px(const std::vector<ViewCalibration>& views, const CalibrationOptions& options) {
+  std::vector<double> rms;
+  for (const ViewCalibration& v : views)
+    if (v.residual_decides) rms.push_back(v.rms_px);
+  if (rms.empty()) return options.max_rms_px;
+  return std::max(options.max_rms_px, 2 * median(rms));
 }
 
 }  // namespace ctk

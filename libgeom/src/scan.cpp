@@ -6,6 +6,7 @@
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/provenance.hpp"
 #include "ctk/geom/detector_binning.hpp"
+#include "ctk/geom/holder_file.hpp"
 
 namespace ctk {
 
@@ -112,37 +113,6 @@ ProjectionSet read_projections(const JsonNode& node, const ScanDescription& scan
   return p;
 }
 
-Holder read_holder(const JsonNode& node) {
-  node.warn_unknown_keys({"helix", "sphere_diameter_mm", "spheres_mm", "wall"});
-  Holder h;
-  const JsonNode helix = node.at("helix");
-  helix.warn_unknown_keys({"radius_mm", "rho_rad_per_mm", "phase_rad"});
-  h.helix.radius_mm = helix.at("radius_mm").length_mm();
-  h.helix.rho_rad_per_mm = helix.at("rho_rad_per_mm").number();
-  h.helix.phase_rad = helix.at("phase_rad").number();
-  h.sphere_diameter_mm = node.at("sphere_diameter_mm").length_mm();
-  const JsonNode spheres = node.at("spheres_mm");
-  for (std::size_t i = 0; i < spheres.size(); ++i) h.spheres_mm.push_back(spheres.at(i).position_mm());
-  if (h.spheres_mm.empty()) spheres.fail("expected at least one sphere centre");
-  if (node.has("wall")) {
-    const JsonNode wall = node.at("wall");
-    wall.warn_unknown_keys({"inner_radius_mm", "outer_radius_mm", "ends_mm"});
-    h.wall = HolderWall{wall.at("inner_radius_mm").length_mm(), wall.at("outer_radius_mm").length_mm(), std::nullopt};
-    if (!(h.wall->outer_radius_mm > h.wall->inner_radius_mm))
-      wall.at("outer_radius_mm").fail("expected more than inner_radius_mm");
-    if (wall.has("ends_mm")) {
-      const JsonNode ends = wall.at("ends_mm");
-      if (ends.size() != 2) ends.fail("expected the tube's two ends along the holder axis, [lower, upper] in mm");
-      h.wall->ends_mm = Eigen::Vector2d(ends.at(0).number(), ends.at(1).number());
-      if (!(h.wall->ends_mm->x() < h.wall->ends_mm->y())) ends.fail("expected the lower end first");
-      if (h.wall->ends_mm->x() > h.tau_min() || h.wall->ends_mm->y() < h.tau_max())
-        ends.fail("expected ends beyond the spheres the tube carries (" + std::to_string(h.tau_min()) + " to " +
-                  std::to_string(h.tau_max()) + " mm)");
-    }
-  }
-  return h;
-}
-
 }  // namespace
 
 std::string ProjectionSet::file_name(int view) const {
@@ -199,6 +169,7 @@ ScanDescription relocated_scan(const ScanDescription& scan, const fs::path& file
     for (std::string& n : *names) move(n);
   if (out.panda) move(out.panda->joints_csv);
   if (out.matrices) move(out.matrices->file);
+  move(out.holder_file);
   return out;
 }
 
@@ -293,7 +264,16 @@ ScanDescription scan_from_json(const nlohmann::json& root, const fs::path& file)
     pose.at("kind").fail("expected \"panda\" or \"matrices\", got \"" + kind + "\"");
   }
 
-  if (auto holder = top.find("holder")) scan.holder = read_holder(*holder);
+  if (auto holder = top.find("holder")) {
+    // The holder spelt out, or a ctk-holder/1 file shared by the scans of one holder.
+    if (holder->raw().is_string()) {
+      scan.holder_file = holder->string();
+      require_readable(scan, *holder, scan.holder_file);
+      scan.holder = read_holder_file(scan.resolve(scan.holder_file));
+    } else {
+      scan.holder = holder_from_json(*holder);
+    }
+  }
   scan.stored_detector = scan.detector;
   if (auto binning = top.at("detector").find("binning")) {
     const int b = binning->integer();
@@ -360,18 +340,15 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
     j["pose_source"] = {{"kind", "matrices"}, {"file", scan.matrices->file}};
   }
   if (scan.holder) {
-    const auto& h = *scan.holder;
-    json spheres = json::array();
-    for (const auto& s : h.spheres_mm) spheres.push_back({s.x(), s.y(), s.z()});
-    j["holder"] = {
-        {"helix",
-         {{"radius_mm", h.helix.radius_mm}, {"rho_rad_per_mm", h.helix.rho_rad_per_mm}, {"phase_rad", h.helix.phase_rad}}},
-        {"sphere_diameter_mm", h.sphere_diameter_mm},
-        {"spheres_mm", spheres}};
-    if (h.wall) {
-      j["holder"]["wall"] = {{"inner_radius_mm", h.wall->inner_radius_mm}, {"outer_radius_mm", h.wall->outer_radius_mm}};
-      if (h.wall->ends_mm) j["holder"]["wall"]["ends_mm"] = {h.wall->ends_mm->x(), h.wall->ends_mm->y()};
-    }
+    // A holder still as its file describes it is declared by naming the file; one a workflow
+    // changed (a diagnosis moving spheres or measuring the wall) is spelt out.
+    bool as_filed = false;
+    if (!scan.holder_file.empty()) try {
+        as_filed = holder_to_json(read_holder_file(scan.resolve(scan.holder_file))) == holder_to_json(*scan.holder);
+      } catch (const InputError&) {
+        // gone or changed since: spelt out
+      }
+    j["holder"] = as_filed ? nlohmann::json(scan.holder_file) : holder_to_json(*scan.holder);
   }
   return j;
 }

@@ -8,6 +8,7 @@
 
 #include "ctk/core/error.hpp"
 #include "ctk/core/output_set.hpp"
+#include "ctk/geom/holder_file.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
@@ -89,7 +90,8 @@ SimulationEffects simulation_effects_from_json(const nlohmann::json& named, cons
                                        "false_blobs",          "scatter_fraction",
                                        "detector_psf_px",      "focal_spot_mm",
                                        "detector_lag",         "robot_clusters_mm",
-                                       "robot_droop_mm_per_m"};
+                                       "robot_droop_mm_per_m", "sphere_jitter_mm",
+                                       "holder_seed"};
   for (const auto& item : named.items()) {
     const std::string& key = item.key();
     if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return key == k; }) == std::end(kKnown))
@@ -104,6 +106,16 @@ SimulationEffects simulation_effects_from_json(const nlohmann::json& named, cons
   if (has("displaced_spheres"))
     e.sphere_positions = SphereDisplacement{static_cast<int>(number(named["displaced_spheres"], "displaced_spheres")),
                                             has("displacement_mm") ? number(named["displacement_mm"], "displacement_mm") : 0.2};
+  if (has("sphere_jitter_mm")) {
+    const double sigma = number(named["sphere_jitter_mm"], "sphere_jitter_mm");
+    if (!(sigma > 0 && sigma <= 10)) throw std::invalid_argument("sphere_jitter_mm: expected a sigma in (0, 10] mm");
+    const double seed = has("holder_seed") ? number(named["holder_seed"], "holder_seed") : 1.0;
+    if (!(seed >= 0 && seed < 9e15 && seed == std::floor(seed)))
+      throw std::invalid_argument("holder_seed: expected a whole number of 0 or more");
+    e.printed_holder = PrintedHolder{sigma, static_cast<std::uint64_t>(seed)};
+  } else if (has("holder_seed")) {
+    throw std::invalid_argument("holder_seed: only with sphere_jitter_mm (the printed holder it draws)");
+  }
   if (has("base_translation_mm") || has("base_rotation_deg"))
     e.robot_base_frame = RigidOffset{vec3("base_translation_mm"), vec3("base_rotation_deg")};
   if (has("mount_translation_mm") || has("mount_rotation_deg"))
@@ -155,6 +167,7 @@ SimulationRun run_simulation(const SimulationRequest& r, const std::filesystem::
   for (const std::string& name : r.phantoms)
     if (fs::path(name).extension() == ".json") files.input("phantom", name);
   files.input("poses", r.poses);
+  if (fs::path(r.holder).extension() == ".json") files.input("holder", r.holder);
   const std::vector<std::string> written = {"scan.json", "truth.json", "truth-geometry.json", "joints.csv", "poses.json",
                                             "flat.tif",  "dark.tif",   "projections"};
   for (const std::string& name : written)
@@ -165,7 +178,7 @@ SimulationRun run_simulation(const SimulationRequest& r, const std::filesystem::
   const Detector detector{r.cols, r.rows, r.pitch_mm, r.pitch_mm};
   ScanSimulation sim;
   sim.setup = reference_panda_setup(detector, r.sdd_mm, r.sod_mm);
-  sim.holder = reference_helix_holder();
+  sim.holder = holder_named(r.holder);
   sim.with_holder = false;
   std::vector<std::string> sample;  // the holder is drawn apart, from the scan's own description
   for (const std::string& name : r.phantoms) {

@@ -41,12 +41,20 @@ nlohmann::json json3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 nlohmann::json json2(const Eigen::Vector2d& v) { return {v.x(), v.y()}; }
 
 bool has_pose_effects(const SimulationEffects& e) {
-  return e.detector_intrinsics || e.sphere_positions || e.robot_base_frame || e.holder_mount || e.joint_offsets_rad ||
-         e.source_drift_mm_per_100_views || e.holder_sag_deg || e.source_wobble_mm || e.moving_sphere_mm;
+  return e.detector_intrinsics || e.sphere_positions || e.printed_holder || e.robot_base_frame || e.holder_mount ||
+         e.joint_offsets_rad || e.source_drift_mm_per_100_views || e.holder_sag_deg || e.source_wobble_mm || e.moving_sphere_mm;
 }
 
 void draw_true_holder(const ScanSimulation& sim, TrueScan& truth, std::mt19937_64& rng) {
   truth.holder = sim.holder;
+  if (const auto& printed = sim.effects.printed_holder) {
+    std::mt19937_64 holder_rng(printed->seed);
+    std::normal_distribution<double> n(0.0, printed->sigma_mm);
+    for (Eigen::Vector3d& centre : truth.holder.spheres_mm) {
+      const Eigen::Vector3d offset(n(holder_rng), n(holder_rng), n(holder_rng));
+      centre += offset;
+    }
+  }
   if (!sim.effects.sphere_positions) return;
   const auto& d = *sim.effects.sphere_positions;
   for (int k : choose(static_cast<int>(sim.holder.spheres_mm.size()), d.count, rng))
@@ -219,13 +227,16 @@ nlohmann::json truth_to_json(const ScanSimulation& sim, const TrueScan& truth, c
   if (e.detector_distortion)
     effects["detector_distortion"] = {{"k1_per_px2", e.detector_distortion->k1_per_px2},
                                       {"center_px", json2(e.detector_distortion->centre_px)}};
-  if (e.sphere_positions) {
+  if (e.sphere_positions || e.printed_holder) {
     nlohmann::json spheres = nlohmann::json::array();
     for (std::size_t k = 0; k < truth.holder.spheres_mm.size(); ++k) {
       const Eigen::Vector3d offset = truth.holder.spheres_mm[k] - sim.holder.spheres_mm[k];
       if (offset.norm() > 0) spheres.push_back({{"index", k}, {"offset_mm", json3(offset)}});
     }
     effects["sphere_positions"] = {{"spheres", spheres}};
+    if (e.printed_holder)
+      effects["sphere_positions"]["printed_holder"] = {{"sigma_mm", e.printed_holder->sigma_mm},
+                                                       {"seed", e.printed_holder->seed}};
   }
   auto rigid_effect = [](const RigidOffset& o) {
     return nlohmann::json{{"translation_mm", json3(o.translation_mm)}, {"rotation_deg", json3(o.rotation_deg)}};

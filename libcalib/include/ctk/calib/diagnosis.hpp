@@ -94,6 +94,10 @@ ScanObservations observe_scan(const ScanDescription& scan, const ScanCalibration
 Diagnosis diagnose(const ScanObservations& observations, const DiagnosisOptions& options,
                    const std::function<void(const std::string&)>& log = {});
 
+/// Whether sphere_positions was accepted with every sphere free: the holder's geometry as a whole
+/// is off (each sphere a little, as a printed holder's are), a case for ctk holder measure.
+bool whole_holder_off(const Diagnosis& d);
+
 /// The report in the ctk-diagnosis/1 format.
 nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& observations);
 

@@ -16,8 +16,9 @@ struct ScanCalibration {
   Geometry geometry;                   // ctk-geometry/1, one entry per projection
   std::vector<ViewCalibration> views;  // details, same order
   double seconds = 0;
-  int taken_over = 0;   // views an earlier run had finished (BatchControl::done)
-  int left_undone = 0;  // views not started when a stop was asked for
+  int taken_over = 0;            // views an earlier run had finished (BatchControl::done)
+  int left_undone = 0;           // views not started when a stop was asked for
+  double residual_limit_px = 0;  // the residual a view was allowed (residual_limit_px)
 };
 
 /// What a batch takes from an earlier, interrupted run, and hands on as it goes.

@@ -57,8 +57,9 @@ struct EffectParameters {
   double distortion[3] = {0, 0, 0};  // radial shift at 360 px from the centre (px); centre offset from the principal point (px)
   double gravity[2] = {0, 0};        // holder's turn (rad) and shift (mm) under gravity across its axis (gravity_load_offset)
   std::vector<Eigen::Vector3d> spheres;  // offset of each sphere (mm, holder frame)
-  /// Which sphere offsets are free when sphere_positions is fitted: empty means all (the list's
-  /// centroid, orientation and scale then fixed by a gauge); a subset is held in place by the rest.
+  /// Which sphere offsets are free when sphere_positions is fitted: empty or all true means all
+  /// (the list's centroid, orientation and scale then fixed by a gauge); a subset is held in place
+  /// by the rest.
   std::vector<bool> free_spheres;
 };
 

@@ -38,7 +38,20 @@ struct ViewCalibration {
   /// or a sphere that is not where the holder's list says: the diagnosis tells them apart).
   std::vector<int> outlier_spheres;
   std::vector<Eigen::Vector2d> outlier_detected_px;
+  /// The pose fit converged on enough spheres, so the residual alone decides the status (against
+  /// the scan's limit, residual_limit_px).
+  bool residual_decides = false;
 };
+
+/// Accepts a view whose pose fit converged when its residual is within `limit_px`, else rejects
+/// it saying so.
+void judge_residual(ViewCalibration& view, double limit_px);
+
+/// The residual a view of a scan may have: `max_rms_px`, or twice the median over the scan's
+/// converged fits when that is higher. A holder whose every sphere is a little off (a printed
+/// one), or a detector effect the model lacks, raises every view's residual alike; a view is then
+/// rejected only when its residual stands out from the scan's own.
+double residual_limit_px(const std::vector<ViewCalibration>& views, const CalibrationOptions& options);
 
 /// `K`: the scan's detector matrix; `initial`: first-guess T_camera_holder (robot FK);
 /// `distortion`: the detector's declared radial distortion (centres are undistorted before the

@@ -53,6 +53,9 @@ struct ScanDescription {
   std::optional<PandaPoseSource> panda;  // exactly one of panda / matrices is set
   std::optional<MatricesPoseSource> matrices;
   std::optional<Holder> holder;  // required for calibration, optional otherwise
+  /// When `holder` names a ctk-holder/1 file instead of spelling the holder out (an extension of
+  /// ctk-scan/1): that name, as written, resolved against `folder`.
+  std::string holder_file;
   /// Optional key `detector.radial_distortion` {k1_per_px2, center_px} (an extension of
   /// ctk-scan/1, as the diagnosis reports it): the detector measures x at x + k1 |x - c|^2 (x - c).
   std::optional<RadialDistortion> distortion;

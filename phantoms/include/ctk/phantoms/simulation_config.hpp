@@ -33,6 +33,14 @@ struct SphereDisplacement {
   double magnitude_mm = 0.2;  // each by this much, in a random direction
 };
 
+/// A 3-D printed holder: every sphere off its declared centre by a Gaussian of this sigma per
+/// axis, drawn from a seed of the holder's own, so that the scans of one holder (each with its own
+/// seed) share it.
+struct PrintedHolder {
+  double sigma_mm = 0.1;
+  std::uint64_t seed = 1;
+};
+
 struct BlurredViews {
   double fraction = 0.05;  // of the acquired views, chosen at random
   double sigma_px = 2.0;
@@ -46,6 +54,7 @@ struct SimulationEffects {
   std::optional<DetectorIntrinsicsError> detector_intrinsics;
   std::optional<RadialDistortion> detector_distortion;
   std::optional<SphereDisplacement> sphere_positions;
+  std::optional<PrintedHolder> printed_holder;  // reported under sphere_positions too
   std::optional<RigidOffset> robot_base_frame;
   std::optional<RigidOffset> holder_mount;
   std::optional<panda::Joints> joint_offsets_rad;

@@ -20,6 +20,9 @@ namespace ctk {
 struct SimulationRequest {
   /// Built-in phantom names (helix-holder, shepp-logan, ...) or ctk-phantom/1 files (.json).
   std::vector<std::string> phantoms{"helix-holder"};
+  /// The holder the scan declares and "helix-holder" draws: a built-in one by name (reference,
+  /// thesis-first) or a ctk-holder/1 file.
+  std::string holder = "reference";
   /// circular (joint-7 orbit), spherical (HEALPix directions), cap (a band of directions about
   /// the holder axis while it spins), random (uniform directions from the seed); ignored with poses.
   std::string trajectory = "circular";
