@@ -8,6 +8,7 @@
 #include "../test_support.hpp"
 #include "ctk/geom/astra.hpp"
 #include "ctk/geom/detector_binning.hpp"
+#include "ctk/geom/holder_file.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/panda_setup.hpp"
 #include "ctk/geom/scan.hpp"
@@ -372,6 +373,80 @@ TEST(ScanFile, RelocatedScanFindsTheSameFiles) {
   EXPECT_TRUE(same(moved.resolve(moved.projections.flat[1]), dir / "flats/f1.tif"));
   EXPECT_TRUE(same(moved.resolve(moved.projections.dark[0]), dir / "dark.tif"));
   EXPECT_TRUE(same(moved.resolve(moved.panda->joints_csv), dir / "joints.csv"));
+}
+
+// A holder described once (ctk-holder/1) and named by a scan: read from the file, written back
+// as the name while the holder is as filed, spelt out once a workflow changed it, and found from
+// a scan written elsewhere.
+TEST(ScanFile, HolderFileNamedByTheScan) {
+  const auto dir = testing::scratch_dir();
+  const auto file = write_valid_scan(dir, 6);
+  nlohmann::json holder = holder_to_json(thesis_first_holder());
+  holder["format"] = "ctk-holder/1";
+  std::filesystem::create_directories(dir / "holders");
+  testing::write_text(dir / "holders" / "printed.json", holder.dump(2));
+  nlohmann::json j = read_json_file(file);
+  j["holder"] = "holders/printed.json";
+  testing::write_text(file, j.dump(2));
+  ScanDescription scan = read_scan(file);
+  ASSERT_TRUE(scan.holder);
+  EXPECT_EQ(scan.holder_file, "holders/printed.json");
+  EXPECT_EQ(scan.holder->spheres_mm.size(), 50u);
+  EXPECT_DOUBLE_EQ(scan.holder->sphere_diameter_mm, 0.678);
+  EXPECT_EQ(scan_to_json(scan)["holder"], "holders/printed.json");
+
+  const std::filesystem::path elsewhere = dir / "out" / "corrected.json";
+  std::filesystem::create_directories(elsewhere.parent_path());
+  write_scan(relocated_scan(scan, elsewhere), elsewhere);
+  EXPECT_EQ(read_json_file(elsewhere)["holder"], "../holders/printed.json");
+  EXPECT_EQ(read_scan(elsewhere).holder->spheres_mm[7], scan.holder->spheres_mm[7]);
+
+  scan.holder->spheres_mm[3].x() += 0.05;  // a diagnosis moved a sphere: the holder is no longer the file's
+  const nlohmann::json changed = scan_to_json(scan)["holder"];
+  ASSERT_TRUE(changed.is_object());
+  EXPECT_DOUBLE_EQ(changed["spheres_mm"][3][0].get<double>(), scan.holder->spheres_mm[3].x());
+
+  j["holder"] = "holders/missing.json";
+  testing::write_text(file, j.dump(2));
+  EXPECT_THROW(read_scan(file), InputError);
+}
+
+// The holder block's two spellings of the centres and of the helix' rise; both, or neither, named.
+TEST(HolderFile, CentresOnTheHelixAndItsPitch) {
+  const auto dir = testing::scratch_dir();
+  const nlohmann::json on_helix = {{"format", "ctk-holder/1"},
+                                   {"helix", {{"radius_mm", 19.5}, {"pitch_mm", 24.0}, {"phase_rad", 0.0}}},
+                                   {"sphere_diameter_mm", 0.678},
+                                   {"spheres_on_helix", {{"count", 50}, {"tau_mm", {-24.0, 24.0}}}},
+                                   {"wall", {{"inner_radius_mm", 17.5}, {"outer_radius_mm", 19.5}, {"ends_mm", {-28.0, 28.0}}}}};
+  testing::write_text(dir / "h.json", on_helix.dump());
+  const Holder read = read_holder_file(dir / "h.json");
+  const Holder thesis = thesis_first_holder();
+  ASSERT_EQ(read.spheres_mm.size(), thesis.spheres_mm.size());
+  for (std::size_t k = 0; k < read.spheres_mm.size(); ++k) EXPECT_LT((read.spheres_mm[k] - thesis.spheres_mm[k]).norm(), 1e-12);
+  EXPECT_NEAR(read.helix.rho_rad_per_mm, 2 * M_PI / 24.0, 1e-15);
+  EXPECT_EQ(holder_named(dir.string() + "/h.json").spheres_mm.size(), 50u);
+  EXPECT_EQ(holder_named("reference").spheres_mm.size(), 50u);
+  EXPECT_THROW(holder_named("no-such-holder"), InputError);
+
+  auto refused = [&](const std::function<void(nlohmann::json&)>& spoil, const std::string& key) {
+    nlohmann::json j = on_helix;
+    spoil(j);
+    testing::write_text(dir / "bad.json", j.dump());
+    try {
+      read_holder_file(dir / "bad.json");
+      ADD_FAILURE() << "accepted a holder without a valid " << key;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
+    }
+  };
+  refused([](nlohmann::json& j) { j["helix"]["rho_rad_per_mm"] = 0.26; }, "helix");
+  refused([](nlohmann::json& j) { j["helix"].erase("pitch_mm"); }, "helix");
+  refused([](nlohmann::json& j) { j["spheres_mm"] = {{0, 0, 0}}; }, "spheres_mm");
+  refused([](nlohmann::json& j) { j["spheres_on_helix"]["count"] = 0; }, "spheres_on_helix.count");
+  refused([](nlohmann::json& j) { j["spheres_on_helix"]["tau_mm"] = {24.0, -24.0}; }, "spheres_on_helix.tau_mm");
+  refused([](nlohmann::json& j) { j["format"] = "ctk-scan/1"; }, "format");
 }
 
 // The origin of a geometry file's matrices is kept, and a matrices scan's nominal geometry is
