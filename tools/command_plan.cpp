@@ -104,6 +104,9 @@ void register_plan(CLI::App& app) {
                   "Output folder: the planned scan (lab mode), or planned/ and, with --compare, whole-sphere/ and random/")
       ->capture_default_str();
   cmd->add_option("--phantom", o->simulated.phantoms, "Simulation mode: built-in phantoms or ctk-phantom/1 files in the holder");
+  cmd->add_option("--holder", o->simulated.holder,
+                  "Simulation mode: the holder (reference, thesis-first, or a ctk-holder/1 file)")
+      ->capture_default_str();
   cmd->add_option("--lab", o->lab, "Lab mode: the folder shared with the acquisition process (request/answer files)");
   cmd->add_option("--setup", o->setup, "Lab mode: the lab's ctk-scan/1 file (detector, robot frames, holder, flat, dark)")
       ->check(CLI::ExistingFile);

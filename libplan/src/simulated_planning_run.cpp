@@ -9,6 +9,7 @@
 #include "ctk/core/error.hpp"
 #include "ctk/core/provenance.hpp"
 #include "ctk/core/volume_file.hpp"
+#include "ctk/geom/holder_file.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/geom/trajectory.hpp"
@@ -203,7 +204,7 @@ ScanSimulation simulated_world(const SimulatedPlanRequest& o) {
   ScanSimulation sim;
   const Detector detector{o.cols, o.rows, o.pitch_mm, o.pitch_mm};
   sim.setup = reference_panda_setup(detector, o.sdd_mm, o.sod_mm);
-  sim.holder = reference_helix_holder();
+  sim.holder = holder_named(o.holder);
   sim.sample = sample_of(o.phantoms);
   sim.spectrum = tube_spectrum(o.kvp, o.filter_al_mm);
   sim.counts = {o.flat_counts, 100};
@@ -264,6 +265,7 @@ SimulatedPlanningRun run_simulated_planning(const SimulatedPlanRequest& request,
   RunFiles files;
   for (const std::string& name : request.phantoms)
     if (fs::path(name).extension() == ".json") files.input("phantoms", name);
+  if (fs::path(request.holder).extension() == ".json") files.input("holder", request.holder);
   files.output_folder("out", request.out);
   files.check();
   SimulatedPlanningRun run;

@@ -55,7 +55,7 @@ from ._reports import read_report
 _log = logging.getLogger("ctk")
 
 __all__ = [
-    "BinnedProjection", "CalibrationResult", "DiagnosisResult", "InputError", "ReconstructionResult", "RefineResult", "SimulationResult", "calibrate", "diagnose", "reconstruct", "simulate", "circular_matrices", "import_nikon", "import_nxtomo", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection", "read_volume", "voxelise", "write_volume",
+    "BinnedProjection", "CalibrationResult", "DiagnosisResult", "InputError", "ReconstructionResult", "RefineResult", "SimulationResult", "calibrate", "diagnose", "measure_holder", "reconstruct", "simulate", "circular_matrices", "import_nikon", "import_nxtomo", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection", "read_volume", "voxelise", "write_volume",
     "Measurements", "__build__", "__version__", "as_linear_operator", "load_measurements", "read_image", "cone_vec_from_matrices", "fdk", "geometry_matrices",
     "matrices_from_cone_vec", "read_cone_vec", "read_diagnosis", "read_geometry", "read_nxtomo", "read_rtk_geometry", "read_scan", "read_xtekct",
     "os_sqs", "sirt", "wls_cg", "write_geometry", "write_rtk_geometry", "write_scan",
@@ -271,7 +271,8 @@ class SimulationResult:
     saturated_pixels: int
 
 
-def simulate(out: str | os.PathLike, *, phantoms: Sequence[str] = ("helix-holder",), trajectory: str = "circular",
+def simulate(out: str | os.PathLike, *, phantoms: Sequence[str] = ("helix-holder",),
+             holder: str | os.PathLike = "reference", trajectory: str = "circular",
              views: int = 360, nside: int = 3, cap_deg: tuple[float, float] = (5.0, 90.0),
              poses: Optional[str | os.PathLike] = None, detector_shape: tuple[int, int] = (720, 720),
              pitch_mm: float = 0.6, sdd_mm: float = 2150.0, sod_mm: float = 1360.0, supersampling: int = 2,
@@ -280,7 +281,8 @@ def simulate(out: str | os.PathLike, *, phantoms: Sequence[str] = ("helix-holder
              effects: Optional[dict] = None,
              progress: Optional[Callable[[int, int], None]] = None) -> SimulationResult:
     """`ctk simulate`: a scan folder `out` from analytic phantoms (built-in names or ctk-phantom/1
-    files) on the reference robot setup, with its truth beside it. trajectory: circular (joint-7
+    files) on the reference robot setup, with its truth beside it; `holder` is the one the scan
+    declares and "helix-holder" draws (reference, thesis-first or a ctk-holder/1 file). trajectory: circular (joint-7
     orbit of `views`), spherical (HEALPix, 12 nside^2 directions), cap (`views` directions from
     cap_deg[0] to cap_deg[1] off the holder axis while it spins) or random; or `poses`, a
     ctk-geometry/1 file of matrices. detector_shape (rows, cols). `effects` are undeclared errors
@@ -289,7 +291,7 @@ def simulate(out: str | os.PathLike, *, phantoms: Sequence[str] = ("helix-holder
     simulation wrote is refused (InputError)."""
     named = None if effects is None else {k: (list(v) if isinstance(v, (tuple, list, np.ndarray)) else v)
                                           for k, v in effects.items()}
-    d = _ctk._simulate(os.fspath(out), list(phantoms), trajectory, views, nside, tuple(cap_deg),
+    d = _ctk._simulate(os.fspath(out), list(phantoms), os.fspath(holder), trajectory, views, nside, tuple(cap_deg),
                        None if poses is None else os.fspath(poses), tuple(detector_shape), pitch_mm, sdd_mm, sod_mm,
                        supersampling, output, flat_counts, dark_counts, kvp, filter_al_mm, robot_noise_mm, robot_noise_deg,
                        seed, named, progress, lambda line: _log.info("simulate: %s", line))
@@ -366,6 +368,16 @@ def diagnose(scan: str | os.PathLike, geometry: str | os.PathLike, *, repeatabil
     d = _ctk._diagnose(os.fspath(scan), os.fspath(geometry), repeatability_mm, repeatability_deg,
                        lambda line: _log.info("diagnose: %s", line))
     return DiagnosisResult(**d)
+
+
+def measure_holder(scan: str | os.PathLike, geometry: str | os.PathLike, *, min_views: int = 60) -> dict:
+    """`ctk holder measure`: every sphere's centre of the holder `scan` declares, measured from the
+    scan's calibrated `geometry` (60 or more well-spread views) with its uncertainty. Returns the
+    ctk-holder/1 file as a dict (`measurement` says how; write it with json and name it in a
+    scan's `holder`). Each step is logged to the 'ctk' logger."""
+    d = _ctk._measure_holder(os.fspath(scan), os.fspath(geometry), min_views, lambda line: _log.info("holder: %s", line))
+    _log.info("%s", d["brief"])
+    return d["holder"]
 
 
 def read_diagnosis(file: str | os.PathLike) -> dict:

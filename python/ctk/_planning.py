@@ -78,7 +78,7 @@ def _hook(callback: Optional[ViewCallback]):
     return on_view
 
 
-def plan(out: str | os.PathLike, *, phantoms: Sequence[str], views: int = 100, scout_nside: int = 2,
+def plan(out: str | os.PathLike, *, phantoms: Sequence[str], holder: str | os.PathLike = "reference", views: int = 100, scout_nside: int = 2,
          candidate_nside: int = 8, damage_exponent: float = 0.25, spread_exponent: float = 4.0,
          widest_gap_fraction: float = 0.0, edge_tangency_weight: float = 0.5, tangent_width_deg: float = 10.0,
          seed: int = 1, coarse_size: int = 128, coarse_voxel_mm: float = 0.75, binning: int = 3,
@@ -88,7 +88,8 @@ def plan(out: str | os.PathLike, *, phantoms: Sequence[str], views: int = 100, s
          eval_voxel_mm: float = 0.5, eval_iterations: int = 20, eval_lambda: float = 3.0, eval_binning: int = 2,
          callback: Optional[ViewCallback] = None) -> PlanResult:
     """`ctk plan --phantom`: an absorption-aware spherical trajectory planned against the
-    simulated lab (phantoms: built-in names or ctk-phantom/1 files, in the reference holder),
+    simulated lab (phantoms: built-in names or ctk-phantom/1 files, in `holder`: reference,
+    thesis-first or a ctk-holder/1 file),
     each view calibrated from its spheres, written to `out`/planned. compare: the whole-sphere and
     `random_draws` random trajectories of as many views are acquired too, each reconstructed alike
     (WLS-CG, eval_*; eval_size 0: a volume holding the holder and the sample) and scored against
@@ -102,6 +103,7 @@ def plan(out: str | os.PathLike, *, phantoms: Sequence[str], views: int = 100, s
     keywords = {k: v for k, v in locals().items() if k not in ("callback",)}
     keywords["out"] = os.fspath(out)
     keywords["phantoms"] = [os.fspath(p) for p in phantoms]
+    keywords["holder"] = os.fspath(holder)
     keywords["detector_shape"] = list(detector_shape)
     d = _ctk._plan(keywords, _hook(callback), lambda line: _log.info("plan: %s", line))
     if d["stopped"]:

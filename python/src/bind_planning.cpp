@@ -103,6 +103,7 @@ void take_path(Keywords& k, const char* key, fs::path& path) {
 void take_simulated(Keywords& k, SimulatedPlanRequest& r) {
   simulated_keywords(r, [&](const char* key, auto& field) { k.take(key, field); });
   k.take("phantoms", r.phantoms);
+  k.take("holder", r.holder);
   take_path(k, "out", r.out);
   std::array<int, 2> shape{r.rows, r.cols};
   k.take("detector_shape", shape);

@@ -18,6 +18,7 @@
 #include "conversions.hpp"
 #include "ctk/calib/calibration_run.hpp"
 #include "ctk/calib/diagnosis_run.hpp"
+#include "ctk/calib/holder_measurement.hpp"
 #include "ctk/geom/import_run.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/phantoms/simulation_run.hpp"
@@ -198,6 +199,22 @@ py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, cons
   return d;
 }
 
+py::dict measure_holder(const fs::path& scan_file, const fs::path& geometry_file, int min_views, const py::object& log) {
+  HolderMeasurementOptions o;
+  o.min_views = min_views;
+  o.validate();
+  const ScanDescription scan = read_scan(scan_file);
+  const Geometry geometry = geometry_for_scan(scan, read_geometry(geometry_file));
+  PythonBridge bridge;
+  std::optional<HolderMeasurement> run;
+  interruptible([&] { run = run_holder_measurement(scan, geometry, o, {}, bridge.log(log)); });
+  bridge.raise_if_stopped();
+  py::dict d;
+  d["holder"] = to_python(run->holder_file(scan_file.string()));
+  d["brief"] = run->brief();
+  return d;
+}
+
 py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& geometry_file, const std::string& method,
                      int iterations, int held_out_every, int subsets, double lambda, const std::string& regulariser,
                      double huber_delta, double tolerance, const std::string& preconditioner, bool weighted, bool undistort,
@@ -239,7 +256,8 @@ py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& g
   return d;
 }
 
-py::dict simulate(const fs::path& out, const std::vector<std::string>& phantoms, const std::string& trajectory, int views,
+py::dict simulate(const fs::path& out, const std::vector<std::string>& phantoms, const std::string& holder,
+                  const std::string& trajectory, int views,
                   int nside, const std::array<double, 2>& cap_deg, const std::optional<fs::path>& poses,
                   const std::array<int, 2>& detector_shape, double pitch_mm, double sdd_mm, double sod_mm, int supersampling,
                   const std::string& output, double flat_counts, double dark_counts, const std::optional<double>& kvp,
@@ -249,6 +267,7 @@ py::dict simulate(const fs::path& out, const std::vector<std::string>& phantoms,
     throw py::value_error("output must be 'counts' or 'line-integrals', not '" + output + "'");
   SimulationRequest r;
   r.phantoms = phantoms;
+  r.holder = holder;
   r.trajectory = trajectory;
   r.views = views;
   r.nside = nside;
@@ -319,11 +338,12 @@ A Nikon (X-Tek) scan, its .xtekct file and the <Name>_NNNN.tif projections besid
 ctk-scan/1 file `out`, as `ctk import nikon` makes it (the white level and a zero dark written as
 images beside it). Returns the scan as read back; keys read and not modelled are warned about.
 )doc");
-  m.def("_simulate", &simulate, py::arg("out"), py::arg("phantoms"), py::arg("trajectory"), py::arg("views"), py::arg("nside"),
+  m.def("_simulate", &simulate, py::arg("out"), py::arg("phantoms"), py::arg("holder"), py::arg("trajectory"), py::arg("views"), py::arg("nside"),
         py::arg("cap_deg"), py::arg("poses"), py::arg("detector_shape"), py::arg("pitch_mm"), py::arg("sdd_mm"),
         py::arg("sod_mm"), py::arg("supersampling"), py::arg("output"), py::arg("flat_counts"), py::arg("dark_counts"),
         py::arg("kvp"), py::arg("filter_al_mm"), py::arg("robot_noise_mm"), py::arg("robot_noise_deg"), py::arg("seed"),
         py::arg("effects"), py::arg("progress"), py::arg("log"));
+  m.def("_measure_holder", &measure_holder, py::arg("scan"), py::arg("geometry"), py::arg("min_views"), py::arg("log"));
   m.def("_reconstruct", &reconstruct, py::arg("scan"), py::arg("geometry"), py::arg("method"), py::arg("iterations"),
         py::arg("held_out_every"), py::arg("subsets"), py::arg("lambda_"), py::arg("regulariser"), py::arg("huber_delta"),
         py::arg("tolerance"), py::arg("preconditioner"), py::arg("weighted"), py::arg("undistort"), py::arg("size"),

@@ -28,8 +28,10 @@ struct ComparisonOptions {
 
 struct SimulatedPlanRequest {
   PlanRequest plan;
-  /// Built-in phantom names or ctk-phantom/1 files (.json), placed in the reference holder.
+  /// Built-in phantom names or ctk-phantom/1 files (.json), placed in the holder.
   std::vector<std::string> phantoms;
+  /// The holder: built-in by name (reference, thesis-first) or a ctk-holder/1 file.
+  std::string holder = "reference";
   std::filesystem::path out = "plan";  // planned/ and, to compare, whole-sphere/, random/ ...
   int cols = 720, rows = 720;
   double pitch_mm = 0.6, sdd_mm = 2150, sod_mm = 1360;
