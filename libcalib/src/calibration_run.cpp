@@ -93,11 +93,6 @@ nlohmann::json CalibrationRun::summary() const {
           {"skipped", skipped},
           {"median_rms_px", median(rms)},
           {"residual_limit_px", c.residual_limit_px},
-          {"ball_contrast",
-           {{"hardening_per_line_integral", c.contrast.hardening},
-            {"sigma", c.contrast.sigma},
-            {"balls", c.contrast.balls},
-            {"used", c.hardening}}},
           {"median_translation_sigma_across_beam_mm", median(across_sigma)},
           {"median_translation_sigma_along_beam_mm", median(depth_sigma)},
           {"seconds", c.seconds},
@@ -147,10 +142,6 @@ std::string CalibrationRun::brief() const {
     << " views/s); median reprojection RMS " << s.at("median_rms_px").get<double>() << " px; median pose uncertainty "
     << s.at("median_translation_sigma_across_beam_mm").get<double>() * 1000 << " um across the beam, "
     << s.at("median_translation_sigma_along_beam_mm").get<double>() * 1000 << " um along it";
-  if (calibration.hardening > 0)
-    b << "\nthe spheres' contrast falls with the background behind them (a polychromatic beam or scatter): "
-      << calibration.contrast.hardening << " +- " << calibration.contrast.sigma << " per unit line integral over "
-      << calibration.contrast.balls << " balls, modelled in every profile fit";
   if (calibration.residual_limit_px > options.max_rms_px)
     b << "\nevery view's residual is high (a holder whose spheres are each a little off, or a detector effect the model "
          "lacks): views rejected above "

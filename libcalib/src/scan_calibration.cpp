@@ -52,57 +52,7 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
   for (int v = ranks.rank(); v < n; v += ranks.size()) mine.push_back(v);
   const int share = static_cast<int>(mine.size());
 
-  // One view, whatever its data provoke: its rejection, never the batch's end.
-  const auto calibrate_one = [&](int v, const CalibrationOptions& o) {
-    const FirstGuess& guess = guesses[static_cast<std::size_t>(v)];
-    ViewCalibration out;
-    if (!guess.T_camera_holder) {
-      out.status = ViewStatus::skipped;
-      out.reason = "no pose: " + guess.reason;
-      return out;
-    }
-    try {
-      const Image image = read_line_integrals(scan, v, flat_dark);
-      const ViewCamera camera = view_camera(scan, v);
-      out = calibrate_view(image, camera.K, camera.from_nominal * *guess.T_camera_holder, *scan.holder, scan.detector, o,
-                           scan.distortion);
-      if (out.T_camera_holder) out.T_camera_holder = camera.from_nominal.inverse() * *out.T_camera_holder;
-    } catch (const InputError& e) {
-      out = ViewCalibration{};
-      out.status = ViewStatus::rejected;
-      out.reason = std::string("unreadable image: ") + e.what();
-    } catch (const std::exception& e) {
-      out = ViewCalibration{};
-      out.status = ViewStatus::rejected;
-      out.reason = std::string("calibration failed: ") + e.what();
-    }
-    return out;
-  };
-
   ScanCalibration result;
-  // The balls' contrast loss over the background, unless given: measured on up to 12 views spread
-  // over the scan (the same on every rank), used when it is there beyond its uncertainty.
-  CalibrationOptions used = options;
-  if (!used.hardening) {
-    std::vector<int> sample;
-    for (int v = 0; v < n; ++v)
-      if (guesses[static_cast<std::size_t>(v)].T_camera_holder) sample.push_back(v);
-    const std::size_t step = std::max<std::size_t>(1, sample.size() / 12);
-    std::vector<int> spread;
-    for (std::size_t i = 0; i < sample.size(); i += step) spread.push_back(sample[i]);
-    std::vector<std::vector<Eigen::Vector2d>> contrast(spread.size());
-    CalibrationOptions plain = options;
-    plain.hardening = 0.0;
-    parallel_for_dynamic(static_cast<int>(spread.size()), [&](int k) {
-      const ViewCalibration c = calibrate_one(spread[static_cast<std::size_t>(k)], plain);
-      if (c.status == ViewStatus::ok) contrast[static_cast<std::size_t>(k)] = c.ball_contrast;
-    });
-    std::vector<Eigen::Vector2d> pairs;
-    for (const auto& c : contrast) pairs.insert(pairs.end(), c.begin(), c.end());
-    result.contrast = fit_ball_contrast(pairs);
-    used.hardening = result.contrast.significant() ? result.contrast.hardening : 0.0;
-  }
-  result.hardening = *used.hardening;
   result.views.resize(static_cast<std::size_t>(n));
   int done = 0;
   std::atomic<int> left_undone{0};
@@ -110,6 +60,7 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
   parallel_for_dynamic(share, [&](int k) {
     const int v = mine[static_cast<std::size_t>(k)];
     ViewCalibration& out = result.views[static_cast<std::size_t>(v)];
+    const FirstGuess& guess = guesses[static_cast<std::size_t>(v)];
     if (control && control->done) {
       if (const auto earlier = control->done->find(v); earlier != control->done->end()) {
         out = earlier->second;
@@ -123,7 +74,27 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
       ++left_undone;
       return;
     }
-    out = calibrate_one(v, used);
+    if (!guess.T_camera_holder) {
+      out.status = ViewStatus::skipped;
+      out.reason = "no pose: " + guess.reason;
+    } else {
+      try {
+        const Image image = read_line_integrals(scan, v, flat_dark);
+        const ViewCamera camera = view_camera(scan, v);
+        out = calibrate_view(image, camera.K, camera.from_nominal * *guess.T_camera_holder, *scan.holder, scan.detector, options,
+                             scan.distortion);
+        if (out.T_camera_holder) out.T_camera_holder = camera.from_nominal.inverse() * *out.T_camera_holder;
+      } catch (const InputError& e) {
+        out = ViewCalibration{};
+        out.status = ViewStatus::rejected;
+        out.reason = std::string("unreadable image: ") + e.what();
+      } catch (const std::exception& e) {
+        // Whatever else one view's data provokes is that view's rejection, never the batch's end.
+        out = ViewCalibration{};
+        out.status = ViewStatus::rejected;
+        out.reason = std::string("calibration failed: ") + e.what();
+      }
+    }
     finished[static_cast<std::size_t>(v)] = 1;
 #pragma omp critical(ctk_calibration_progress)
     {
@@ -132,7 +103,7 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
     }
   });
   if (ranks.size() > 1) share_views(mine, ranks, result.views);
-  result.residual_limit_px = residual_limit_px(result.views, used);
+  result.residual_limit_px = residual_limit_px(result.views, options);
   for (ViewCalibration& v : result.views)
     if (v.residual_decides) judge_residual(v, result.residual_limit_px);
   result.left_undone = left_undone;

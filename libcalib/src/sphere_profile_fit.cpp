@@ -22,15 +22,13 @@ namespace {
 // background {a, b, c, s}: a + b du + c dv + s shape.
 class WindowCost : public ceres::CostFunction {
  public:
-  WindowCost(std::vector<Eigen::Vector2d> offsets, std::vector<double> values, std::vector<double> shape, double shape_at_origin,
-             int balls, int subsamples, double hardening)
+  WindowCost(std::vector<Eigen::Vector2d> offsets, std::vector<double> values, std::vector<double> shape, int balls,
+             int subsamples)
       : offsets_(std::move(offsets)),
         values_(std::move(values)),
         shape_(std::move(shape)),
-        shape_at_origin_(shape_at_origin),
         balls_(balls),
-        subsamples_(subsamples),
-        hardening_(hardening) {
+        subsamples_(subsamples) {
     mutable_parameter_block_sizes()->assign({2 * balls, 2 * balls, 4});
     set_num_residuals(static_cast<int>(values_.size()));
   }
@@ -51,11 +49,6 @@ class WindowCost : public ceres::CostFunction {
       const auto ku = static_cast<std::size_t>(k);
       const double du = offsets_[ku].x(), dv = offsets_[ku].y();
       double model = background[0] + background[1] * du + background[2] * dv + background[3] * shape_[ku];
-      // The balls' contrast here: lower where the background rises above its level at the window's
-      // reference point (hardening), 1 without.
-      const double shape_rise = shape_[ku] - shape_at_origin_;
-      const double contrast = 1 - hardening_ * (background[1] * du + background[2] * dv + background[3] * shape_rise);
-      double balls_here = 0;  // the balls' model before the contrast, for its derivatives
       if (j_background) {
         double* row = j_background + 4 * k;
         row[0] = -1;
@@ -82,22 +75,15 @@ class WindowCost : public ceres::CostFunction {
             d_radius += radius / root;
           }
         }
-        model += contrast * weight * amplitude * chord;
-        balls_here += weight * amplitude * chord;
+        model += weight * amplitude * chord;
         if (j_centre) {
-          j_centre[k * width + 2 * b] = -contrast * weight * amplitude * d_u;
-          j_centre[k * width + 2 * b + 1] = -contrast * weight * amplitude * d_v;
+          j_centre[k * width + 2 * b] = -weight * amplitude * d_u;
+          j_centre[k * width + 2 * b + 1] = -weight * amplitude * d_v;
         }
         if (j_disc) {
-          j_disc[k * width + 2 * b] = -contrast * weight * amplitude * d_radius;
-          j_disc[k * width + 2 * b + 1] = -contrast * weight * chord;
+          j_disc[k * width + 2 * b] = -weight * amplitude * d_radius;
+          j_disc[k * width + 2 * b + 1] = -weight * chord;
         }
-      }
-      if (j_background && hardening_ != 0 && balls_here != 0) {
-        double* row = j_background + 4 * k;
-        row[1] += hardening_ * du * balls_here;
-        row[2] += hardening_ * dv * balls_here;
-        row[3] += hardening_ * shape_rise * balls_here;
       }
       residual[k] = values_[ku] - model;
     }
@@ -108,10 +94,8 @@ class WindowCost : public ceres::CostFunction {
   std::vector<Eigen::Vector2d> offsets_;  // pixel centres relative to the window's reference point
   std::vector<double> values_;
   std::vector<double> shape_;  // the known background shape, pixel-averaged (0 if none)
-  double shape_at_origin_;     // the shape at the window's reference point
   int balls_;
   int subsamples_;
-  double hardening_;
 };
 
 // The known shape averaged over each pixel of the window [c0, c1] x [r0, r1] (row-major). Where it
@@ -160,8 +144,6 @@ void ProfileFitOptions::validate() const {
   require_option(margin_px > 0, "ProfileFitOptions.margin_px", "a number above 0", margin_px);
   require_option(subsamples >= 1, "ProfileFitOptions.subsamples", "at least 1", subsamples);
   require_option(max_move_px > 0, "ProfileFitOptions.max_move_px", "a number above 0", max_move_px);
-  require_option(std::isfinite(hardening) && hardening >= 0 && hardening < 1, "ProfileFitOptions.hardening",
-                 "a contrast loss per unit line integral in [0, 1)", hardening);
 }
 
 std::vector<bool> refine_cluster_by_profile_fit(const Image& im, double radius_px, std::span<SphereDetection> spheres,
@@ -226,9 +208,7 @@ std::vector<bool> refine_cluster_by_profile_fit(const Image& im, double radius_p
     disc[2 * su + 1] = peak / (2 * radius_px);
   }
 
-  const double shape_at_origin = shape ? shape(origin) : 0.0;
-  auto* cost = new WindowCost(std::move(offsets), std::move(values), std::move(shape_values), shape_at_origin, n, o.subsamples,
-                              o.hardening);
+  auto* cost = new WindowCost(std::move(offsets), std::move(values), std::move(shape_values), n, o.subsamples);
   ceres::Problem problem;
   problem.AddResidualBlock(cost, nullptr, {centre.data(), disc.data(), background});
   if (!shape) problem.SetManifold(background, new ceres::SubsetManifold(4, {3}));
@@ -247,10 +227,6 @@ std::vector<bool> refine_cluster_by_profile_fit(const Image& im, double radius_p
     if (!(amplitude > 0) || !((uv - spheres[su].uv).norm() <= o.max_move_px)) continue;
     spheres[su].uv = uv;
     spheres[su].strength = 4 * M_PI / 3 * amplitude * radius * radius * radius;  // the ball's chords summed
-    spheres[su].amplitude = amplitude;
-    const Eigen::Vector2d at = uv - origin;
-    spheres[su].background =
-        background[0] + background[1] * at.x() + background[2] * at.y() + background[3] * (shape ? shape(uv) : 0.0);
     refined[su] = true;
   }
   return refined;

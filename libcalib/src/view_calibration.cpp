@@ -90,10 +90,9 @@ Prediction predict(const Eigen::Matrix3d& K, const Rigid& T, const Holder& holde
 // is as strong as the matched ones (within 30 % of their median). Balls closer than a radius
 // cannot be told apart and are left out.
 void recover_missed_spheres(const Image& image, const Prediction& p, double radius_px, std::vector<double> strengths,
-                            const ProfileFitOptions& profile, const BackgroundShape& wall_shadow,
-                            const std::optional<RadialDistortion>& distortion, std::vector<SphereMatch>& matches,
-                            const std::vector<SphereMatch>& dropped, std::vector<SphereDetection>& measured,
-                            std::vector<SphereDetection>& detections) {
+                            const BackgroundShape& wall_shadow, const std::optional<RadialDistortion>& distortion,
+                            std::vector<SphereMatch>& matches, const std::vector<SphereMatch>& dropped,
+                            std::vector<SphereDetection>& measured, std::vector<SphereDetection>& detections) {
   if (strengths.empty()) return;
   const double typical = median_in_place(strengths);
   const std::size_t n = p.uv.size();
@@ -135,7 +134,7 @@ void recover_missed_spheres(const Image& image, const Prediction& p, double radi
         d.uv = distortion ? distortion->measured_from_ideal(p.uv[k]) : p.uv[k];
         found.push_back(d);
       }
-    const std::vector<bool> refined = refine_cluster_by_profile_fit(image, radius_px, found, profile, wall_shadow);
+    const std::vector<bool> refined = refine_cluster_by_profile_fit(image, radius_px, found, {}, wall_shadow);
     for (std::size_t m = 0; m < members.size(); ++m) {
       if (!refined[m] || std::abs(found[m].strength - typical) > 0.3 * typical) continue;
       measured.push_back(found[m]);
@@ -156,9 +155,6 @@ void CalibrationOptions::validate() const {
   require_option(robust_px > 0, "CalibrationOptions.robust_px", "a number above 0", robust_px);
   require_option(max_first_guess_error_deg > 0 && max_first_guess_error_deg <= 180,
                  "CalibrationOptions.max_first_guess_error_deg", "a number in (0, 180]", max_first_guess_error_deg);
-  if (hardening)
-    require_option(std::isfinite(*hardening) && *hardening >= 0 && *hardening < 1, "CalibrationOptions.hardening",
-                   "a contrast loss per unit line integral in [0, 1)", *hardening);
 }
 
 ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, const Rigid& initial, const Holder& holder,
@@ -181,8 +177,6 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
     return out;
   }
   const double radius_px = 0.5 * holder.sphere_diameter_mm * K(0, 0) / depth;
-  ProfileFitOptions profile;
-  profile.hardening = o.hardening.value_or(0.0);
   out.radius_px = radius_px;
   DetectionOptions detection;
   detection.radius_px = radius_px;
@@ -340,11 +334,11 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   for (const auto* list : {&best.matches, &best.dropped})
     for (const auto& m : *list) {
       const auto i = static_cast<std::size_t>(m.detection);
-      refine_by_profile_fit(image, radius_px, measured[i], profile, wall_shadow);
+      refine_by_profile_fit(image, radius_px, measured[i], {}, wall_shadow);
       undistort(i);
       strengths.push_back(measured[i].strength);
     }
-  recover_missed_spheres(image, predict(K, best.fit.T_camera_holder, holder, detector, radius_px), radius_px, strengths, profile,
+  recover_missed_spheres(image, predict(K, best.fit.T_camera_holder, holder, detector, radius_px), radius_px, strengths,
                          wall_shadow, distortion, best.matches, best.dropped, measured, detections);
   best.fit = fit_matches(best.fit.T_camera_holder, best.matches);
   drop_outliers(best);
@@ -393,7 +387,7 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
     shadow_pose = pose;
     for (const auto& m : moved) {
       const auto i = static_cast<std::size_t>(m.detection);
-      refine_by_profile_fit(image, radius_px, measured[i], profile, shadow);
+      refine_by_profile_fit(image, radius_px, measured[i], {}, shadow);
       undistort(i);
     }
     best.matches.insert(best.matches.end(), best.dropped.begin(), best.dropped.end());
@@ -422,10 +416,8 @@ ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, con
   out.rotation_sigma_deg = fit.rotation_sigma_deg;
   for (const auto& m : matches) {
     out.spheres.push_back(m.sphere);
-    const SphereDetection& d = detections[static_cast<std::size_t>(m.detection)];
-    out.detected_px.push_back(d.uv);
+    out.detected_px.push_back(detections[static_cast<std::size_t>(m.detection)].uv);
     out.fitted_px.push_back(out.P->project(holder.spheres_mm[static_cast<std::size_t>(m.sphere)]));
-    if (d.amplitude > 0) out.ball_contrast.emplace_back(d.background, d.amplitude);
   }
   for (const auto& m : best.dropped) {
     out.outlier_spheres.push_back(m.sphere);

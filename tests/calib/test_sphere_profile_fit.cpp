@@ -140,40 +140,5 @@ TEST(SphereProfileFit, TouchingBallsAreFittedTogether) {
   }
 }
 
-// A ball on a steep background whose contrast falls where the background rises (a polychromatic
-// beam behind a wall): the plain fit leans to the fainter, lower side; told how the contrast
-// falls, the fit is exact again, and its amplitude and background are those at the centre.
-TEST(SphereProfileFit, AContrastThatFallsWithTheBackgroundIsModelled) {
-  const double hardening = 0.3;  // contrast lost per unit line integral, as a 94 kV orbit scan measures it
-  const auto steep = [](double u, double v) { return 0.6 + 0.05 * u - 0.01 * v; };
-  const Eigen::Vector2d truth(15.7, 16.2);
-  Image im{32, 32, std::vector<float>(32 * 32)};
-  for (int r = 0; r < im.rows; ++r)
-    for (int c = 0; c < im.cols; ++c) {
-      double value = 0;
-      for (int i = 0; i < 8; ++i)
-        for (int j = 0; j < 8; ++j) {
-          const double u = c - 0.5 + (j + 0.5) / 8, v = r - 0.5 + (i + 0.5) / 8;
-          const double x = u - truth.x(), y = v - truth.y();
-          const double chord = 2 * std::sqrt(std::max(0.0, kRadius * kRadius - x * x - y * y)) / kRadius;
-          const double contrast = 1 - hardening * (steep(u, v) - steep(truth.x(), truth.y()));
-          value += (steep(u, v) + 0.075 * chord * contrast) / 64;
-        }
-      im.pixels[static_cast<std::size_t>(r * im.cols + c)] = static_cast<float>(value);
-    }
-  SphereDetection plain, modelled;
-  plain.uv = modelled.uv = truth + Eigen::Vector2d(0.2, -0.2);
-  ASSERT_TRUE(refine_by_profile_fit(im, kRadius, plain));
-  ProfileFitOptions o;
-  o.hardening = hardening;
-  ASSERT_TRUE(refine_by_profile_fit(im, kRadius, modelled, o));
-  std::cout << "centre error: plain fit " << (plain.uv - truth).norm() << " px, contrast modelled "
-            << (modelled.uv - truth).norm() << " px\n";
-  EXPECT_LT(plain.uv.x() - truth.x(), -0.01);  // towards the lower, brighter-contrast side
-  EXPECT_LT((modelled.uv - truth).norm(), 0.01);
-  EXPECT_NEAR(modelled.amplitude, 0.075 / kRadius, 0.01 * 0.075 / kRadius);
-  EXPECT_NEAR(modelled.background, steep(truth.x(), truth.y()), 2e-3);
-}
-
 }  // namespace
 }  // namespace ctk

@@ -6,7 +6,6 @@
 #include <map>
 #include <vector>
 
-#include "ctk/calib/ball_contrast.hpp"
 #include "ctk/calib/view_calibration.hpp"
 #include "ctk/core/communicator.hpp"
 #include "ctk/geom/scan.hpp"
@@ -20,8 +19,6 @@ struct ScanCalibration {
   int taken_over = 0;            // views an earlier run had finished (BatchControl::done)
   int left_undone = 0;           // views not started when a stop was asked for
   double residual_limit_px = 0;  // the residual a view was allowed (residual_limit_px)
-  BallContrast contrast;         // measured on a sample of views, unless the options gave the hardening
-  double hardening = 0;          // what the views were calibrated with (CalibrationOptions::hardening)
 };
 
 /// What a batch takes from an earlier, interrupted run, and hands on as it goes.

@@ -19,8 +19,6 @@ struct SphereDetection {
   Eigen::Vector2d uv{0, 0};  // sub-pixel centre (pixel-centre convention of scan-format.md)
   double strength = 0;       // background-free line integral summed over the blob (mm * px^2)
   double response = 0;       // filter response at the candidate
-  double background = 0;     // the background's line integral at the centre (profile fit), NaN if unknown
-  double amplitude = 0;      // the ball's fitted line integral per unit chord (profile fit)
 };
 
 struct DetectionOptions {

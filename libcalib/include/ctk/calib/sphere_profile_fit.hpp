@@ -18,13 +18,7 @@ struct ProfileFitOptions {
   double margin_px = 3.0;    // the window reaches this far beyond the sphere's rim
   int subsamples = 3;        // per pixel and axis: the model is averaged over the pixel's area
   double max_move_px = 1.0;  // a fit moving further from its start is not trusted
-  /// How a ball's contrast falls with the background under it: its chords scaled by
-  /// 1 - hardening (background - background at the window's reference). A polychromatic beam
-  /// hardened by the wall behind a ball (and scatter, larger behind thick parts) lowers the
-  /// ball's line integral more where the wall is thicker, so a ball on the wall's gradient looks
-  /// shifted towards its thinner side. One number per scan (hardening.hpp measures it); 0: none.
-  double hardening = 0.0;
-  void validate() const;  // std::invalid_argument naming the field
+  void validate() const;     // std::invalid_argument naming the field
 };
 
 /// A known shape of the background at an image position (pixel units), e.g. the path length

@@ -18,11 +18,7 @@ struct CalibrationOptions {
   double search_px = 40;                   // how far the first guess may put the pattern (5 mm / 3 deg here)
   double robust_px = 1.0;                  // Cauchy scale of the pose fit
   double max_first_guess_error_deg = 6.0;  // a fitted pose turned further from the guess is refused
-  /// The balls' contrast loss per unit background line integral (ProfileFitOptions::hardening).
-  /// Absent: measured on a sample of the scan's views (ball_contrast.hpp), used when it differs
-  /// from 0 beyond its uncertainty.
-  std::optional<double> hardening;
-  void validate() const;  // std::invalid_argument naming the field
+  void validate() const;                   // std::invalid_argument naming the field
 };
 
 struct ViewCalibration {
@@ -45,10 +41,6 @@ struct ViewCalibration {
   /// The pose fit converged on enough spheres, so the residual alone decides the status (against
   /// the scan's limit, residual_limit_px).
   bool residual_decides = false;
-  /// Each used sphere's background line integral at its centre and fitted amplitude (line
-  /// integral per unit chord), where its profile was fitted: how the balls' contrast follows the
-  /// background (ball_contrast.hpp).
-  std::vector<Eigen::Vector2d> ball_contrast;
 };
 
 /// Accepts a view whose pose fit converged when its residual is within `limit_px`, else rejects
