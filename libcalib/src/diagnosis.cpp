@@ -29,16 +29,6 @@ std::vector<std::size_t> all_views(const ScanObservations& o) {
   return v;
 }
 
-double image_rms(const ScanModelFit& f) {
-  double sq = 0;
-  int n = 0;
-  for (std::size_t i = 0; i < f.image_sq_px.size(); ++i) {
-    sq += f.image_sq_px[i];
-    n += f.residual_count[i] / 2;
-  }
-  return n > 0 ? std::sqrt(sq / n) : 0.0;
-}
-
 // Held out: each half fitted on the other, every held-out view's pose refitted with the model
 // fixed. Returns per-view costs (all views, in order) and the held-out image RMS.
 struct HeldOut {
@@ -143,7 +133,7 @@ void fk_error(const ScanObservations& o, const std::vector<Rigid>& reference, co
 // The image figures; the robot figures are filled in once the final model gives the reference.
 ModelError image_error(const ScanModelFit& all, const HeldOut& h) {
   ModelError e;
-  e.rms_px = image_rms(all);
+  e.rms_px = all.image_rms_px();
   e.heldout_rms_px = h.rms_px;
   return e;
 }

@@ -12,16 +12,6 @@ namespace ctk {
 
 namespace {
 
-double image_rms_px(const ScanModelFit& fit) {
-  double sq = 0;
-  int n = 0;
-  for (std::size_t i = 0; i < fit.image_sq_px.size(); ++i) {
-    sq += fit.image_sq_px[i];
-    n += fit.residual_count[i] / 2;
-  }
-  return n > 0 ? std::sqrt(sq / n) : 0.0;
-}
-
 nlohmann::json xyz(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 }  // namespace
@@ -61,8 +51,8 @@ HolderMeasurement measure_once(const ScanDescription& scan, const Geometry& geom
   say("measuring " + std::to_string(o.setup.holder.spheres_mm.size()) + " sphere centres with " + std::to_string(views.size()) +
       " view poses ...");
   const ScanModelFit fit = fit_scan_model(o, active, views, start, true);
-  m.rms_px_declared = image_rms_px(d.after_fit);
-  m.rms_px_measured = image_rms_px(fit);
+  m.rms_px_declared = d.after_fit.image_rms_px();
+  m.rms_px_measured = fit.image_rms_px();
 
   // Degrees of freedom: every image and prior residual, less the poses, the effects and the
   // centres (3 each, 7 fixed by the gauge).

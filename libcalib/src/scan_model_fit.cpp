@@ -332,6 +332,16 @@ void size_result(ScanModelFit& out, std::size_t n) {
 
 }  // namespace
 
+double ScanModelFit::image_rms_px() const {
+  double sq = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < image_sq_px.size(); ++i) {
+    sq += image_sq_px[i];
+    n += residual_count[i] / 2;
+  }
+  return n > 0 ? std::sqrt(sq / n) : 0.0;
+}
+
 int parameter_count(Effect e, const ScanObservations& o) {
   return e == Effect::sphere_positions ? 3 * static_cast<int>(o.setup.holder.spheres_mm.size()) : block_size(e);
 }

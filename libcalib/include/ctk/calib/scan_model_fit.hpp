@@ -23,6 +23,9 @@ struct ScanModelFit {
   Eigen::MatrixXd covariance;                             // of the active effects' parameters, in fit order (may be empty)
   std::vector<int> covariance_offsets;                    // where each active effect starts in it
   bool converged = false;
+
+  /// Image RMS per sphere (px): the image residuals of every view, 2 per sphere.
+  double image_rms_px() const;
 };
 
 /// Fits the poses of `views` (indices into observations.views) and the parameters of `active`,
