@@ -61,11 +61,26 @@ Primitive shape_from_json(const JsonNode& node) {
     return Primitive::cylinder(centre, node.at("radius_mm").positive_number(), node.at("height_mm").positive_number(), R, mu,
                                label);
   }
+  if (type == "mesh") {
+    // A closed triangle mesh from an STL file beside the phantom file (binary or ASCII), its
+    // coordinates in `scale_mm` millimetres (1: the file is in mm), its origin at center_mm.
+    node.warn_unknown_keys(
+        {"type", "center_mm", "attenuation_per_mm", "label", "material", "rotation_vector_deg", "file", "scale_mm"});
+    const std::string name = node.at("file").string();
+    const double scale = node.has("scale_mm") ? node.at("scale_mm").positive_number() : 1.0;
+    const std::filesystem::path folder = std::filesystem::path(node.file()).parent_path();
+    const std::filesystem::path stl = std::filesystem::path(name).is_absolute() ? std::filesystem::path(name) : folder / name;
+    Primitive p =
+        Primitive::from_mesh(std::make_shared<const TriangleMesh>(TriangleMesh::read_stl(stl, scale)), centre, R, mu, label);
+    p.mesh_file = name;
+    p.mesh_scale_mm = scale;
+    return p;
+  }
   if (type == "box") {
     node.warn_unknown_keys({"type", "center_mm", "attenuation_per_mm", "label", "material", "rotation_vector_deg", "size_mm"});
     return Primitive::box(centre, positive3("size_mm"), R, mu, label);
   }
-  node.at("type").fail("expected \"sphere\", \"ellipsoid\", \"cylinder\" or \"box\", got \"" + type + "\"");
+  node.at("type").fail("expected \"sphere\", \"ellipsoid\", \"cylinder\", \"box\" or \"mesh\", got \"" + type + "\"");
 }
 
 Primitive primitive_from_json(const JsonNode& node) {
@@ -101,6 +116,10 @@ nlohmann::json primitive_to_json(const Primitive& p) {
       break;
     case Shape::box:
       j["size_mm"] = {2 * h.x(), 2 * h.y(), 2 * h.z()};
+      break;
+    case Shape::mesh:
+      j["file"] = p.mesh_file;
+      j["scale_mm"] = p.mesh_scale_mm;
       break;
   }
   if (p.shape != Shape::sphere) {

@@ -17,6 +17,8 @@ const char* to_string(Shape shape) {
       return "cylinder";
     case Shape::box:
       return "box";
+    case Shape::mesh:
+      return "mesh";
   }
   return "?";
 }
@@ -27,22 +29,45 @@ Primitive Primitive::sphere(const Eigen::Vector3d& centre, double radius, double
           make_rigid(Eigen::Matrix3d::Identity(), centre),
           mu,
           std::move(label),
-          {}};
+          {},
+          nullptr,
+          {},
+          1.0};
 }
 
 Primitive Primitive::ellipsoid(const Eigen::Vector3d& centre, const Eigen::Vector3d& radii, const Eigen::Matrix3d& R, double mu,
                                std::string label) {
-  return {Shape::ellipsoid, radii, make_rigid(R, centre), mu, std::move(label), {}};
+  return {Shape::ellipsoid, radii, make_rigid(R, centre), mu, std::move(label), {}, nullptr, {}, 1.0};
 }
 
 Primitive Primitive::cylinder(const Eigen::Vector3d& centre, double radius, double height, const Eigen::Matrix3d& R, double mu,
                               std::string label) {
-  return {Shape::cylinder, Eigen::Vector3d(radius, radius, 0.5 * height), make_rigid(R, centre), mu, std::move(label), {}};
+  return {Shape::cylinder,
+          Eigen::Vector3d(radius, radius, 0.5 * height),
+          make_rigid(R, centre),
+          mu,
+          std::move(label),
+          {},
+          nullptr,
+          {},
+          1.0};
 }
 
 Primitive Primitive::box(const Eigen::Vector3d& centre, const Eigen::Vector3d& size, const Eigen::Matrix3d& R, double mu,
                          std::string label) {
-  return {Shape::box, 0.5 * size, make_rigid(R, centre), mu, std::move(label), {}};
+  return {Shape::box, 0.5 * size, make_rigid(R, centre), mu, std::move(label), {}, nullptr, {}, 1.0};
+}
+
+Primitive Primitive::from_mesh(std::shared_ptr<const TriangleMesh> mesh, const Eigen::Vector3d& origin, const Eigen::Matrix3d& R,
+                               double mu, std::string label) {
+  Primitive p;
+  p.shape = Shape::mesh;
+  p.half_size_mm = 0.5 * mesh->bounds().sizes();
+  p.pose = make_rigid(R, origin);
+  p.attenuation_per_mm = mu;
+  p.label = std::move(label);
+  p.mesh = std::move(mesh);
+  return p;
 }
 
 namespace {
@@ -75,6 +100,8 @@ bool clip_to_unit_ball(const Eigen::Vector3d& p, const Eigen::Vector3d& d, int n
 }  // namespace
 
 double Primitive::chord_mm(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const {
+  if (shape == Shape::mesh)
+    return mesh->chord_mm(pose.linear().transpose() * (origin - pose.translation()), pose.linear().transpose() * direction);
   // Map the ray into the unit shape's coordinates; the ray parameter t (mm along the unit
   // direction) is unchanged by the affine map, so the chord is t1 - t0.
   const Eigen::Matrix3d& R = pose.linear();
@@ -93,11 +120,14 @@ double Primitive::chord_mm(const Eigen::Vector3d& origin, const Eigen::Vector3d&
     case Shape::box:
       hit = clip_to_slab(p.x(), d.x(), t0, t1) && clip_to_slab(p.y(), d.y(), t0, t1) && clip_to_slab(p.z(), d.z(), t0, t1);
       break;
+    case Shape::mesh:
+      break;  // above
   }
   return hit ? t1 - t0 : 0.0;
 }
 
 bool Primitive::contains(const Eigen::Vector3d& point) const {
+  if (shape == Shape::mesh) return mesh->contains(pose.linear().transpose() * (point - pose.translation()));
   const Eigen::Vector3d p = (pose.linear().transpose() * (point - pose.translation())).cwiseQuotient(half_size_mm);
   switch (shape) {
     case Shape::sphere:
@@ -107,6 +137,8 @@ bool Primitive::contains(const Eigen::Vector3d& point) const {
       return p.head<2>().squaredNorm() <= 1 && std::abs(p.z()) <= 1;
     case Shape::box:
       return p.cwiseAbs().maxCoeff() <= 1;
+    case Shape::mesh:
+      break;  // above
   }
   return false;
 }
@@ -115,7 +147,8 @@ std::array<Eigen::Vector3d, 8> Primitive::bounding_corners() const {
   std::array<Eigen::Vector3d, 8> corners;
   for (int i = 0; i < 8; ++i) {
     const Eigen::Vector3d sign(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1);
-    corners[static_cast<std::size_t>(i)] = pose * sign.cwiseProduct(half_size_mm);
+    const Eigen::Vector3d centre = mesh ? Eigen::Vector3d(mesh->bounds().center()) : Eigen::Vector3d::Zero();
+    corners[static_cast<std::size_t>(i)] = pose * (centre + sign.cwiseProduct(half_size_mm));
   }
   return corners;
 }

@@ -257,12 +257,11 @@ py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& g
 }
 
 py::dict simulate(const fs::path& out, const std::vector<std::string>& phantoms, const std::string& holder,
-                  const std::string& trajectory, int views,
-                  int nside, const std::array<double, 2>& cap_deg, const std::optional<fs::path>& poses,
-                  const std::array<int, 2>& detector_shape, double pitch_mm, double sdd_mm, double sod_mm, int supersampling,
-                  const std::string& output, double flat_counts, double dark_counts, const std::optional<double>& kvp,
-                  double filter_al_mm, double robot_noise_mm, double robot_noise_deg, std::uint64_t seed,
-                  const py::object& effects, const py::object& progress, const py::object& log) {
+                  const std::string& trajectory, int views, int nside, const std::array<double, 2>& cap_deg,
+                  const std::optional<fs::path>& poses, const std::array<int, 2>& detector_shape, double pitch_mm, double sdd_mm,
+                  double sod_mm, int supersampling, const std::string& output, double flat_counts, double dark_counts,
+                  const std::optional<double>& kvp, double filter_al_mm, double robot_noise_mm, double robot_noise_deg,
+                  std::uint64_t seed, const py::object& effects, const py::object& progress, const py::object& log) {
   if (output != "counts" && output != "line-integrals")
     throw py::value_error("output must be 'counts' or 'line-integrals', not '" + output + "'");
   SimulationRequest r;
@@ -338,8 +337,8 @@ A Nikon (X-Tek) scan, its .xtekct file and the <Name>_NNNN.tif projections besid
 ctk-scan/1 file `out`, as `ctk import nikon` makes it (the white level and a zero dark written as
 images beside it). Returns the scan as read back; keys read and not modelled are warned about.
 )doc");
-  m.def("_simulate", &simulate, py::arg("out"), py::arg("phantoms"), py::arg("holder"), py::arg("trajectory"), py::arg("views"), py::arg("nside"),
-        py::arg("cap_deg"), py::arg("poses"), py::arg("detector_shape"), py::arg("pitch_mm"), py::arg("sdd_mm"),
+  m.def("_simulate", &simulate, py::arg("out"), py::arg("phantoms"), py::arg("holder"), py::arg("trajectory"), py::arg("views"),
+        py::arg("nside"), py::arg("cap_deg"), py::arg("poses"), py::arg("detector_shape"), py::arg("pitch_mm"), py::arg("sdd_mm"),
         py::arg("sod_mm"), py::arg("supersampling"), py::arg("output"), py::arg("flat_counts"), py::arg("dark_counts"),
         py::arg("kvp"), py::arg("filter_al_mm"), py::arg("robot_noise_mm"), py::arg("robot_noise_deg"), py::arg("seed"),
         py::arg("effects"), py::arg("progress"), py::arg("log"));
