@@ -9,6 +9,7 @@
 #include "ctk/core/output_set.hpp"
 #include "ctk/geom/holder_file.hpp"
 #include "ctk/geom/run_files.hpp"
+#include "interruption.hpp"
 #include "option_checks.hpp"
 #include "progress.hpp"
 
@@ -35,8 +36,15 @@ void run_measure(const MeasureOptions& o) {
   if (!scan.holder) throw InputError(o.scan.string(), "holder", "measuring the holder needs its declared spheres (missing)");
   const Geometry geometry = geometry_for_scan(scan, read_geometry(o.geometry));
   Progress progress("detect", "views");
-  const HolderMeasurement m = run_holder_measurement(scan, geometry, o.run, std::ref(progress),
-                                                     [](const std::string& s) { std::cout << s << std::endl; });
+  // Ctrl-C stops the views being matched; nothing is written before the measurement ends.
+  const InterruptionWatch watch(InterruptionWatch::Stop::the_parallel_loops_too);
+  HolderMeasurement m;
+  try {
+    m = run_holder_measurement(scan, geometry, o.run, std::ref(progress),
+                               [](const std::string& s) { std::cout << s << std::endl; });
+  } catch (const Cancelled&) {
+    throw Interrupted("holder measure stopped by Ctrl-C: nothing written");
+  }
   write_text_atomically(o.out, m.holder_file(o.scan.string()).dump(2) + "\n");
   outputs.publish();
   std::cout << "holder file " << o.out.string() << ": declare it in a scan as \"holder\": \"" << o.out.filename().string()

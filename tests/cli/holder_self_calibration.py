@@ -4,10 +4,12 @@ holder, every sphere off by 0.1 mm per axis, 60 random views of 360^2.
 
 Asserts the centres to a fifth of the displacement, the stated uncertainties covering the errors
 at their level, a second scan declaring the measured holder calibrated as well as with the true
-holder (residual and pose error), and clearly better than with the declared one.
+holder (residual and pose error), and clearly better than with the declared one; Ctrl-C half way
+through a measurement is exit 130 with the earlier holder file kept.
 Usage: holder_self_calibration.py CTK SOURCE"""
 
 import json
+import signal
 import subprocess
 import sys
 
@@ -27,6 +29,18 @@ checks = {
     "pose error with the measured holder within 25 % of the true holder's": s["measured"]["grid_error_rms_px"] < 1.25 * s["true"]["grid_error_rms_px"],
     "pose error with the measured holder below 80 % of the declared one's": s["measured"]["grid_error_rms_px"] < 0.8 * s["declared"]["grid_error_rms_px"],
 }
+# Ctrl-C half way: exit 130, the earlier holder file as it was.
+case = "holder-self-calibration/reference-0.1-1"
+before = open(f"{case}/holder.json").read()
+run = subprocess.Popen([ctk, "holder", "measure", "--scan", f"{case}/a/scan.json", "--geometry", f"{case}/a-cal.json", "--out",
+                        f"{case}/holder.json"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+for line in run.stdout:
+    if "round 1" in line:
+        run.send_signal(signal.SIGINT)
+        break
+rest = run.stdout.read()
+checks["Ctrl-C half way: exit 130, saying so"] = run.wait(timeout=60) == 130 and "stopped by Ctrl-C" in rest
+checks["Ctrl-C half way: the earlier holder file kept"] = open(f"{case}/holder.json").read() == before
 for what, ok in checks.items():
     print(("ok   " if ok else "FAIL ") + what)
 print(json.dumps({k: c[k] for k in ("error_rms_mm", "error_fraction_of_offset", "normalised_error_rms", "coverage_1.96")}), json.dumps(s))
