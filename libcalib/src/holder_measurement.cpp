@@ -23,40 +23,73 @@ void HolderMeasurementOptions::validate() const {
 
 namespace {
 
-// One pass: the scan's views matched to `scan`'s holder, the diagnosis, then every centre.
-HolderMeasurement measure_once(const ScanDescription& scan, const Geometry& geometry, const HolderMeasurementOptions& options,
-                               const std::function<void(int, int)>& progress,
-                               const std::function<void(const std::string&)>& log) {
-  const auto say = [&](const std::string& line) {
-    if (log && !line.empty()) log(line);
-  };
-  HolderMeasurement m;
-  m.diagnosis = run_diagnosis(scan, geometry, options.diagnosis, progress, log);
-  const ScanObservations& o = m.diagnosis.observations;
+// One pass: the scan's views matched to `scan`'s holder, the diagnosis, then every centre fitted
+// with every view's pose and the effects the diagnosis put in the model.
+struct CentresFit {
+  DiagnosisRun diagnosis;
+  std::vector<Effect> fitted_with;  // the diagnosis' effects, refitted beside the centres
+  std::vector<Effect> active;       // those and sphere_positions, in fit order
+  EffectParameters start;
+  ScanModelFit fit;
+};
+
+CentresFit fit_centres(const ScanDescription& scan, const Geometry& geometry, const HolderMeasurementOptions& options,
+                       bool with_covariance, const std::function<void(int, int)>& progress,
+                       const std::function<void(const std::string&)>& log) {
+  CentresFit c;
+  c.diagnosis = run_diagnosis(scan, geometry, options.diagnosis, progress, log);
+  const ScanObservations& o = c.diagnosis.observations;
   if (static_cast<int>(o.views.size()) < options.min_views)
     throw InputError(geometry.source(), "views",
                      std::to_string(o.views.size()) + " calibrated views; measuring a holder needs at least " +
                          std::to_string(options.min_views) + " from well-spread directions (a spherical or random trajectory)");
-  const Diagnosis& d = m.diagnosis.diagnosis;
-  // The effects the diagnosis put in the model stay in it and are refitted beside every centre.
+  const Diagnosis& d = c.diagnosis.diagnosis;
   for (Effect e : d.accepted)
-    if (e != Effect::sphere_positions) m.fitted_with.push_back(e);
-  for (const EffectFinding& f : d.outside) m.fitted_with.push_back(f.effect);
-  std::vector<Effect> active = m.fitted_with;
-  active.push_back(Effect::sphere_positions);
-  EffectParameters start = d.model;
-  start.free_spheres.clear();  // every centre, the declared list's gauge
+    if (e != Effect::sphere_positions) c.fitted_with.push_back(e);
+  for (const EffectFinding& f : d.outside) c.fitted_with.push_back(f.effect);
+  c.active = c.fitted_with;
+  c.active.push_back(Effect::sphere_positions);
+  c.start = d.model;
+  c.start.free_spheres.clear();  // every centre, the declared list's gauge
   std::vector<std::size_t> views(o.views.size());
   std::iota(views.begin(), views.end(), std::size_t{0});
-  say("measuring " + std::to_string(o.setup.holder.spheres_mm.size()) + " sphere centres with " + std::to_string(views.size()) +
-      " view poses ...");
-  const ScanModelFit fit = fit_scan_model(o, active, views, start, true);
-  m.rms_px_declared = d.after_fit.image_rms_px();
+  if (log)
+    log("measuring " + std::to_string(o.setup.holder.spheres_mm.size()) + " sphere centres with " + std::to_string(views.size()) +
+        " view poses ...");
+  c.fit = fit_scan_model(o, c.active, views, c.start, with_covariance);
+  return c;
+}
+
+}  // namespace
+
+HolderMeasurement run_holder_measurement(const ScanDescription& scan, const Geometry& geometry,
+                                         const HolderMeasurementOptions& options, const std::function<void(int, int)>& progress,
+                                         const std::function<void(const std::string&)>& log) {
+  options.validate();
+  // Matched to the declared holder, a view drops the spheres whose error it sees largest as
+  // outliers, and so the first pass underestimates the errors it measures; the second pass
+  // matches every view to the first pass's holder, whose residuals are the detection noise.
+  const CentresFit first = fit_centres(scan, geometry, options, false, progress, log);
+  ScanDescription again = scan;
+  for (std::size_t k = 0; k < again.holder->spheres_mm.size(); ++k)
+    again.holder->spheres_mm[k] += first.fit.parameters.spheres[k];
+  if (log) log("first pass done; matching the views to its centres again");
+  CentresFit second = fit_centres(again, geometry, options, true, progress, log);
+  const ScanObservations& o = second.diagnosis.observations;
+  const ScanModelFit& fit = second.fit;
+
+  HolderMeasurement m;
+  m.fitted_with = second.fitted_with;
+  m.declared = *scan.holder;
+  m.measured = *again.holder;
+  m.rms_px_declared = first.diagnosis.diagnosis.before_fit.image_rms_px();
   m.rms_px_measured = fit.image_rms_px();
 
   // Degrees of freedom: every image and prior residual, less the poses, the effects and the
-  // centres (3 each, 7 fixed by the gauge).
-  const std::size_t spheres = o.setup.holder.spheres_mm.size();
+  // centres (3 each, 7 fixed by the gauge). The detection noise was measured on the declared
+  // holder's residuals, which carry the holder's own error; the joint fit's chi-square per
+  // degree of freedom says what the noise really was.
+  const std::size_t spheres = m.declared.spheres_mm.size();
   int residuals = 0;
   for (int r : fit.residual_count) residuals += r;
   int parameters = 3 * static_cast<int>(spheres) - 7;
@@ -64,29 +97,21 @@ HolderMeasurement measure_once(const ScanDescription& scan, const Geometry& geom
   const double chi2 = std::accumulate(fit.cost.begin(), fit.cost.end(), 0.0);
   const int dof = residuals - parameters;
   m.variance_factor = dof > 0 ? chi2 / dof : 1.0;
-  // The detection noise was measured on the declared holder's residuals, which carry the holder's
-  // own error; the joint fit's chi-square per degree of freedom says what the noise really was.
-  const double scale = m.variance_factor;
 
   // The same measurement from the even and the odd views: where their difference exceeds what
   // their covariances predict, the centres carry errors that are not the detection noise (a
   // centre's bias that changes with the direction it is seen from), and the stated uncertainty
   // grows by that factor.
   std::vector<std::size_t> halves[2];
-  for (std::size_t i = 0; i < views.size(); ++i) halves[i % 2].push_back(i);
-  const ScanModelFit even = fit_scan_model(o, active, halves[0], start, true);
-  const ScanModelFit odd = fit_scan_model(o, active, halves[1], start, true);
-
-  m.declared = o.setup.holder;
-  m.measured = o.setup.holder;
-  m.views_per_sphere.assign(spheres, 0);
-  for (const ViewObservations& v : o.views)
-    for (int k : v.spheres) ++m.views_per_sphere[static_cast<std::size_t>(k)];
-  const auto slot = static_cast<std::size_t>(std::find(active.begin(), active.end(), Effect::sphere_positions) - active.begin());
+  for (std::size_t i = 0; i < o.views.size(); ++i) halves[i % 2].push_back(i);
+  const ScanModelFit even = fit_scan_model(o, second.active, halves[0], second.start, true);
+  const ScanModelFit odd = fit_scan_model(o, second.active, halves[1], second.start, true);
+  const auto slot = static_cast<std::size_t>(std::find(second.active.begin(), second.active.end(), Effect::sphere_positions) -
+                                             second.active.begin());
   const auto variance = [&](const ScanModelFit& f, std::size_t k) {
     if (f.covariance.size() == 0) return Eigen::Vector3d(Eigen::Vector3d::Constant(std::nan("")));
     const auto at = static_cast<Eigen::Index>(f.covariance_offsets[slot] + 3 * static_cast<int>(k));
-    return Eigen::Vector3d(scale * f.covariance.block(at, at, 3, 3).diagonal().cwiseMax(0.0));
+    return Eigen::Vector3d(m.variance_factor * f.covariance.block(at, at, 3, 3).diagonal().cwiseMax(0.0));
   };
   double z2 = 0;
   int compared = 0;
@@ -101,31 +126,16 @@ HolderMeasurement measure_once(const ScanDescription& scan, const Geometry& geom
   }
   m.halves_factor = compared > 0 ? std::sqrt(z2 / compared) : std::nan("");
   const double inflate = std::isfinite(m.halves_factor) ? std::max(1.0, m.halves_factor) : 1.0;
+
+  m.views_per_sphere.assign(spheres, 0);
+  for (const ViewObservations& v : o.views)
+    for (int k : v.spheres) ++m.views_per_sphere[static_cast<std::size_t>(k)];
   for (std::size_t k = 0; k < spheres; ++k) {
-    m.measured.spheres_mm[k] = o.setup.holder.spheres_mm[k] + fit.parameters.spheres[k];
+    m.measured.spheres_mm[k] += fit.parameters.spheres[k];
     m.sigma_mm.push_back(inflate * variance(fit, k).cwiseSqrt());
   }
-  return m;
-}
-
-}  // namespace
-
-HolderMeasurement run_holder_measurement(const ScanDescription& scan, const Geometry& geometry,
-                                         const HolderMeasurementOptions& options, const std::function<void(int, int)>& progress,
-                                         const std::function<void(const std::string&)>& log) {
-  options.validate();
-  if (!scan.holder) throw InputError(scan.folder.string(), "holder", "measuring the holder needs its declared spheres (missing)");
-  // Matched to the declared holder, a view drops the spheres whose error it sees largest as
-  // outliers, and so the first pass underestimates the errors it measures; the second pass
-  // matches every view to the first pass's holder, whose residuals are the detection noise.
-  const HolderMeasurement first = measure_once(scan, geometry, options, progress, log);
-  if (log) log("first pass: " + first.brief().substr(0, first.brief().find('\n')) + "; matching the views to it again");
-  ScanDescription again = scan;
-  again.holder->spheres_mm = first.measured.spheres_mm;
-  HolderMeasurement m = measure_once(again, geometry, options, progress, log);
-  m.declared = *scan.holder;
-  m.rms_px_declared = first.rms_px_declared;
   m.helix = fit_helix(m.measured.spheres_mm, m.declared.helix);
+  m.diagnosis = std::move(second.diagnosis);
   if (log) log(m.brief());
   return m;
 }

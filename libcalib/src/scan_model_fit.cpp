@@ -403,14 +403,15 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
   options.max_num_iterations = 50;
   options.function_tolerance = 1e-10;
   if (spheres_free && !sphere_subset) {
-    // Every centre free: over so many directions the minimum is flat, and the cost stops changing
-    // (1e-10) while the centres still move by micrometres, differently from run to run as the
-    // threads sum in another order; held to their own convergence instead.
+    // Every centre free: the minimum is flat, and the cost stops changing (1e-10) while the
+    // centres still move by micrometres; held to their own convergence instead.
     options.function_tolerance = 1e-16;
     options.parameter_tolerance = 1e-12;
     options.max_num_iterations = 200;
   }
   options.logging_type = ceres::SILENT;
+  // One thread: two summed the Schur complement in an order that changed from run to run, and a
+  // holder measured twice differed by 1.1 um (its second pass's matches followed).
   options.num_threads = 1;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);

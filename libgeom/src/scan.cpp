@@ -169,7 +169,7 @@ ScanDescription relocated_scan(const ScanDescription& scan, const fs::path& file
     for (std::string& n : *names) move(n);
   if (out.panda) move(out.panda->joints_csv);
   if (out.matrices) move(out.matrices->file);
-  move(out.holder_file);
+  if (out.holder_file) move(out.holder_file->name);
   return out;
 }
 
@@ -267,9 +267,10 @@ ScanDescription scan_from_json(const nlohmann::json& root, const fs::path& file)
   if (auto holder = top.find("holder")) {
     // The holder spelt out, or a ctk-holder/1 file shared by the scans of one holder.
     if (holder->raw().is_string()) {
-      scan.holder_file = holder->string();
-      require_readable(scan, *holder, scan.holder_file);
-      scan.holder = read_holder_file(scan.resolve(scan.holder_file));
+      const std::string name = holder->string();
+      require_readable(scan, *holder, name);
+      scan.holder = read_holder_file(scan.resolve(name));
+      scan.holder_file = ScanDescription::HolderFileReference{name, *scan.holder};
     } else {
       scan.holder = holder_from_json(*holder);
     }
@@ -340,15 +341,11 @@ nlohmann::json scan_to_json(const ScanDescription& scan) {
     j["pose_source"] = {{"kind", "matrices"}, {"file", scan.matrices->file}};
   }
   if (scan.holder) {
-    // A holder still as its file describes it is declared by naming the file; one a workflow
+    // A holder still as its file described it is declared by naming the file; one a workflow
     // changed (a diagnosis moving spheres or measuring the wall) is spelt out.
-    bool as_filed = false;
-    if (!scan.holder_file.empty()) try {
-        as_filed = holder_to_json(read_holder_file(scan.resolve(scan.holder_file))) == holder_to_json(*scan.holder);
-      } catch (const InputError&) {
-        // gone or changed since: spelt out
-      }
-    j["holder"] = as_filed ? nlohmann::json(scan.holder_file) : holder_to_json(*scan.holder);
+    const nlohmann::json spelt = holder_to_json(*scan.holder);
+    const bool as_filed = scan.holder_file && holder_to_json(scan.holder_file->as_filed) == spelt;
+    j["holder"] = as_filed ? nlohmann::json(scan.holder_file->name) : spelt;
   }
   return j;
 }

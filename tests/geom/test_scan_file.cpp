@@ -390,7 +390,8 @@ TEST(ScanFile, HolderFileNamedByTheScan) {
   testing::write_text(file, j.dump(2));
   ScanDescription scan = read_scan(file);
   ASSERT_TRUE(scan.holder);
-  EXPECT_EQ(scan.holder_file, "holders/printed.json");
+  ASSERT_TRUE(scan.holder_file);
+  EXPECT_EQ(scan.holder_file->name, "holders/printed.json");
   EXPECT_EQ(scan.holder->spheres_mm.size(), 50u);
   EXPECT_DOUBLE_EQ(scan.holder->sphere_diameter_mm, 0.678);
   EXPECT_EQ(scan_to_json(scan)["holder"], "holders/printed.json");

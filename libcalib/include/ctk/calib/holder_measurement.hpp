@@ -32,7 +32,7 @@ struct HolderMeasurement {
   Holder declared, measured;              // measured: the declared holder with the measured centres
   std::vector<Eigen::Vector3d> sigma_mm;  // each measured centre's standard deviation per axis
   std::vector<int> views_per_sphere;      // views in which each sphere was matched
-  double rms_px_declared = 0;             // image RMS per sphere of the model before (the diagnosis' final model)
+  double rms_px_declared = 0;             // image RMS per sphere with the declared holder and setup (the diagnosis' baseline)
   double rms_px_measured = 0;             // with every centre measured
   double variance_factor = 1;             // chi-square per degree of freedom of the joint fit (the covariance scaled by it)
   /// RMS of the even and the odd views' centres' difference in units of its stated deviation: above

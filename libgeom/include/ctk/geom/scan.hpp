@@ -54,8 +54,14 @@ struct ScanDescription {
   std::optional<MatricesPoseSource> matrices;
   std::optional<Holder> holder;  // required for calibration, optional otherwise
   /// When `holder` names a ctk-holder/1 file instead of spelling the holder out (an extension of
-  /// ctk-scan/1): that name, as written, resolved against `folder`.
-  std::string holder_file;
+  /// ctk-scan/1): that name, as written (resolved against `folder`), and the holder it gave. While
+  /// `holder` is still that one the scan is written with the name; once a workflow changed it (a
+  /// diagnosis moving spheres), spelt out.
+  struct HolderFileReference {
+    std::string name;
+    Holder as_filed;
+  };
+  std::optional<HolderFileReference> holder_file;
   /// Optional key `detector.radial_distortion` {k1_per_px2, center_px} (an extension of
   /// ctk-scan/1, as the diagnosis reports it): the detector measures x at x + k1 |x - c|^2 (x - c).
   std::optional<RadialDistortion> distortion;
