@@ -10,6 +10,7 @@
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/output_set.hpp"
 #include "ctk/geom/run_files.hpp"
+#include "interruption.hpp"
 #include "option_checks.hpp"
 #include "progress.hpp"
 #include "run_page.hpp"
@@ -43,8 +44,9 @@ void run_diagnose(const DiagnoseOptions& o) {
   const Geometry geometry = geometry_for_scan(scan, read_geometry(o.geometry));
   std::cout << "geometry: " << geometry.description() << "\n";
   Progress progress("detect", "views");
-  const DiagnosisRun run =
-      run_diagnosis(scan, geometry, o.run, std::ref(progress), [](const std::string& s) { std::cout << s << std::endl; });
+  const DiagnosisRun run = stoppable("diagnose stopped by Ctrl-C: nothing written", [&] {
+    return run_diagnosis(scan, geometry, o.run, std::ref(progress), [](const std::string& s) { std::cout << s << std::endl; });
+  });
   const Diagnosis& d = run.diagnosis;
   const ScanObservations& observations = run.observations;
 

@@ -37,14 +37,10 @@ void run_measure(const MeasureOptions& o) {
   const Geometry geometry = geometry_for_scan(scan, read_geometry(o.geometry));
   Progress progress("detect", "views");
   // Ctrl-C stops the views being matched; nothing is written before the measurement ends.
-  const InterruptionWatch watch(InterruptionWatch::Stop::the_parallel_loops_too);
-  HolderMeasurement m;
-  try {
-    m = run_holder_measurement(scan, geometry, o.run, std::ref(progress),
-                               [](const std::string& s) { std::cout << s << std::endl; });
-  } catch (const Cancelled&) {
-    throw Interrupted("holder measure stopped by Ctrl-C: nothing written");
-  }
+  const HolderMeasurement m = stoppable("holder measure stopped by Ctrl-C: nothing written", [&] {
+    return run_holder_measurement(scan, geometry, o.run, std::ref(progress),
+                                  [](const std::string& s) { std::cout << s << std::endl; });
+  });
   write_text_atomically(o.out, m.holder_file(o.scan.string()).dump(2) + "\n");
   outputs.publish();
   std::cout << "holder file " << o.out.string() << ": declare it in a scan as \"holder\": \"" << o.out.filename().string()

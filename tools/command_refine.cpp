@@ -18,6 +18,7 @@
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "ctk/recon/refine_scan.hpp"
+#include "interruption.hpp"
 #include "measurement_report.hpp"
 #include "option_checks.hpp"
 #include "progress.hpp"
@@ -90,7 +91,8 @@ void run_refine(const RefineOptions& o) {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "[" << static_cast<int>(t) << " s] " << line << std::endl;
   };
-  const RefineScanSummary s = refine_scan(scan, geometry, o.options, log, std::ref(reading));
+  const RefineScanSummary s = stoppable("refine stopped by Ctrl-C: nothing written",
+                                        [&] { return refine_scan(scan, geometry, o.options, log, std::ref(reading)); });
   const RefinementResult& r = s.result;
   if (s.clamped_pixels > 0) std::cout << "clamped " << s.clamped_pixels << " pixels\n";
   report_masked_and_left_out(s.masked_pixels, s.left_out);

@@ -5,6 +5,7 @@
 // (cancellation.hpp): they skip what is left and end with Cancelled.
 #include <csignal>
 #include <stdexcept>
+#include <string>
 
 #include "ctk/core/cancellation.hpp"
 
@@ -50,5 +51,20 @@ class InterruptionWatch {
 struct Interrupted : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+/// Runs `work`, a command's computation before it writes anything, so that Ctrl-C or SIGTERM ends
+/// the command with exit 130 and nothing written: the library's parallel loops stop at once, and
+/// a signal that came during a step without such loops (a solve) is honoured when `work` returns.
+template <class Work>
+auto stoppable(const std::string& stopped, Work&& work) {
+  const InterruptionWatch watch(InterruptionWatch::Stop::the_parallel_loops_too);
+  try {
+    auto result = work();
+    if (InterruptionWatch::requested()) throw Cancelled();
+    return result;
+  } catch (const Cancelled&) {
+    throw Interrupted(stopped);
+  }
+}
 
 }  // namespace ctk::tools

@@ -1,7 +1,9 @@
 // ctk: calibration and reconstruction of cone-beam CT scans along arbitrary trajectories.
 #include <malloc.h>
 
+#include <filesystem>
 #include <iostream>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -39,6 +41,16 @@ int fail(int exit_code) {
   return exit_code;
 }
 
+// No option of ctk takes an empty value: `--out ""` would otherwise reach the end of a run as a
+// file system error. Refused at parsing, for every option that takes one.
+void refuse_empty_values(CLI::App& app) {
+  static const CLI::Validator non_empty(
+      [](const std::string& input) -> std::string { return input.empty() ? "expected a value, got an empty string" : ""; }, "",
+      "non-empty");
+  for (CLI::Option* option : app.get_options([](CLI::Option* o) { return o->get_expected_min() > 0; })) option->check(non_empty);
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) refuse_empty_values(*sub);
+}
+
 int run(int argc, char** argv) {
   // Every view passes through a few image-sized buffers (2 MB at 720 x 720). By default glibc maps
   // each from the kernel and unmaps it when freed, so the pages are faulted in and zeroed again
@@ -60,6 +72,7 @@ int run(int argc, char** argv) {
   ctk::tools::register_plan(app);
   ctk::tools::register_reconstruct(app);
   ctk::tools::register_bench(app);
+  refuse_empty_values(app);
   // CLI11 answers a mistyped subcommand ("ctk reconstuct", "ctk import circulr") with "A
   // subcommand is required", which hides the typo: follow the words down the subcommands and
   // name the first that is none of them, with those there are.
@@ -100,7 +113,9 @@ int run(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // CLI11 prints the message (or the help); a malformed command line is bad input like any
     // other, so it exits 2 rather than with CLI11's own codes (105 for a missing file, ...).
-    return app.exit(e) == 0 ? 0 : fail(2);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    std::cerr << ctk::with_long_words_clipped(e.what()) << "\nRun with --help for more information.\n";
+    return fail(2);
   } catch (const ctk::tools::Interrupted& e) {
     std::cerr << "ctk" << rank_prefix << ": " << e.what() << "\n";
     return fail(130);
@@ -111,8 +126,22 @@ int run(int argc, char** argv) {
     // A request refusing a value (every options struct's validate()) is bad input as well.
     std::cerr << "ctk" << rank_prefix << ": input error: " << e.what() << "\n";
     return fail(2);
+  } catch (const std::bad_alloc&) {
+    std::cerr << "ctk" << rank_prefix << ": error: not enough memory for this run (the volume, the views held at once or "
+              << "a size a file declares); the run's plan is printed above when it has one\n";
+    return fail(1);
+  } catch (const std::filesystem::filesystem_error& e) {
+    std::cerr << "ctk" << rank_prefix << ": error: " << e.path1().string()
+              << (e.path2().empty() ? "" : " -> " + e.path2().string()) << ": " << e.code().message() << "\n";
+    return fail(1);
+  } catch (const std::logic_error& e) {
+    // A check inside ctk that failed is ctk's fault, not the input's: say so, and keep the detail
+    // a report needs.
+    std::cerr << "ctk" << rank_prefix << ": internal error (please report it with the command that gave it): " << e.what()
+              << "\n";
+    return fail(1);
   } catch (const std::exception& e) {
-    std::cerr << "ctk" << rank_prefix << ": error: " << e.what() << "\n";
+    std::cerr << "ctk" << rank_prefix << ": error: " << ctk::with_long_words_clipped(e.what()) << "\n";
     return fail(1);
   }
   return 0;

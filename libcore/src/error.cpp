@@ -1,5 +1,6 @@
 #include "ctk/core/error.hpp"
 
+#include <algorithm>
 #include <sstream>
 
 namespace ctk {
@@ -7,7 +8,27 @@ namespace ctk {
 static std::string compose_message(const std::string& file, const std::string& where, const std::string& what) {
   std::string message = file;
   if (!where.empty()) message += ": " + where;
-  return message + ": " + what;
+  return message + ": " + with_long_words_clipped(what);
+}
+
+std::string with_long_words_clipped(const std::string& message) {
+  constexpr std::size_t longest = 160, head = 60, tail = 30;
+  std::string out;
+  std::size_t i = 0;
+  while (i < message.size()) {
+    const std::size_t end = std::min(message.find_first_of(" \t\n", i), message.size());
+    if (end - i > longest) {
+      out.append(message, i, head);
+      out += "...";
+      out.append(message, end - tail, tail);
+      out += " (" + std::to_string(end - i) + " characters)";
+    } else {
+      out.append(message, i, end - i);
+    }
+    if (end < message.size()) out += message[end];
+    i = end + 1;
+  }
+  return out;
 }
 
 std::string json_key(const std::string& path) { return "key '" + path + "'"; }
@@ -19,7 +40,7 @@ void require_option_of(bool ok, const char* field, const char* expected, const V
   if (ok) return;
   std::ostringstream message;
   message << field << ": expected " << expected << ", got " << value;
-  throw std::invalid_argument(message.str());
+  throw std::invalid_argument(with_long_words_clipped(message.str()));
 }
 
 }  // namespace

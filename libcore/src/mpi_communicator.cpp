@@ -26,7 +26,7 @@ constexpr std::size_t kPiece = std::size_t{1} << 28;
 // An exchange's counts and offsets are ints in MPI: beyond them the exchange is refused by name.
 int checked_count(std::size_t n) {
   if (n > static_cast<std::size_t>(std::numeric_limits<int>::max()))
-    throw std::length_error("an exchange between MPI ranks of more than 2^31 values (use more ranks)");
+    throw std::runtime_error("an exchange between MPI ranks of more than 2^31 values (use more ranks)");
   return static_cast<int>(n);
 }
 

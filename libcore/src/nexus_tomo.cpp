@@ -55,6 +55,9 @@ std::string outside_storage(hid_t dataset) {
 // character set (HDF5 converts no string between ASCII and UTF-8, so a UTF-8 `definition` read as
 // ASCII was "no NXtomo entry") and one byte more than the file's size (a null-padded "mm" read
 // into two null-terminated bytes lost its last character: a unit of "m").
+// NXtomo's strings are names and units; a fixed size beyond this is a damaged or hostile file.
+constexpr std::size_t kLongestString = 1 << 16;
+
 std::optional<std::string> read_string(hid_t object, bool attribute) {
   const Handle type(attribute ? H5Aget_type(object) : H5Dget_type(object), H5Tclose);
   if (!type.valid() || H5Tget_class(type.get()) != H5T_STRING) return std::nullopt;
@@ -76,6 +79,7 @@ std::optional<std::string> read_string(hid_t object, bool attribute) {
     if (status < 0) return std::nullopt;
   } else {
     const std::size_t size = H5Tget_size(type.get());
+    if (size == 0 || size > kLongestString) return std::nullopt;  // a declared size, not what the file holds
     std::string buffer(size + 1, '\0');
     H5Tset_size(memory.get(), size + 1);
     H5Tset_strpad(memory.get(), H5T_STR_NULLTERM);
@@ -131,14 +135,19 @@ class Reader {
   std::optional<std::string> string(const std::string& path) const { return read_string(dataset(path).get(), false); }
 
   // A one-dimensional numeric dataset (a scalar counts as one value) and its `units` attribute.
-  std::vector<double> numbers(const std::string& path, std::string* units = nullptr) const {
+  // More than `most` values are refused before any is read: a small file may declare any count.
+  std::vector<double> numbers(const std::string& path, std::size_t most, std::string* units = nullptr) const {
     const Handle d = dataset(path);
     const Handle type(H5Dget_type(d.get()), H5Tclose);
     const H5T_class_t c = H5Tget_class(type.get());
     if (c != H5T_INTEGER && c != H5T_FLOAT) fail(path, "expected numbers");
     const Handle space(H5Dget_space(d.get()), H5Sclose);
     if (H5Sget_simple_extent_ndims(space.get()) > 1) fail(path, "expected one value per frame (one dimension)");
-    std::vector<double> v(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get())));
+    const hssize_t count = H5Sget_simple_extent_npoints(space.get());
+    if (count < 0) fail(path, "cannot read its size");
+    if (static_cast<std::size_t>(count) > most)
+      fail(path, "declares " + std::to_string(count) + " values; expected at most " + std::to_string(most));
+    std::vector<double> v(static_cast<std::size_t>(count));
     if (!v.empty() && H5Dread(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) < 0)
       fail(path, "cannot read its values");
     for (double x : v)
@@ -206,7 +215,7 @@ std::string find_entry(const Reader& r, const fs::path& file) {
 std::optional<double> length_mm(const Reader& r, const std::string& path, NxTomo& scan) {
   if (!r.has(path)) return std::nullopt;
   std::string units;
-  const std::vector<double> v = r.numbers(path, &units);
+  const std::vector<double> v = r.numbers(path, 1, &units);
   if (v.size() != 1) r.fail(path, "expected one value, got " + std::to_string(v.size()));
   const double scale = mm_per(units);
   if (scale == 0) {
@@ -293,7 +302,7 @@ NxTomo read_nxtomo(const fs::path& file, const std::string& entry_name) {
 
   const std::string key_path = detector + "/image_key";
   if (r.has(key_path)) {
-    for (double k : r.numbers(key_path)) {
+    for (double k : r.numbers(key_path, frames)) {
       if (k != 0 && k != 1 && k != 2 && k != 3)
         r.fail(key_path, "expected 0 (projection), 1 (flat), 2 (dark) or 3 (invalid), got " + std::to_string(k));
       scan.kind.push_back(static_cast<NxFrameKind>(static_cast<int>(k)));
@@ -310,7 +319,7 @@ NxTomo read_nxtomo(const fs::path& file, const std::string& entry_name) {
   if (!r.has(angle_path))
     r.fail(scan.entry + "/sample/rotation_angle", "missing: NXtomo gives each frame's rotation angle there");
   std::string units;
-  scan.rotation_angle_deg = r.numbers(angle_path, &units);
+  scan.rotation_angle_deg = r.numbers(angle_path, frames, &units);
   if (scan.rotation_angle_deg.size() != frames)
     r.fail(angle_path, std::to_string(scan.rotation_angle_deg.size()) + " angles for " + std::to_string(frames) + " frames");
   if (units == "rad" || units == "radian" || units == "radians") {

@@ -77,13 +77,18 @@ const std::string& this_run_id() {
 fs::path temporary_beside(const fs::path& path) {
   static std::atomic<unsigned> counter{0};
   // Appended piece by piece: GCC 12 misreads "." + std::string as an overlapping copy (-Wrestrict).
+  std::string tail = ".";
+  tail += this_run_id();
+  tail += "-";
+  tail += std::to_string(counter++);
+  // A file system takes names of up to NAME_MAX (255) bytes: the stem gives way to the run's id,
+  // so that an output of a legal name always has a legal temporary beside it.
+  const std::string stem = path.stem().string(), extension = path.extension().string();
+  const std::size_t room = 255 - std::min<std::size_t>(255, 1 + tail.size() + extension.size());
   std::string name = ".";
-  name += path.stem().string();
-  name += ".";
-  name += this_run_id();
-  name += "-";
-  name += std::to_string(counter++);
-  name += path.extension().string();
+  name += stem.substr(0, room);
+  name += tail;
+  name += extension;
   fs::path tmp = path;
   tmp.replace_filename(name);
   return tmp;

@@ -62,6 +62,7 @@ std::vector<ConeVec> read_cone_vecs(const std::filesystem::path& file) {
     if (ss >> extra) throw InputError(file.string(), "line " + std::to_string(line_number), "more than 12 numbers");
     out.push_back(v);
   }
+  if (out.empty()) throw InputError(file.string(), "", "no rows of 12 numbers (an empty cone_vec file)");
   return out;
 }
 

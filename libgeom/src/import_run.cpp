@@ -253,7 +253,15 @@ ImportRun run_import(const CircularImportRequest& r) {
   orbit.source_to_detector_mm = r.sdd_mm;
   orbit.sense = r.sense;
   for (int k = 0; k < projections.count; ++k) orbit.angles_rad.push_back((r.first_angle_deg + k * r.step_deg) * M_PI / 180.0);
-  return finish(import_matrices(orbit.detector, circular_matrices(orbit), projections, r.out), r, request, std::move(notes));
+  std::vector<ProjectionMatrix> matrices;
+  try {
+    matrices = circular_matrices(orbit);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(text(r.name(request, "pitch_mm"), ", ", r.name(request, "sod_mm"), ", ",
+                                     r.name(request, "sdd_mm"), ", ", r.name(request, "principal_point_px"), ", ",
+                                     r.name(request, "step_deg"), ": ", e.what()));
+  }
+  return finish(import_matrices(orbit.detector, matrices, projections, r.out), r, request, std::move(notes));
 }
 
 ImportRun run_import(const ConeVecImportRequest& r) {
@@ -300,8 +308,15 @@ ImportRun run_import(const RtkImportRequest& r) {
     throw InputError(r.geometry.string(), "", text(g.views.size(), " projections for ", projections.count, " files"));
   const RtkRows rows = r.rows.value_or(g.pixel_map());
   const Detector detector = described_detector(r, projections, request, r.pitch_mm.front(), r.pitch_mm.back(), notes);
-  // The reader refused what from_rtk cannot take.
-  const std::vector<ProjectionMatrix> matrices = holder_matrices(g, detector, rows);
+  // The reader refused what from_rtk cannot take, but not every pitch a caller may give.
+  std::vector<ProjectionMatrix> matrices;
+  try {
+    matrices = holder_matrices(g, detector, rows);
+  } catch (const std::invalid_argument&) {
+    throw InputError(r.geometry.string(), "",
+                     text("with ", r.name(request, "pitch_mm"), " ", detector.pitch_u_mm, " x ", detector.pitch_v_mm,
+                          " mm its projections describe no cone-beam projection (a pitch in the wrong unit?)"));
+  }
   notes.push_back(text("pixel map ", to_string(rows), !r.rows && g.rows ? " (named by the file)" : ""));
   if (g.holder_z_on_rtk_y) notes.push_back("volume frame: written by ctk with the holder's z on RTK's y, turned back");
   return finish(import_matrices(detector, matrices, projections, r.out), r, request, std::move(notes),

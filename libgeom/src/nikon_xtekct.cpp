@@ -159,7 +159,13 @@ std::vector<ProjectionMatrix> nikon_matrices(const NikonScan& s, int sense) {
     const Eigen::Matrix3d to_volume = (axis_frame * about(Eigen::Vector3d::UnitZ(), angle)).transpose();
     const Eigen::Vector3d src = to_volume * (source - axis_point), det = to_volume * (detector_centre - axis_point),
                           u = to_volume * column_step, v = to_volume * row_step;
-    out.push_back(from_cone_vec(make_cone_vec(src, det, u, v), s.detector));
+    try {
+      out.push_back(from_cone_vec(make_cone_vec(src, det, u, v), s.detector));
+    } catch (const std::invalid_argument&) {
+      throw InputError(s.file.string(), "projection " + std::to_string(k),
+                       "its angle, distances, axis offset and pixel size describe no cone-beam projection (a number too large "
+                       "or in the wrong unit?)");
+    }
   }
   return out;
 }

@@ -80,6 +80,17 @@ NxTomoPlan plan_nxtomo_import(const NxTomo& scan, const NxTomoSetup& setup) {
 
 ImportedScan import_nxtomo(const NxTomo& scan, const NxTomoPlan& plan, const fs::path& scan_file,
                            const std::function<void(int, int)>& progress) {
+  // The matrices before any frame is copied: numbers that describe no projection are refused first.
+  std::vector<ProjectionMatrix> matrices;
+  try {
+    matrices = circular_matrices(plan.orbit);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(scan.file.string(),
+                     "entry '" + scan.entry +
+                         "' (instrument/detector/x_pixel_size, y_pixel_size and distance, instrument/source/distance, or the "
+                         "values given for them)",
+                     e.what());
+  }
   const fs::path folder = fs::absolute(scan_file).parent_path() / (fs::path(scan_file).stem().string() + ".frames");
   const int total = static_cast<int>(plan.projections.size() + plan.flats.size() + plan.darks.size());
   int written = 0;
@@ -129,7 +140,7 @@ ImportedScan import_nxtomo(const NxTomo& scan, const NxTomoPlan& plan, const fs:
     }
   }
   staged.commit();
-  ImportedScan imported = import_matrices(plan.orbit.detector, circular_matrices(plan.orbit), set, scan_file);
+  ImportedScan imported = import_matrices(plan.orbit.detector, matrices, set, scan_file);
   imported.scan.written_by_run = this_run_id();
   return imported;
 }

@@ -1,7 +1,9 @@
 #include "ctk/geom/scan_import.hpp"
 
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "ctk/core/atomic_write.hpp"
 
@@ -15,12 +17,19 @@ std::vector<ConeVec> circular_cone_vecs(const CircularOrbit& orbit) {
   if (orbit.angles_rad.empty()) throw std::invalid_argument("circular orbit: no angles");
   if (orbit.sense != 1 && orbit.sense != -1) throw std::invalid_argument("circular orbit: the sense must be +1 or -1");
   const Detector& det = orbit.detector;
+  if (!(det.pitch_u_mm > 0 && det.pitch_v_mm > 0 && std::isfinite(det.pitch_u_mm) && std::isfinite(det.pitch_v_mm)))
+    throw std::invalid_argument("circular orbit: the pixel pitch must be finite and above 0");
+  if (!orbit.principal_point_px.allFinite() || !std::isfinite(sdd))
+    throw std::invalid_argument("circular orbit: the principal point and the distances must be finite");
   // The principal point's offset from the detector's centre, in mm along columns and rows.
   const Eigen::Vector2d offset_mm =
       (det.centre_px() - orbit.principal_point_px).cwiseProduct(Eigen::Vector2d(det.pitch_u_mm, det.pitch_v_mm));
   std::vector<ConeVec> vecs;
-  for (double angle : orbit.angles_rad) {
-    const double t = orbit.sense * angle;
+  for (std::size_t k = 0; k < orbit.angles_rad.size(); ++k) {
+    const double t = orbit.sense * orbit.angles_rad[k];
+    if (!std::isfinite(t))
+      throw std::invalid_argument("circular orbit: view " + std::to_string(k) +
+                                  "'s angle is not finite (first + k step overflows)");
     const Eigen::Vector3d towards_source(std::sin(t), std::cos(t), 0.0);
     const Eigen::Vector3d e_u(std::cos(t), -std::sin(t), 0.0), e_v(0, 0, -1);
     const Eigen::Vector3d s = sod * towards_source;
@@ -33,7 +42,22 @@ std::vector<ConeVec> circular_cone_vecs(const CircularOrbit& orbit) {
 
 std::vector<ProjectionMatrix> circular_matrices(const CircularOrbit& orbit) {
   std::vector<ProjectionMatrix> out;
-  for (const ConeVec& v : circular_cone_vecs(orbit)) out.push_back(from_cone_vec(v, orbit.detector));
+  for (const ConeVec& v : circular_cone_vecs(orbit)) {
+    try {
+      out.push_back(from_cone_vec(v, orbit.detector));
+    } catch (const std::invalid_argument&) {
+      // Finite numbers, yet no matrix: the focal length in pixels is negligible (or beyond double
+      // precision) against the principal point, i.e. a pitch or distance in the wrong unit.
+      const Detector& det = orbit.detector;
+      std::ostringstream what;
+      what << "circular orbit: a focal length of " << orbit.source_to_detector_mm / det.pitch_u_mm << " x "
+           << orbit.source_to_detector_mm / det.pitch_v_mm << " px (SDD " << orbit.source_to_detector_mm << " mm over pitch "
+           << det.pitch_u_mm << " x " << det.pitch_v_mm << " mm) with the principal point at (" << orbit.principal_point_px.x()
+           << ", " << orbit.principal_point_px.y()
+           << ") px describes no cone-beam projection: are the pitch and distances in mm?";
+      throw std::invalid_argument(what.str());
+    }
+  }
   return out;
 }
 

@@ -4,26 +4,13 @@
 # symbolic link or a hard link; and no input changes. Usage: outputs_never_overwrite_inputs.sh CTK
 set -u
 ctk=$1
+. "$(dirname "$0")/expect.sh"
 dir=outputs-never-overwrite-inputs
 rm -rf "$dir" && mkdir -p "$dir" && cd "$dir" || exit 1
 "$ctk" simulate --out s --views 4 --cols 48 --rows 48 --pitch 9 --phantom helix-holder >/dev/null 2>&1 || { echo "simulate failed"; exit 1; }
 ln -s s/joints.csv soft-joints.csv
 ln s/joints.csv hard-joints.csv
 before=$(cat s/*.json s/*.csv s/*.tif s/projections/* | md5sum)
-failures=0
-# expect NAME PATTERN COMMAND...: the command must exit 2 and print PATTERN.
-expect() {
-  name=$1 pattern=$2
-  shift 2
-  out=$("$@" 2>&1)
-  code=$?
-  if [ "$code" -ne 2 ] || ! printf '%s' "$out" | grep -q -- "$pattern"; then
-    echo "FAIL $name: exit $code, expected 2 and '$pattern'; said: $out"
-    failures=$((failures + 1))
-  else
-    echo "ok   $name: $(printf '%s' "$out" | tail -n 1)"
-  fi
-}
 expect "calibrate --report onto the joint log" "would overwrite the input --scan: pose_source.joints_csv" \
   "$ctk" calibrate --scan s/scan.json --out g.json --report s/joints.csv
 expect "geometry --out onto the scan" "would overwrite the input --scan (s/scan.json)" \

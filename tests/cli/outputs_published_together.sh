@@ -5,7 +5,8 @@
 # its log as they were. A finished simulation replaces the earlier scan as a whole (no stale
 # projections of a longer run), keeps the files it does not own and removes what the killed one
 # left; a projection of another run
-# copied into a scan's folder is refused by the readers. Usage: outputs_published_together.sh CTK
+# copied into a scan's folder is refused by the readers. A diagnosis stopped by Ctrl-C writes
+# nothing and exits 130. Usage: outputs_published_together.sh CTK
 set -u
 . "$(dirname "$0")/signals.sh"
 ctk=$1
@@ -27,6 +28,14 @@ signal_when sim-int.log "simulate: [1-9][0-9]* / " INT "$ctk" simulate --out s -
 [ "$code" -eq 130 ] || fail "Ctrl-C during a simulation gave exit $code, expected 130: $(tail -n 1 sim-int.log)"
 [ "$(fingerprint s)" = "$before" ] || fail "a simulation stopped by Ctrl-C changed the earlier scan"
 ls -a | grep -q '^\.s\.' && fail "a simulation stopped by Ctrl-C left its hidden folder: $(ls -a | grep '^\.s\.')"
+
+# Ctrl-C during a diagnosis (in its detection, or in a fit that checks no flag): exit 130, nothing written.
+"$ctk" simulate --out d --views 40 --cols 360 --rows 360 --pitch 1.2 >/dev/null 2>&1 || fail "the diagnosis' scan failed"
+signal_when diag.log "detect: [1-9][0-9]* / " INT "$ctk" diagnose --scan d/scan.json --geometry d/truth-geometry.json --out d/diag.json
+# (A process ended by the signal also shows 130 to the shell: the message tells that it stopped itself.)
+{ [ "$code" -eq 130 ] && grep -q "diagnose stopped by Ctrl-C: nothing written" diag.log; } ||
+  fail "Ctrl-C during a diagnosis gave exit $code, expected 130 and the diagnosis' own stop: $(tail -n 1 diag.log)"
+ls d/diag* 2>/dev/null | grep . && fail "a diagnosis stopped by Ctrl-C wrote its outputs"
 
 "$ctk" reconstruct --scan s/scan.json --geometry s/truth-geometry.json --out s/v.nrrd --size 16 --iterations 1 >/dev/null 2>&1 ||
   fail "the first reconstruction failed"

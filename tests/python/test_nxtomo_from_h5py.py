@@ -110,6 +110,26 @@ def test_files_that_point_outside_themselves_are_refused(tmp_path, ctk_command):
         assert "dataset '/entry/instrument/detector/data'" in done.stderr and message in done.stderr, done.stderr
 
 
+def test_per_frame_lists_declaring_more_values_than_frames_are_refused_before_reading(tmp_path, ctk_command):
+    """A few kilobytes may declare 10^12 image keys or angles (chunked, never written): the count is
+    checked against the frames before anything is allocated (it had asked for 8 TB)."""
+    for dataset in ("instrument/detector/image_key", "sample/rotation_angle"):
+        nexus = tmp_path / "scan.nx"
+        write_nxtomo(nexus)
+        with h5py.File(nexus, "a") as f:
+            units = f["entry/" + dataset].attrs.get("units")
+            del f["entry/" + dataset]
+            huge = f.create_dataset("entry/" + dataset, (10 ** 12,), np.float64, chunks=(4096,), compression="gzip")
+            if units is not None:
+                huge.attrs["units"] = units
+        assert nexus.stat().st_size < 100_000
+        done = ctk_import(ctk_command, nexus, tmp_path / "scan.json")
+        assert done.returncode == 2, done.stderr
+        assert f"dataset '/entry/{dataset}'" in done.stderr, done.stderr
+        assert f"declares 1000000000000 values; expected at most {FRAMES}" in done.stderr, done.stderr
+        assert not (tmp_path / "scan.json").exists()
+
+
 def virtual_layout():
     layout = h5py.VirtualLayout(shape=(FRAMES, 8, 10), dtype=np.uint16)
     layout[:] = h5py.VirtualSource("missing.h5", "data", shape=(FRAMES, 8, 10))

@@ -22,6 +22,10 @@ class InputError : public std::runtime_error {
   std::string where_;
 };
 
+/// `message` with every word longer than 160 characters cut to its head and tail and its length: a
+/// value pasted by mistake (a 400-digit number, a whole file on one line) is not echoed in full.
+std::string with_long_words_clipped(const std::string& message);
+
 /// An options struct checking itself: unless `ok`, throws std::invalid_argument
 /// "<field>: expected <expected>, got <value>" (field as "SirtOptions.relaxation").
 void require_option(bool ok, const char* field, const char* expected, double value);

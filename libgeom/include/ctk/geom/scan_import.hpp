@@ -28,7 +28,8 @@ struct CircularOrbit {
   int sense = +1;  // +1 or -1
 };
 
-/// Throws std::invalid_argument on non-positive distances, SDD <= SOD, no angles or a bad sense.
+/// Throws std::invalid_argument on non-positive or non-finite distances and pitches, SDD <= SOD, no
+/// angles, an angle not finite or a bad sense; the matrices also when the numbers describe no projection.
 std::vector<ConeVec> circular_cone_vecs(const CircularOrbit& orbit);
 /// The same views as projection matrices.
 std::vector<ProjectionMatrix> circular_matrices(const CircularOrbit& orbit);
