@@ -30,7 +30,15 @@ std::string not_replaceable_by_output(const fs::path& path) {
   }
 }
 
+std::string not_an_output_name(const fs::path& path) {
+  const std::string name = path.filename().string();
+  if (name.empty() || name == "." || name == "..") return "names no file (an empty name, or a folder)";
+  if (name.size() > 255) return "a name of " + std::to_string(name.size()) + " bytes; file systems take at most 255 per name";
+  return {};
+}
+
 void write_path_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  if (const std::string why = not_an_output_name(path); !why.empty()) throw InputError(path.string(), "", why);
   if (const std::string kind = not_replaceable_by_output(path); !kind.empty())
     throw InputError(path.string(), "",
                      "is " + kind + ", not a regular file; an output replaces a file whole, so it names only files");

@@ -127,9 +127,7 @@ void RunFiles::check() const {
   std::map<fs::path, const Entry*> written;
   std::map<fs::path, std::string> probed;  // folders asked whether they take new files, and the answer
   for (const Entry& out : outputs_) {
-    if (const std::size_t length = out.path.filename().string().size(); length > 255)
-      throw InputError(out.path.string(), out.what,
-                       "a name of " + std::to_string(length) + " bytes; file systems take at most 255 per name");
+    if (const std::string why = not_an_output_name(out.path); !why.empty()) throw InputError(out.path.string(), out.what, why);
     if (const std::string kind = not_replaceable_by_output(out.path); !kind.empty())
       throw InputError(out.path.string(), out.what,
                        "is " + kind + ", not a regular file; ctk replaces its outputs whole, so it names only files");

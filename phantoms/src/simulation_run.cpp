@@ -155,6 +155,7 @@ SimulationRun run_simulation(const SimulationRequest& r, const std::filesystem::
   namespace fs = std::filesystem;
   const auto start = std::chrono::steady_clock::now();
   r.validate();
+  if (out.empty()) throw std::invalid_argument("out: expected the scan folder to write, got an empty name");
   const auto say = [&](const std::string& line) {
     if (log) log(line);
   };

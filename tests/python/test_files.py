@@ -151,6 +151,26 @@ def test_bad_inputs_raise_the_named_exception(simulated, tmp_path):
     assert issubclass(ctk.InputError, ValueError)
 
 
+def test_outputs_that_name_no_file_and_numbers_that_describe_no_projection_are_refused_as_the_command_line_does(
+        simulated, tmp_path):
+    geometry = ctk.read_geometry(simulated / "truth-geometry.json")
+    with pytest.raises(ctk.InputError, match="names no file"):
+        ctk.write_geometry(geometry, "")
+    with pytest.raises(ctk.InputError, match="a name of 256 bytes; file systems take at most 255"):
+        ctk.write_geometry(geometry, tmp_path / ("g" * 251 + ".json"))
+    legal = tmp_path / ("g" * 245 + ".json")  # 250 bytes: its temporary's name gives way
+    ctk.write_geometry(geometry, legal)
+    assert ctk.read_geometry(legal)["views"] == geometry["views"]
+    assert [p.name for p in tmp_path.iterdir()] == [legal.name]
+    with pytest.raises(ValueError, match="out: expected the scan folder to write, got an empty name"):
+        ctk.simulate("")
+    with pytest.raises(ValueError, match="describes no cone-beam projection: are the pitch and distances in mm"):
+        ctk.circular_matrices([0.0, 1.0], (64, 64), (100, 100), sod=0.001, sdd=0.002)
+    (tmp_path / "empty.vec").write_text("")
+    with pytest.raises(ctk.InputError, match="no rows of 12 numbers"):
+        ctk.read_cone_vec(tmp_path / "empty.vec")
+
+
 def test_an_import_never_writes_over_its_inputs(simulated):
     image = simulated / "projections" / sorted(p.name for p in (simulated / "projections").iterdir())[0]
     before = image.read_bytes()
