@@ -1,16 +1,16 @@
 # What `cmake --install` puts where, so another project finds ctk with find_package(ctk) and links
-# ctk::core, ctk::geom, ctk::proj, ctk::recon, ctk::calib, ctk::phantoms, ctk::plan and
+# ctk::core, ctk::geom, ctk::measure, ctk::proj, ctk::recon, ctk::calib, ctk::phantoms, ctk::plan and
 # ctk::plan_simulated; and the Debian package CPack makes of it (`cpack -G DEB` in the build tree).
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-set(ctk_libraries ctk_core ctk_geom ctk_proj ctk_recon ctk_calib ctk_phantoms ctk_plan ctk_plan_simulated)
+set(ctk_libraries ctk_core ctk_geom ctk_measure ctk_proj ctk_recon ctk_calib ctk_phantoms ctk_plan ctk_plan_simulated)
 foreach(library IN LISTS ctk_libraries)
   string(REGEX REPLACE "^ctk_" "" name ${library})
   set_target_properties(${library} PROPERTIES EXPORT_NAME ${name})
 endforeach()
 install(TARGETS ${ctk_libraries} EXPORT ctkTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
-foreach(folder libcore libgeom libproj librecon libcalib libplan phantoms)
+foreach(folder libcore libgeom libmeasure libproj librecon libcalib libplan phantoms)
   install(DIRECTORY ${CMAKE_SOURCE_DIR}/${folder}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 endforeach()
 set(ctk_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/ctk)

@@ -22,7 +22,7 @@
 #include "ctk/core/output_set.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/run_files.hpp"
-#include "ctk/proj/projection_reading.hpp"
+#include "ctk/measure/projection_reading.hpp"
 #include "interruption.hpp"
 #include "option_checks.hpp"
 #include "progress.hpp"

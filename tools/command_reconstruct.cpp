@@ -40,19 +40,20 @@ struct ReconstructOptions {
   fs::path scan, geometry, out;
   int bin = 1;
   std::string method = to_string(ReconstructionOptions{}.method);
-  int iterations = 0;  // 0: the method's default
+  int iterations = ReconstructionOptions{}.iterations;  // 0: the method's default
   int held_out_every = ReconstructionOptions{}.held_out_every;
-  int subsets = 0;  // OS-SQS: 0 chosen from the views
-  double lambda = 0, tolerance = 1e-4, huber_delta = 0;
-  std::string regulariser = "identity";
-  std::string preconditioner = "none";
+  int subsets = ReconstructionOptions{}.subsets;  // OS-SQS: 0 chosen from the views
+  double lambda = ReconstructionOptions{}.lambda, tolerance = ReconstructionOptions{}.tolerance,
+         huber_delta = ReconstructionOptions{}.huber_delta;
+  std::string regulariser = to_string(ReconstructionOptions{}.regulariser);
+  std::string preconditioner = to_string(ReconstructionOptions{}.preconditioner);
   bool unweighted = false;
   bool as_measured = false;
   std::vector<int> size;
   double voxel_mm = 0;
   bool resume = false;
   int checkpoint_every = 10;
-  std::string decomposition = "auto";
+  std::string decomposition = to_string(ReconstructionOptions{}.decomposition);
 };
 
 ReconstructionOptions library_options(const ReconstructOptions& o) {

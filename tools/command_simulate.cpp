@@ -17,21 +17,9 @@ namespace {
 
 struct SimulateOptions {
   std::filesystem::path out = "simulated-scan";
-  std::vector<std::string> phantoms{"helix-holder"};
-  std::string holder = "reference";
-  std::string trajectory = "circular";
-  int views = 360, nside = 3;
-  std::vector<double> cap_deg{5.0, 90.0};
-  std::filesystem::path poses;
-  int cols = 720, rows = 720;
-  double pitch_mm = 0.6, sdd_mm = 2150.0, sod_mm = 1360.0;
-  int supersampling = 2;
+  SimulationRequest request;  // the options bound straight into the library's fields and defaults
+  std::vector<double> cap_deg{SimulationRequest{}.cap_min_deg, SimulationRequest{}.cap_max_deg};
   std::string output = "counts";
-  double flat_counts = 1e4, dark_counts = 100;
-  std::optional<double> kvp;
-  double filter_al_mm = 2.0;
-  double robot_noise_mm = 0.1, robot_noise_deg = 0.02;
-  std::uint64_t seed = 1;
   // Effects (unset: off).
   std::optional<double> sdd_error_mm;
   std::vector<double> principal_point_error_px, tilt_deg, distortion_centre_px;
@@ -94,32 +82,15 @@ nlohmann::json named_effects(const SimulateOptions& o) {
 }
 
 void run_simulate(const SimulateOptions& o) {
-  if (o.trajectory == "cap" && o.cap_deg[0] > o.cap_deg[1])
+  if (o.request.trajectory == "cap" && o.cap_deg[0] > o.cap_deg[1])
     throw InputError(
         "--cap-deg", "",
         "expected the least angle first, got " + std::to_string(o.cap_deg[0]) + " before " + std::to_string(o.cap_deg[1]));
-  SimulationRequest r;
-  r.phantoms = o.phantoms;
-  r.holder = o.holder;
-  r.trajectory = o.trajectory;
-  r.views = o.views;
-  r.nside = o.nside;
+  SimulationRequest r = o.request;
   r.cap_min_deg = o.cap_deg[0];
   r.cap_max_deg = o.cap_deg[1];
-  r.poses = o.poses;
-  r.cols = o.cols;
-  r.rows = o.rows;
-  r.pitch_mm = o.pitch_mm;
-  r.sdd_mm = o.sdd_mm;
-  r.sod_mm = o.sod_mm;
-  r.supersampling = o.supersampling;
   r.output = o.output == "counts" ? SimulatedOutput::counts : SimulatedOutput::line_integrals;
-  r.counts = {o.flat_counts, o.dark_counts};
-  r.kvp = o.kvp;
-  r.filter_al_mm = o.filter_al_mm;
-  r.robot_noise = {o.robot_noise_mm, o.robot_noise_deg};
-  r.seed = o.seed;
-  r.effects = simulation_effects_from_json(named_effects(o), Detector{o.cols, o.rows, o.pitch_mm, o.pitch_mm});
+  r.effects = simulation_effects_from_json(named_effects(o), Detector{r.cols, r.rows, r.pitch_mm, r.pitch_mm});
   Progress progress("simulate", "views");
   // Ctrl-C stops the views being drawn; the scan, written into a hidden folder, is not published.
   const InterruptionWatch watch(InterruptionWatch::Stop::the_parallel_loops_too);
@@ -142,58 +113,60 @@ void register_simulate(CLI::App& app) {
   auto o = std::make_shared<SimulateOptions>();
   CLI::App* cmd = app.add_subcommand("simulate", "Simulate a scan of analytic phantoms, with its truth (truth.json)");
   cmd->add_option("--out", o->out, "Scan folder to write")->capture_default_str();
-  cmd->add_option("--phantom", o->phantoms,
+  cmd->add_option("--phantom", o->request.phantoms,
                   "Phantoms in the beam: built-in names (helix-holder, shepp-logan, brick-and-plate, sample-1, sample-2, "
                   "walnut) or ctk-phantom/1 files (.json); repeat to combine")
       ->capture_default_str();
-  cmd->add_option("--holder", o->holder,
+  cmd->add_option("--holder", o->request.holder,
                   "The holder the scan declares and helix-holder draws: reference, thesis-first, or a ctk-holder/1 file")
       ->capture_default_str();
-  auto* poses = cmd->add_option("--poses", o->poses, "Per-view matrices (ctk-geometry/1) instead of a robot trajectory")
+  auto* poses = cmd->add_option("--poses", o->request.poses, "Per-view matrices (ctk-geometry/1) instead of a robot trajectory")
                     ->check(CLI::ExistingFile);
-  cmd->add_option("--trajectory", o->trajectory,
+  cmd->add_option("--trajectory", o->request.trajectory,
                   "Robot trajectory: circular (joint 7 orbit), spherical (HEALPix directions), cap (--cap-deg band of directions "
                   "about the holder axis while it spins), random (uniform directions from --seed)")
       ->check(CLI::IsMember({"circular", "spherical", "cap", "random"}))
       ->capture_default_str()
       ->excludes(poses);
-  cmd->add_option("--views", o->views, "Views of a circular, cap or random trajectory")
+  cmd->add_option("--views", o->request.views, "Views of a circular, cap or random trajectory")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   cmd->add_option("--cap-deg", o->cap_deg, "A cap trajectory's band: least and greatest angle between beam and holder axis")
       ->expected(2)
       ->check(CLI::Range(0.0, 180.0))
       ->capture_default_str();
-  cmd->add_option("--nside", o->nside, "HEALPix resolution of a spherical trajectory (12 nside^2 directions)")
+  cmd->add_option("--nside", o->request.nside, "HEALPix resolution of a spherical trajectory (12 nside^2 directions)")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
-  cmd->add_option("--cols", o->cols, "Detector columns")->check(CLI::Range(1, 100000))->capture_default_str();
-  cmd->add_option("--rows", o->rows, "Detector rows")->check(CLI::Range(1, 100000))->capture_default_str();
-  cmd->add_option("--pitch", o->pitch_mm, "Pixel pitch (mm)")->check(positive_number)->capture_default_str();
-  cmd->add_option("--sdd", o->sdd_mm, "Source-to-detector distance (mm)")->check(positive_number)->capture_default_str();
-  cmd->add_option("--sod", o->sod_mm, "Source-to-isocentre distance (mm)")->check(positive_number)->capture_default_str();
-  cmd->add_option("--supersampling", o->supersampling, "s x s rays per pixel")->check(CLI::Range(1, 16))->capture_default_str();
+  cmd->add_option("--cols", o->request.cols, "Detector columns")->check(CLI::Range(1, 100000))->capture_default_str();
+  cmd->add_option("--rows", o->request.rows, "Detector rows")->check(CLI::Range(1, 100000))->capture_default_str();
+  cmd->add_option("--pitch", o->request.pitch_mm, "Pixel pitch (mm)")->check(positive_number)->capture_default_str();
+  cmd->add_option("--sdd", o->request.sdd_mm, "Source-to-detector distance (mm)")->check(positive_number)->capture_default_str();
+  cmd->add_option("--sod", o->request.sod_mm, "Source-to-isocentre distance (mm)")->check(positive_number)->capture_default_str();
+  cmd->add_option("--supersampling", o->request.supersampling, "s x s rays per pixel")
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str();
   cmd->add_option("--output", o->output, "counts: 16-bit TIFF with flat and dark; line-integrals: float EXR, noise-free")
       ->check(CLI::IsMember({"counts", "line-integrals"}))
       ->capture_default_str();
-  cmd->add_option("--flat-counts", o->flat_counts, "Mean counts above dark, open beam")
+  cmd->add_option("--flat-counts", o->request.counts.flat_counts, "Mean counts above dark, open beam")
       ->check(CLI::Range(1.0, 65000.0))
       ->capture_default_str();
-  cmd->add_option("--dark-counts", o->dark_counts, "Dark offset (counts)")
+  cmd->add_option("--dark-counts", o->request.counts.dark_counts, "Dark offset (counts)")
       ->check(CLI::Range(0.0, 10000.0))
       ->capture_default_str();
-  cmd->add_option("--kvp", o->kvp, "Polychromatic rays from a tube at this voltage (Kramers spectrum; beam hardening)")
+  cmd->add_option("--kvp", o->request.kvp, "Polychromatic rays from a tube at this voltage (Kramers spectrum; beam hardening)")
       ->check(CLI::Range(16.0, 150.0));
-  cmd->add_option("--filter-al-mm", o->filter_al_mm, "Aluminium filter of the polychromatic spectrum")
+  cmd->add_option("--filter-al-mm", o->request.filter_al_mm, "Aluminium filter of the polychromatic spectrum")
       ->check(non_negative_number)
       ->capture_default_str();
-  cmd->add_option("--robot-noise-mm", o->robot_noise_mm, "Pose repeatability, RMS translation (0: off)")
+  cmd->add_option("--robot-noise-mm", o->request.robot_noise.translation_mm, "Pose repeatability, RMS translation (0: off)")
       ->check(non_negative_number)
       ->capture_default_str();
-  cmd->add_option("--robot-noise-deg", o->robot_noise_deg, "Pose repeatability, RMS rotation (0: off)")
+  cmd->add_option("--robot-noise-deg", o->request.robot_noise.rotation_deg, "Pose repeatability, RMS rotation (0: off)")
       ->check(non_negative_number)
       ->capture_default_str();
-  cmd->add_option("--seed", o->seed, "Random seed (noise, effects)")->capture_default_str();
+  cmd->add_option("--seed", o->request.seed, "Random seed (noise, effects)")->capture_default_str();
 
   const std::string effects = "Effects (undeclared: only truth.json knows)";
   cmd->add_option("--sdd-error-mm", o->sdd_error_mm, "True SDD minus declared")->group(effects);

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "ctk/core/error.hpp"
-#include "ctk/recon/measurements.hpp"
+#include "ctk/measure/measurements.hpp"
 
 namespace ctk::tools {
 

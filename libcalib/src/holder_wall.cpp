@@ -11,7 +11,7 @@
 #include "ctk/core/parallel.hpp"
 #include "ctk/core/statistics.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
-#include "ctk/proj/projection_reading.hpp"
+#include "ctk/measure/projection_reading.hpp"
 #include "small_problem.hpp"
 
 namespace ctk {

@@ -8,7 +8,7 @@
 #include "ctk/core/error.hpp"
 #include "ctk/core/parallel.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
-#include "ctk/proj/projection_reading.hpp"
+#include "ctk/measure/projection_reading.hpp"
 
 namespace ctk {
 

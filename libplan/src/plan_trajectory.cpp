@@ -7,7 +7,7 @@
 
 #include "ctk/core/error.hpp"
 #include "ctk/geom/trajectory.hpp"
-#include "ctk/proj/projection_reading.hpp"
+#include "ctk/measure/projection_reading.hpp"
 
 namespace ctk {
 

@@ -7,9 +7,9 @@
 #include "ctk/core/error.hpp"
 #include "ctk/core/volume_file.hpp"
 #include "ctk/geom/run_files.hpp"
+#include "ctk/measure/projection_reading.hpp"
 #include "ctk/plan/plan_pictures.hpp"
 #include "ctk/plan/planned_scan.hpp"
-#include "ctk/proj/projection_reading.hpp"
 
 namespace ctk {
 

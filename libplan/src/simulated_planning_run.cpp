@@ -13,11 +13,11 @@
 #include "ctk/geom/run_files.hpp"
 #include "ctk/geom/scan.hpp"
 #include "ctk/geom/trajectory.hpp"
+#include "ctk/measure/measurements.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/render.hpp"
 #include "ctk/plan/plan_pictures.hpp"
 #include "ctk/plan/simulated_acquisition.hpp"
-#include "ctk/recon/measurements.hpp"
 
 namespace ctk {
 

@@ -7,8 +7,8 @@
 #include <stdexcept>
 
 #include "ctk/core/error.hpp"
+#include "ctk/measure/measurements.hpp"
 #include "ctk/recon/default_volume.hpp"
-#include "ctk/recon/measurements.hpp"
 #include "ctk/recon/repeat_exposure.hpp"
 
 namespace ctk {

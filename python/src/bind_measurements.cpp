@@ -13,7 +13,7 @@
 #include "conversions.hpp"
 #include "ctk/core/image_io.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
-#include "ctk/recon/measurements.hpp"
+#include "ctk/measure/measurements.hpp"
 #include "interruptible.hpp"
 #include "numpy_arrays.hpp"
 

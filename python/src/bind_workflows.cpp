@@ -215,6 +215,48 @@ py::dict measure_holder(const fs::path& scan_file, const fs::path& geometry_file
   return d;
 }
 
+// The library's defaults under simulate()'s keywords (a test checks the signature against them).
+py::dict simulation_defaults() {
+  const SimulationRequest r;
+  py::dict d;
+  d["phantoms"] = py::tuple(py::cast(r.phantoms));
+  d["holder"] = r.holder;
+  d["trajectory"] = r.trajectory;
+  d["views"] = r.views;
+  d["nside"] = r.nside;
+  d["cap_deg"] = py::make_tuple(r.cap_min_deg, r.cap_max_deg);
+  d["detector_shape"] = py::make_tuple(r.rows, r.cols);
+  d["pitch_mm"] = r.pitch_mm;
+  d["sdd_mm"] = r.sdd_mm;
+  d["sod_mm"] = r.sod_mm;
+  d["supersampling"] = r.supersampling;
+  d["flat_counts"] = r.counts.flat_counts;
+  d["dark_counts"] = r.counts.dark_counts;
+  d["filter_al_mm"] = r.filter_al_mm;
+  d["robot_noise_mm"] = r.robot_noise.translation_mm;
+  d["robot_noise_deg"] = r.robot_noise.rotation_deg;
+  d["seed"] = r.seed;
+  return d;
+}
+
+// The library's defaults under reconstruct()'s keywords (a test checks the signature against them).
+py::dict reconstruction_defaults() {
+  const ReconstructionOptions o;
+  py::dict d;
+  d["method"] = to_string(o.method);
+  d["iterations"] = o.iterations;
+  d["subsets"] = o.subsets;
+  d["lambda_"] = o.lambda;
+  d["regulariser"] = to_string(o.regulariser);
+  d["huber_delta"] = o.huber_delta;
+  d["tolerance"] = o.tolerance;
+  d["preconditioner"] = to_string(o.preconditioner);
+  d["weighted"] = o.statistical_weights;
+  d["undistort"] = o.undistort;
+  d["voxel_mm"] = o.voxel_mm;
+  return d;
+}
+
 py::dict reconstruct(const fs::path& scan_file, const std::optional<fs::path>& geometry_file, const std::string& method,
                      int iterations, int held_out_every, int subsets, double lambda, const std::string& regulariser,
                      double huber_delta, double tolerance, const std::string& preconditioner, bool weighted, bool undistort,
@@ -343,6 +385,8 @@ images beside it). Returns the scan as read back; keys read and not modelled are
         py::arg("kvp"), py::arg("filter_al_mm"), py::arg("robot_noise_mm"), py::arg("robot_noise_deg"), py::arg("seed"),
         py::arg("effects"), py::arg("progress"), py::arg("log"));
   m.def("_measure_holder", &measure_holder, py::arg("scan"), py::arg("geometry"), py::arg("min_views"), py::arg("log"));
+  m.def("_reconstruction_defaults", &reconstruction_defaults);
+  m.def("_simulation_defaults", &simulation_defaults);
   m.def("_reconstruct", &reconstruct, py::arg("scan"), py::arg("geometry"), py::arg("method"), py::arg("iterations"),
         py::arg("held_out_every"), py::arg("subsets"), py::arg("lambda_"), py::arg("regulariser"), py::arg("huber_delta"),
         py::arg("tolerance"), py::arg("preconditioner"), py::arg("weighted"), py::arg("undistort"), py::arg("size"),

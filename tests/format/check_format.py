@@ -7,7 +7,7 @@ import pathlib
 import subprocess
 import sys
 
-FOLDERS = ["libcore", "libgeom", "libproj", "librecon", "libcalib", "libplan", "phantoms", "tools", "python", "tests", "benchmarks"]
+FOLDERS = ["libcore", "libgeom", "libmeasure", "libproj", "librecon", "libcalib", "libplan", "phantoms", "tools", "python", "tests", "benchmarks"]
 
 
 def main():

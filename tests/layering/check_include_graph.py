@@ -11,11 +11,12 @@ import sys
 LAYERS = {
     "libcore": ("core", set()),
     "libgeom": ("geom", {"core"}),
+    "libmeasure": ("measure", {"core", "geom"}),
     "libproj": ("proj", {"core", "geom"}),
-    "librecon": ("recon", {"core", "geom", "proj"}),
-    "libcalib": ("calib", {"core", "geom", "proj"}),
+    "librecon": ("recon", {"core", "geom", "measure", "proj"}),
+    "libcalib": ("calib", {"core", "geom", "measure"}),
     "phantoms": ("phantoms", {"core", "geom"}),
-    "libplan": ("plan", {"core", "geom", "proj", "recon", "calib"}),
+    "libplan": ("plan", {"core", "geom", "measure", "proj", "recon", "calib"}),
 }
 # One file may reach further than its library, named with what it may add: the simulated
 # acquisition and the planning workflow on it are libplan's separate target ctk::plan_simulated.

@@ -1,6 +1,7 @@
 """The workflows from Python against the command line on the same simulated robot scan: the
 calibration the same matrices, the diagnosis the undeclared base offset, an interruption raised
 where the user can catch it."""
+import inspect
 import json
 import os
 
@@ -8,6 +9,7 @@ import numpy as np
 import pytest
 
 import ctk
+from ctk import _ctk
 from conftest import run
 
 
@@ -110,3 +112,13 @@ def test_a_printed_holder_simulated_and_measured_from_python_as_the_command_line
         ctk.measure_holder(s.scan_file, tmp_path / "g.json", min_views=3)
     thesis = ctk.simulate(tmp_path / "thesis", holder="thesis-first", views=2, detector_shape=(64, 64), pitch_mm=2.0)
     assert thesis.scan["holder"]["sphere_diameter_mm"] == 0.678 and len(thesis.scan["holder"]["spheres_mm"]) == 50
+
+
+@pytest.mark.parametrize("function, defaults", [(ctk.reconstruct, _ctk._reconstruction_defaults),
+                                                 (ctk.simulate, _ctk._simulation_defaults)])
+def test_the_workflows_keywords_default_to_the_librarys_options(function, defaults):
+    library = defaults()
+    parameters = inspect.signature(function).parameters
+    assert len(library) >= 10 and set(library) <= set(parameters)
+    for name, value in library.items():
+        assert parameters[name].default == value, (function.__name__, name, parameters[name].default, value)

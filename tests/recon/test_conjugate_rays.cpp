@@ -7,7 +7,7 @@
 #include <random>
 
 #include "../test_support.hpp"
-#include "ctk/proj/projection_reading.hpp"
+#include "ctk/measure/projection_reading.hpp"
 #include "ctk/recon/conjugate_rays.hpp"
 #include "ctk/recon/repeat_exposure.hpp"
 

@@ -7,11 +7,11 @@
 #include <random>
 
 #include "ctk/geom/trajectory.hpp"
+#include "ctk/measure/measurements.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/render.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/held_out_fit.hpp"
-#include "ctk/recon/measurements.hpp"
 #include "ctk/recon/ordered_subsets.hpp"
 #include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/reconstruction_run.hpp"

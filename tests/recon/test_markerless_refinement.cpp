@@ -10,10 +10,10 @@
 
 #include "../test_support.hpp"
 #include "ctk/geom/scan_import.hpp"
+#include "ctk/measure/measurements.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/render.hpp"
 #include "ctk/recon/markerless_refinement.hpp"
-#include "ctk/recon/measurements.hpp"
 
 namespace ctk {
 namespace {

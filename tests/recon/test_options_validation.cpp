@@ -6,9 +6,9 @@
 #include <string>
 
 #include "../test_support.hpp"
+#include "ctk/measure/measurements.hpp"
 #include "ctk/proj/joseph_operator.hpp"
 #include "ctk/recon/markerless_refinement.hpp"
-#include "ctk/recon/measurements.hpp"
 #include "ctk/recon/os_sqs.hpp"
 #include "ctk/recon/reconstruction_run.hpp"
 #include "ctk/recon/refine_scan.hpp"

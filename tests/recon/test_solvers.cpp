@@ -5,11 +5,11 @@
 #include <random>
 
 #include "ctk/geom/trajectory.hpp"
+#include "ctk/measure/measurements.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/detector_response.hpp"
 #include "ctk/phantoms/render.hpp"
 #include "ctk/proj/joseph_operator.hpp"
-#include "ctk/recon/measurements.hpp"
 #include "ctk/recon/memory_plan.hpp"
 #include "ctk/recon/sirt.hpp"
 #include "ctk/recon/wls_cg.hpp"

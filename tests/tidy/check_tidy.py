@@ -26,7 +26,7 @@ import time
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "benchmarks"))
 from diagnosis_population import cpu_name  # noqa: E402  (the benchmarks' one description of the CPU)
 
-PRODUCT = ("libcore", "libgeom", "libproj", "librecon", "libplan", "libcalib", "phantoms", "tools", "python")
+PRODUCT = ("libcore", "libgeom", "libmeasure", "libproj", "librecon", "libplan", "libcalib", "phantoms", "tools", "python")
 
 
 def git(root, *args):

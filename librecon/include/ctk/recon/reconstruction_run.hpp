@@ -19,10 +19,10 @@
 #include "ctk/core/volume.hpp"
 #include "ctk/geom/geometry_file.hpp"
 #include "ctk/geom/scan.hpp"
+#include "ctk/measure/measurements.hpp"
 #include "ctk/recon/distribution_plan.hpp"
 #include "ctk/recon/fdk.hpp"
 #include "ctk/recon/iteration_log.hpp"
-#include "ctk/recon/measurements.hpp"
 #include "ctk/recon/memory_plan.hpp"
 #include "ctk/recon/regulariser.hpp"
 #include "ctk/recon/solver_state.hpp"
@@ -44,8 +44,8 @@ struct ReconstructionOptions {
   int subsets = 0;    // OS-SQS: 0 chooses from the view count (default_subset_count)
   double lambda = 0;  // WLS-CG's regularisation weight
   Regulariser regulariser = Regulariser::identity;
-  double huber_delta = 0;   // OS-SQS: > 0 weighs the edge-preserving Huber penalty instead (huber_penalty.hpp)
-  double tolerance = 1e-4;  // WLS-CG stops when the gradient has fallen by this factor
+  double huber_delta = 0;                     // OS-SQS: > 0 weighs the edge-preserving Huber penalty instead (huber_penalty.hpp)
+  double tolerance = WlsOptions{}.tolerance;  // WLS-CG stops when the gradient has fallen by this factor
   CgPreconditioner preconditioner = CgPreconditioner::none;  // WLS-CG: none or diagonal (wls_cg.hpp)
   bool statistical_weights = true;                           // WLS-CG on counts: Poisson weights (line integrals: unit weights)
   bool undistort = true;                                     // a declared detector distortion resampled away (MeasurementOptions)

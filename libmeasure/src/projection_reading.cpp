@@ -1,4 +1,4 @@
-#include "ctk/proj/projection_reading.hpp"
+#include "ctk/measure/projection_reading.hpp"
 
 #include <algorithm>
 #include <cmath>

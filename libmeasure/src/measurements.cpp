@@ -1,4 +1,4 @@
-#include "ctk/recon/measurements.hpp"
+#include "ctk/measure/measurements.hpp"
 
 #include <algorithm>
 #include <iomanip>
@@ -7,7 +7,7 @@
 
 #include "ctk/core/error.hpp"
 #include "ctk/core/parallel.hpp"
-#include "ctk/recon/detector_undistortion.hpp"
+#include "ctk/measure/detector_undistortion.hpp"
 
 namespace ctk {
 

@@ -6,9 +6,9 @@
 #include <cmath>
 
 #include "../test_support.hpp"
+#include "ctk/measure/detector_undistortion.hpp"
+#include "ctk/measure/measurements.hpp"
 #include "ctk/phantoms/scan_simulation.hpp"
-#include "ctk/recon/detector_undistortion.hpp"
-#include "ctk/recon/measurements.hpp"
 
 namespace ctk {
 namespace {

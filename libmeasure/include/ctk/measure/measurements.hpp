@@ -12,7 +12,7 @@
 #include "ctk/core/projection_stack.hpp"
 #include "ctk/geom/geometry_file.hpp"
 #include "ctk/geom/scan.hpp"
-#include "ctk/proj/projection_reading.hpp"
+#include "ctk/measure/projection_reading.hpp"
 
 namespace ctk {
 

@@ -1,4 +1,4 @@
-#include "ctk/recon/detector_undistortion.hpp"
+#include "ctk/measure/detector_undistortion.hpp"
 
 #include <opencv2/imgproc.hpp>
 

@@ -9,10 +9,10 @@
 
 #include "../test_support.hpp"
 #include "ctk/core/error.hpp"
+#include "ctk/measure/measurements.hpp"
+#include "ctk/measure/projection_reading.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/scan_simulation.hpp"
-#include "ctk/proj/projection_reading.hpp"
-#include "ctk/recon/measurements.hpp"
 
 namespace ctk {
 namespace {

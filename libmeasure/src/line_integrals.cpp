@@ -15,10 +15,10 @@
 #include <cstddef>
 #include <limits>
 
-#include "ctk/proj/projection_reading.hpp"
+#include "ctk/measure/projection_reading.hpp"
 
-#ifndef CTK_PROJ_LINE_INTEGRALS_DEFINED
-#define CTK_PROJ_LINE_INTEGRALS_DEFINED
+#ifndef CTK_MEASURE_LINE_INTEGRALS_DEFINED
+#define CTK_MEASURE_LINE_INTEGRALS_DEFINED
 namespace ctk::detail {
 // A transmission above 1.5 cannot come from attenuation: treat it like one at or below zero.
 constexpr float kMinCounts = 0.5f, kMaxTransmission = 1.5f;
