@@ -326,8 +326,9 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
     if (const std::vector<int> chosen = held_out_positions(views.matrices, o.held_out_every, volume_centre); !chosen.empty()) {
       std::vector<int> here = views_split ? views.local_positions(chosen) : chosen;
       std::sort(here.begin(), here.end());
-      std::vector<int> held_indices;
-      for (int p : chosen) held_indices.push_back(views.indices[static_cast<std::size_t>(p)]);
+      std::vector<int> held_indices(chosen.size());
+      std::transform(chosen.begin(), chosen.end(), held_indices.begin(),
+                     [&](int p) { return views.indices[static_cast<std::size_t>(p)]; });
       Measurements held = take_views(m, here);
       views = spread_views();
       judge.emplace(spread_operator(plan, geometry, held, ranks, scan.detector), std::move(held.line_integrals),
