@@ -39,34 +39,26 @@ namespace fs = std::filesystem;
 struct ReconstructOptions {
   fs::path scan, geometry, out;
   int bin = 1;
-  std::string method = to_string(ReconstructionOptions{}.method);
-  int iterations = ReconstructionOptions{}.iterations;  // 0: the method's default
-  int held_out_every = ReconstructionOptions{}.held_out_every;
-  int subsets = ReconstructionOptions{}.subsets;  // OS-SQS: 0 chosen from the views
-  double lambda = ReconstructionOptions{}.lambda, tolerance = ReconstructionOptions{}.tolerance,
-         huber_delta = ReconstructionOptions{}.huber_delta;
-  std::string regulariser = to_string(ReconstructionOptions{}.regulariser);
-  std::string preconditioner = to_string(ReconstructionOptions{}.preconditioner);
+  // The numbers bound straight into the library's options (and their defaults); the choices
+  // below are the library's names, turned into its enums by library_options.
+  ReconstructionOptions run;
+  std::string method = to_string(run.method);
+  std::string regulariser = to_string(run.regulariser);
+  std::string preconditioner = to_string(run.preconditioner);
+  std::string decomposition = to_string(run.decomposition);
   bool unweighted = false;
   bool as_measured = false;
   std::vector<int> size;
-  double voxel_mm = 0;
   bool resume = false;
   int checkpoint_every = 10;
-  std::string decomposition = to_string(ReconstructionOptions{}.decomposition);
 };
 
 ReconstructionOptions library_options(const ReconstructOptions& o) {
-  ReconstructionOptions r;
+  ReconstructionOptions r = o.run;
   r.method = reconstruction_method(o.method);
-  r.subsets = o.subsets;
-  r.iterations = o.iterations;
-  r.held_out_every = o.held_out_every;
-  r.lambda = o.lambda;
-  r.tolerance = o.tolerance;
   r.regulariser = regulariser_from_string(o.regulariser);
-  r.huber_delta = o.huber_delta;
   r.preconditioner = cg_preconditioner_from_string(o.preconditioner);
+  r.decomposition = decomposition_from_string(o.decomposition);
   r.statistical_weights = !o.unweighted;
   r.undistort = !o.as_measured;
   if (o.size.size() == 2)
@@ -74,8 +66,6 @@ ReconstructionOptions library_options(const ReconstructOptions& o) {
                      "expected one value (a cube of n voxels) or three (nx ny nz), got two: " + std::to_string(o.size[0]) + " " +
                          std::to_string(o.size[1]));
   for (std::size_t a = 0; a < 3 && !o.size.empty(); ++a) r.size[a] = o.size[std::min(a, o.size.size() - 1)];
-  r.voxel_mm = o.voxel_mm;
-  r.decomposition = decomposition_from_string(o.decomposition);
   return r;
 }
 
@@ -321,22 +311,22 @@ void register_reconstruct(CLI::App& app) {
                   "conjugate gradients, in more passes over the data, continued by --resume); sirt; fdk (circular scans only)")
       ->check(CLI::IsMember({"wls-cg", "os-sqs", "sirt", "fdk"}))
       ->capture_default_str();
-  cmd->add_option("--iterations", o->iterations,
+  cmd->add_option("--iterations", o->run.iterations,
                   "Iterations on every view (default: until the views held out by --held-out-every stop fitting better, "
                   "at most 30 for wls-cg, 8 epochs for os-sqs, 100 for sirt)")
       ->check(CLI::Range(1, 100000));
-  cmd->add_option("--held-out-every", o->held_out_every,
+  cmd->add_option("--held-out-every", o->run.held_out_every,
                   "Without --iterations: one view in n is held out of the solve, and the run stops with its best iterate "
                   "once their fit stops improving; 0 runs the default count on every view")
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
-  cmd->add_option("--subsets", o->subsets, "os-sqs: ordered subsets (default: about 15 views each, at most 24)")
+  cmd->add_option("--subsets", o->run.subsets, "os-sqs: ordered subsets (default: about 15 views each, at most 24)")
       ->check(CLI::Range(1, 100000));
-  cmd->add_option("--lambda", o->lambda, "Regularisation weight")->check(non_negative_number)->capture_default_str();
+  cmd->add_option("--lambda", o->run.lambda, "Regularisation weight")->check(non_negative_number)->capture_default_str();
   cmd->add_option("--regulariser", o->regulariser, "identity (Tikhonov) or gradient")
       ->check(CLI::IsMember({"identity", "gradient"}))
       ->capture_default_str();
-  cmd->add_option("--huber-delta", o->huber_delta,
+  cmd->add_option("--huber-delta", o->run.huber_delta,
                   "os-sqs: an edge-preserving Huber penalty of neighbour differences (weight --lambda) instead of the "
                   "quadratic one; differences below delta (attenuation per mm) are smoothed, edges above it kept")
       ->check(positive_number);
@@ -345,7 +335,7 @@ void register_reconstruct(CLI::App& app) {
                   "more volume)")
       ->check(CLI::IsMember({"none", "diagonal"}))
       ->capture_default_str();
-  cmd->add_option("--tolerance", o->tolerance, "Stop when the gradient has fallen by this factor (0 <= tolerance < 1)")
+  cmd->add_option("--tolerance", o->run.tolerance, "Stop when the gradient has fallen by this factor (0 <= tolerance < 1)")
       ->check(fraction_below_one)
       ->capture_default_str();
   cmd->add_flag("--unweighted", o->unweighted, "Unit weights even for counts (plain least squares)");
@@ -355,7 +345,7 @@ void register_reconstruct(CLI::App& app) {
   cmd->add_option("--size", o->size, "Voxels: n (cube) or nx ny nz (default: cover the holder, or the field of view)")
       ->expected(1, 3)
       ->check(CLI::Range(1, 100000));
-  cmd->add_option("--voxel", o->voxel_mm, "Voxel size in mm (default: a pixel seen at the holder origin)")
+  cmd->add_option("--voxel", o->run.voxel_mm, "Voxel size in mm (default: a pixel seen at the holder origin)")
       ->check(positive_number);
   cmd->add_option("--decomposition", o->decomposition,
                   "Under mpirun: views (each rank its share of the views and the whole volume), slabs (each rank a slab of "

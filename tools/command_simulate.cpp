@@ -18,7 +18,7 @@ namespace {
 struct SimulateOptions {
   std::filesystem::path out = "simulated-scan";
   SimulationRequest request;  // the options bound straight into the library's fields and defaults
-  std::vector<double> cap_deg{SimulationRequest{}.cap_min_deg, SimulationRequest{}.cap_max_deg};
+  std::vector<double> cap_deg{request.cap_min_deg, request.cap_max_deg};
   std::string output = "counts";
   // Effects (unset: off).
   std::optional<double> sdd_error_mm;
