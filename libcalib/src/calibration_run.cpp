@@ -59,7 +59,16 @@ CalibrationRun run_calibration(const ScanDescription& scan, const CalibrationRun
     if (run.wall) with_wall.holder->wall = modelled_wall(scan, *run.wall);
     wall_seconds = seconds_since(start);
   }
-  c = calibrate_scan(with_wall, o.calibration, progress, control, ranks);
+  // The spheres' contrast loss over their background (a polychromatic beam, scatter), measured in
+  // a sample of views with the wall as modelled, then applied to every view when it is distinct
+  // from zero.
+  const auto contrast_start = std::chrono::steady_clock::now();
+  const std::vector<int> sample = contrast_sample_views(scan.projections.count);
+  run.contrast_loss = measure_contrast_loss(
+      [&](const CalibrationOptions& trial) { return calibrate_scan_views(with_wall, sample, trial, ranks); }, o.calibration);
+  if (run.contrast_loss->used) run.options.contrast_loss = run.contrast_loss->rate;
+  wall_seconds += seconds_since(contrast_start);
+  c = calibrate_scan(with_wall, run.options, progress, control, ranks);
   c.seconds += wall_seconds;
   if (c.left_undone > 0) return run;
   run.prior.reason = "switched off (--image-only)";
@@ -120,6 +129,7 @@ nlohmann::json CalibrationRun::report() const {
       {"options", {{"min_spheres", options.min_spheres}, {"max_rms_px", options.max_rms_px}, {"search_px", options.search_px}}},
       {"views", views}};
   j["robot_prior"] = robot_prior_json(prior);
+  if (contrast_loss) j["contrast_loss"] = to_json(*contrast_loss);
   if (declared_wall) {
     j["holder_wall"] = {{"declared", true},
                         {"inner_radius_mm", declared_wall->inner_radius_mm},
@@ -153,6 +163,7 @@ std::string CalibrationRun::brief() const {
 std::string CalibrationRun::wall_and_prior() const {
   std::ostringstream b;
   if (const std::string line = has_holder ? wall_line(declared_wall, wall) : ""; !line.empty()) b << line << "\n";
+  if (contrast_loss) b << contrast_loss_line(*contrast_loss) << "\n";
   if (prior.applied)
     b << "poses combined with the robot's prior over " << prior.views << " views: repeatability measured " << prior.sigma_mm
       << " mm, " << prior.sigma_deg << " deg; median rotation uncertainty " << prior.image_rotation_sigma_deg

@@ -64,8 +64,17 @@ DiagnosisRun run_diagnosis(const ScanDescription& scan, const Geometry& geometry
     if (run.wall) modelled.holder->wall = modelled_wall(scan, *run.wall);
     say(wall_line(scan.holder->wall, run.wall));
   }
+  // The spheres measured as ctk calibrate measures them, with the contrast loss the scan shows:
+  // measured as calibrate measures it (from the scan's first guesses, not the given poses, so the
+  // two agree to the last bit when the wall was declared).
+  CalibrationOptions calibration = o.calibration;
+  const std::vector<int> sample = contrast_sample_views(scan.projections.count);
+  run.contrast_loss = measure_contrast_loss(
+      [&](const CalibrationOptions& trial) { return calibrate_scan_views(modelled, sample, trial); }, calibration);
+  if (run.contrast_loss.used) calibration.contrast_loss = run.contrast_loss.rate;
+  say(contrast_loss_line(run.contrast_loss));
   // The detections and matches behind the given calibration, each view started from its pose.
-  const ScanCalibration c = recalibrate_scan(modelled, geometry, o.calibration, progress);
+  const ScanCalibration c = recalibrate_scan(modelled, geometry, calibration, progress);
   DiagnosisOptions options = o.diagnosis;
   run.repeatability = set_repeatability(o, scan, c, options);
   say(run.repeatability);
@@ -85,6 +94,7 @@ DiagnosisRun run_diagnosis(const ScanDescription& scan, const Geometry& geometry
 nlohmann::json DiagnosisRun::report() const {
   nlohmann::json j = diagnosis_to_json(diagnosis, observations);
   if (wall) j["holder_wall"] = {{"declared", wall_declared}, {"measured", to_json(*wall)}};
+  j["contrast_loss"] = to_json(contrast_loss);
   return j;
 }
 

@@ -23,12 +23,14 @@ namespace {
 class WindowCost : public ceres::CostFunction {
  public:
   WindowCost(std::vector<Eigen::Vector2d> offsets, std::vector<double> values, std::vector<double> shape, int balls,
-             int subsamples)
+             int subsamples, double contrast_loss, double reference_background)
       : offsets_(std::move(offsets)),
         values_(std::move(values)),
         shape_(std::move(shape)),
         balls_(balls),
-        subsamples_(subsamples) {
+        subsamples_(subsamples),
+        contrast_loss_(contrast_loss),
+        reference_(reference_background) {
     mutable_parameter_block_sizes()->assign({2 * balls, 2 * balls, 4});
     set_num_residuals(static_cast<int>(values_.size()));
   }
@@ -48,14 +50,12 @@ class WindowCost : public ceres::CostFunction {
     for (int k = 0; k < n; ++k) {
       const auto ku = static_cast<std::size_t>(k);
       const double du = offsets_[ku].x(), dv = offsets_[ku].y();
-      double model = background[0] + background[1] * du + background[2] * dv + background[3] * shape_[ku];
-      if (j_background) {
-        double* row = j_background + 4 * k;
-        row[0] = -1;
-        row[1] = -du;
-        row[2] = -dv;
-        row[3] = -shape_[ku];
-      }
+      const double under = background[0] + background[1] * du + background[2] * dv + background[3] * shape_[ku];
+      // The balls' contrast falls by `contrast_loss` per unit of background line integral above
+      // the window's reference (a spectrum hardened by the wall, scatter): each chord is scaled by
+      // `contrast`, so a ball on a steep background is no longer pulled towards its thinner side.
+      const double contrast = 1.0 - contrast_loss_ * (under - reference_);
+      double model = under, balls_sum = 0;  // balls_sum: the balls' unscaled sum, for the background's derivatives
       for (int b = 0; b < balls_; ++b) {
         const double cu = centre[2 * b], cv = centre[2 * b + 1], radius = disc[2 * b], amplitude = disc[2 * b + 1];
         // Most of the window lies wholly outside a given disc: nothing to average there.
@@ -75,15 +75,24 @@ class WindowCost : public ceres::CostFunction {
             d_radius += radius / root;
           }
         }
-        model += weight * amplitude * chord;
+        model += contrast * weight * amplitude * chord;
+        balls_sum += weight * amplitude * chord;
         if (j_centre) {
-          j_centre[k * width + 2 * b] = -weight * amplitude * d_u;
-          j_centre[k * width + 2 * b + 1] = -weight * amplitude * d_v;
+          j_centre[k * width + 2 * b] = -contrast * weight * amplitude * d_u;
+          j_centre[k * width + 2 * b + 1] = -contrast * weight * amplitude * d_v;
         }
         if (j_disc) {
-          j_disc[k * width + 2 * b] = -weight * amplitude * d_radius;
-          j_disc[k * width + 2 * b + 1] = -weight * chord;
+          j_disc[k * width + 2 * b] = -contrast * weight * amplitude * d_radius;
+          j_disc[k * width + 2 * b + 1] = -contrast * weight * chord;
         }
+      }
+      if (j_background) {
+        const double scale = 1.0 - contrast_loss_ * balls_sum;  // d model / d under
+        double* row = j_background + 4 * k;
+        row[0] = -scale;
+        row[1] = -scale * du;
+        row[2] = -scale * dv;
+        row[3] = -scale * shape_[ku];
       }
       residual[k] = values_[ku] - model;
     }
@@ -96,6 +105,8 @@ class WindowCost : public ceres::CostFunction {
   std::vector<double> shape_;  // the known background shape, pixel-averaged (0 if none)
   int balls_;
   int subsamples_;
+  double contrast_loss_;
+  double reference_;
 };
 
 // The known shape averaged over each pixel of the window [c0, c1] x [r0, r1] (row-major). Where it
@@ -144,6 +155,7 @@ void ProfileFitOptions::validate() const {
   require_option(margin_px > 0, "ProfileFitOptions.margin_px", "a number above 0", margin_px);
   require_option(subsamples >= 1, "ProfileFitOptions.subsamples", "at least 1", subsamples);
   require_option(max_move_px > 0, "ProfileFitOptions.max_move_px", "a number above 0", max_move_px);
+  require_option(std::isfinite(contrast_loss), "ProfileFitOptions.contrast_loss", "a finite number", contrast_loss);
 }
 
 std::vector<bool> refine_cluster_by_profile_fit(const Image& im, double radius_px, std::span<SphereDetection> spheres,
@@ -208,7 +220,9 @@ std::vector<bool> refine_cluster_by_profile_fit(const Image& im, double radius_p
     disc[2 * su + 1] = peak / (2 * radius_px);
   }
 
-  auto* cost = new WindowCost(std::move(offsets), std::move(values), std::move(shape_values), n, o.subsamples);
+  const double reference_background = background[0];
+  auto* cost = new WindowCost(std::move(offsets), std::move(values), std::move(shape_values), n, o.subsamples, o.contrast_loss,
+                              reference_background);
   ceres::Problem problem;
   problem.AddResidualBlock(cost, nullptr, {centre.data(), disc.data(), background});
   if (!shape) problem.SetManifold(background, new ceres::SubsetManifold(4, {3}));

@@ -90,9 +90,10 @@ Prediction predict(const Eigen::Matrix3d& K, const Rigid& T, const Holder& holde
 // is as strong as the matched ones (within 30 % of their median). Balls closer than a radius
 // cannot be told apart and are left out.
 void recover_missed_spheres(const Image& image, const Prediction& p, double radius_px, std::vector<double> strengths,
-                            const BackgroundShape& wall_shadow, const std::optional<RadialDistortion>& distortion,
-                            std::vector<SphereMatch>& matches, const std::vector<SphereMatch>& dropped,
-                            std::vector<SphereDetection>& measured, std::vector<SphereDetection>& detections) {
+                            const ProfileFitOptions& fit_options, const BackgroundShape& wall_shadow,
+                            const std::optional<RadialDistortion>& distortion, std::vector<SphereMatch>& matches,
+                            const std::vector<SphereMatch>& dropped, std::vector<SphereDetection>& measured,
+                            std::vector<SphereDetection>& detections) {
   if (strengths.empty()) return;
   const double typical = median_in_place(strengths);
   const std::size_t n = p.uv.size();
@@ -134,7 +135,7 @@ void recover_missed_spheres(const Image& image, const Prediction& p, double radi
         d.uv = distortion ? distortion->measured_from_ideal(p.uv[k]) : p.uv[k];
         found.push_back(d);
       }
-    const std::vector<bool> refined = refine_cluster_by_profile_fit(image, radius_px, found, {}, wall_shadow);
+    const std::vector<bool> refined = refine_cluster_by_profile_fit(image, radius_px, found, fit_options, wall_shadow);
     for (std::size_t m = 0; m < members.size(); ++m) {
       if (!refined[m] || std::abs(found[m].strength - typical) > 0.3 * typical) continue;
       measured.push_back(found[m]);
@@ -239,12 +240,13 @@ class ViewCalibrator {
     for (const auto* list : {&best.matches, &best.dropped})
       for (const auto& m : *list) {
         const auto i = static_cast<std::size_t>(m.detection);
-        refine_by_profile_fit(v_.image, v_.radius_px, measured_[i], {}, wall_shadow);
+        refine_by_profile_fit(v_.image, v_.radius_px, measured_[i], profile_fit_options(), wall_shadow);
         undistort(i);
         strengths.push_back(measured_[i].strength);
       }
     recover_missed_spheres(v_.image, predict(v_.K, best.fit.T_camera_holder, v_.holder, v_.detector, v_.radius_px), v_.radius_px,
-                           strengths, wall_shadow, v_.distortion, best.matches, best.dropped, measured_, detections_);
+                           strengths, profile_fit_options(), wall_shadow, v_.distortion, best.matches, best.dropped, measured_,
+                           detections_);
     best.fit = fit_matches(best.fit.T_camera_holder, best.matches);
     drop_outliers(best);
   }
@@ -279,7 +281,7 @@ class ViewCalibrator {
       shadow_pose_ = pose;
       for (const auto& m : moved) {
         const auto i = static_cast<std::size_t>(m.detection);
-        refine_by_profile_fit(v_.image, v_.radius_px, measured_[i], {}, shadow);
+        refine_by_profile_fit(v_.image, v_.radius_px, measured_[i], profile_fit_options(), shadow);
         undistort(i);
       }
       best.matches.insert(best.matches.end(), best.dropped.begin(), best.dropped.end());
@@ -330,6 +332,12 @@ class ViewCalibrator {
   }
 
  private:
+  ProfileFitOptions profile_fit_options() const {
+    ProfileFitOptions o;
+    o.contrast_loss = v_.options.contrast_loss;
+    return o;
+  }
+
   // Spheres are looked for only where the first guess can have put them: a shift of the pattern
   // beyond the search is never matched. Most of a detector sees no sphere, and the filters over the
   // whole image were a fifth of a view's time (perf on ctk calibrate, 120 views of 720 x 720).
@@ -468,6 +476,8 @@ void CalibrationOptions::validate() const {
   require_option(robust_px > 0, "CalibrationOptions.robust_px", "a number above 0", robust_px);
   require_option(max_first_guess_error_deg > 0 && max_first_guess_error_deg <= 180,
                  "CalibrationOptions.max_first_guess_error_deg", "a number in (0, 180]", max_first_guess_error_deg);
+  require_option(std::abs(contrast_loss) <= kMostContrastLoss, "CalibrationOptions.contrast_loss",
+                 "a rate in [-2, 2] per unit line integral", contrast_loss);
 }
 
 ViewCalibration calibrate_view(const Image& image, const Eigen::Matrix3d& K, const Rigid& initial, const Holder& holder,

@@ -18,10 +18,11 @@ constexpr double kRadius = 2.6;  // px, the reference holder's 2 mm spheres at m
 // The wall background of the plain tests: a sloping plane.
 double sloping_wall(double u, double v) { return 0.4 + 0.01 * u - 0.004 * v; }
 
-// Balls at `centres` on `background` (evaluated per ray), 8 x 8 rays per pixel.
+// Balls at `centres` on `background` (evaluated per ray), 8 x 8 rays per pixel; each ray's ball
+// chord scaled by exp(-contrast_loss x background), as a beam hardened by the background scales it.
 template <typename Background>
 Image balls_image(const std::vector<Eigen::Vector2d>& centres, double noise, std::mt19937& rng, Background background,
-                  int size = 32) {
+                  int size = 32, double contrast_loss = 0) {
   Image im{size, size, std::vector<float>(static_cast<std::size_t>(size * size))};
   std::normal_distribution<double> gauss(0, noise);
   for (int r = 0; r < im.rows; ++r)
@@ -30,11 +31,13 @@ Image balls_image(const std::vector<Eigen::Vector2d>& centres, double noise, std
       for (int i = 0; i < 8; ++i)
         for (int j = 0; j < 8; ++j) {
           const double u = c - 0.5 + (j + 0.5) / 8, v = r - 0.5 + (i + 0.5) / 8;
-          value += background(u, v) / 64;
+          const double under = background(u, v);
+          value += under / 64;
           // 0.075 /mm aluminium, chord in mm = chord_px / radius (1 mm sphere radius).
           for (const auto& centre : centres) {
             const double x = u - centre.x(), y = v - centre.y();
-            value += 0.075 * 2 * std::sqrt(std::max(0.0, kRadius * kRadius - x * x - y * y)) / kRadius / 64;
+            value += std::exp(-contrast_loss * under) * 0.075 * 2 * std::sqrt(std::max(0.0, kRadius * kRadius - x * x - y * y)) /
+                     kRadius / 64;
           }
         }
       im.pixels[static_cast<std::size_t>(r * im.cols + c)] = static_cast<float>(value + (noise > 0 ? gauss(rng) : 0.0));
@@ -116,6 +119,40 @@ TEST(SphereProfileFit, ABallOnTheWallSilhouetteNeedsTheWallsShape) {
   // The fitted strength is the ball's: 0.075 /mm x (4/3) pi r^3 in px^2 mm with r = 1 mm = 2.6 px.
   const double expected = 0.075 / kRadius * 4 * M_PI / 3 * kRadius * kRadius * kRadius;
   EXPECT_NEAR(known.strength, expected, 0.02 * expected);
+}
+
+TEST(SphereProfileFit, ABallOnTheSilhouetteUnderAHardenedBeamNeedsTheContrastLoss) {
+  // The ball's contrast falls by 30 % per unit of the wall's line integral (a polychromatic beam
+  // behind a plastic wall, as the reference orbits at 70-120 kV measure it): across the ball the
+  // wall's shadow rises steeply, so a fit with a constant contrast leans the centre towards the
+  // thinner side; with the rate the centre is as good as under a monochromatic beam.
+  std::mt19937 rng(3);
+  const Eigen::Vector2d truth(20.3, 16.2), start = truth + Eigen::Vector2d(0.3, -0.2);
+  constexpr double kLoss = 0.3;
+  const BackgroundShape shape = [](const Eigen::Vector2d& uv) { return shell_path_px(uv.x()); };
+  ProfileFitOptions with_loss;
+  with_loss.contrast_loss = kLoss;
+  const auto error = [&](const Image& im, const ProfileFitOptions& o) {
+    SphereDetection d;
+    d.uv = start;
+    EXPECT_TRUE(refine_by_profile_fit(im, kRadius, d, o, shape));
+    return (d.uv - truth).norm();
+  };
+  const double monochromatic = error(balls_image({truth}, 0, rng, tube_wall), {});
+  const Image hardened = balls_image({truth}, 0, rng, tube_wall, 32, kLoss);
+  const double constant = error(hardened, {}), modelled = error(hardened, with_loss);
+  std::cout << "centre off by " << monochromatic << " px (monochromatic beam); hardened beam: " << constant
+            << " px with a constant contrast, " << modelled << " px with the contrast loss\n";
+  EXPECT_LT(std::abs(modelled - monochromatic), 0.002);
+  EXPECT_GT(constant - monochromatic, 0.01);
+  // On a flat background the rate changes nothing (the window's contrast is constant).
+  const Image flat = balls_image(
+      {Eigen::Vector2d(15.3, 16.4)}, 0, rng, [](double, double) { return 0.4; }, 32, kLoss);
+  SphereDetection a, b;
+  a.uv = b.uv = {15.5, 16.0};
+  ASSERT_TRUE(refine_by_profile_fit(flat, kRadius, a, with_loss));
+  ASSERT_TRUE(refine_by_profile_fit(flat, kRadius, b));
+  EXPECT_LT((a.uv - b.uv).norm(), 1e-4);
 }
 
 TEST(SphereProfileFit, TouchingBallsAreFittedTogether) {

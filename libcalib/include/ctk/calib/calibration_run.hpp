@@ -1,7 +1,8 @@
 #pragma once
 // The calibration workflow on a whole scan, as `ctk calibrate` and Python's `ctk.calibrate` run
 // it: every view from its own image (calibrate_scan); a holder wall the scan does not declare
-// measured from the images and the views it cost calibrated again with it; the poses combined
+// measured from the images and the views it cost calibrated again with it; the spheres' contrast
+// loss over their background measured on a sample of views and applied; the poses combined
 // with the robot's prior unless asked not to. Returns the calibration and its report; files
 // (geometry, journal, pictures) are the caller's.
 #include <functional>
@@ -9,6 +10,7 @@
 #include <optional>
 #include <string>
 
+#include "ctk/calib/contrast_loss.hpp"
 #include "ctk/calib/holder_wall.hpp"
 #include "ctk/calib/robot_prior.hpp"
 #include "ctk/calib/scan_calibration.hpp"
@@ -24,10 +26,11 @@ struct CalibrationRunOptions {
 struct CalibrationRun {
   ScanCalibration calibration;  // left_undone > 0: stopped on request, nothing after the views was done
   std::optional<HolderWall> declared_wall;
-  std::optional<WallMeasurement> wall;  // measured, when the scan does not declare it
+  std::optional<WallMeasurement> wall;                   // measured, when the scan does not declare it
+  std::optional<ContrastLossMeasurement> contrast_loss;  // measured on a sample of views before the batch
   bool has_holder = false;
   RobotPriorFit prior;
-  CalibrationOptions options;
+  CalibrationOptions options;  // as the views were calibrated (the measured contrast loss in it when used)
 
   /// ctk-calibration-report/1: summary, options, per-view table, holder wall, robot prior (the
   /// caller adds the file names and pictures).

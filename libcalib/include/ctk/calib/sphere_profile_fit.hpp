@@ -5,7 +5,9 @@
 // the centre (the steep rim most), where the centroid weighs the flat middle most; with the
 // image noise of the reference scans that halves the centre's scatter. Where the background is
 // known not to be planar (a sphere on the silhouette of the holder's wall), its known shape is
-// added to the plane with a fitted scale.
+// added to the plane with a fitted scale. A polychromatic beam (or scatter) makes a ball's
+// contrast fall where the background is higher; the scan's measured rate of that fall
+// (contrast_loss.hpp) scales the chords pixel by pixel.
 #include <functional>
 #include <span>
 #include <vector>
@@ -18,6 +20,7 @@ struct ProfileFitOptions {
   double margin_px = 3.0;    // the window reaches this far beyond the sphere's rim
   int subsamples = 3;        // per pixel and axis: the model is averaged over the pixel's area
   double max_move_px = 1.0;  // a fit moving further from its start is not trusted
+  double contrast_loss = 0;  // the balls' relative contrast lost per unit of background line integral
   void validate() const;     // std::invalid_argument naming the field
 };
 

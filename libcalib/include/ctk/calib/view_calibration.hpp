@@ -12,12 +12,17 @@
 
 namespace ctk {
 
+/// The largest rate at which a ball's contrast may fall per unit of background line integral;
+/// beyond it the chord scaling, a first-order model, would turn contrast negative within reach.
+inline constexpr double kMostContrastLoss = 2.0;
+
 struct CalibrationOptions {
   int min_spheres = 6;                     // fewer matched spheres: rejected
   double max_rms_px = 0.5;                 // larger reprojection RMS: rejected
   double search_px = 40;                   // how far the first guess may put the pattern (5 mm / 3 deg here)
   double robust_px = 1.0;                  // Cauchy scale of the pose fit
   double max_first_guess_error_deg = 6.0;  // a fitted pose turned further from the guess is refused
+  double contrast_loss = 0;                // the balls' contrast lost per unit background line integral (contrast_loss.hpp)
   void validate() const;                   // std::invalid_argument naming the field
 };
 
