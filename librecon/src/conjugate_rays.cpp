@@ -26,6 +26,19 @@ struct Mismatch {
     }
     return n > 0 ? s / static_cast<double>(n) : std::numeric_limits<double>::infinity();
   }
+  // Over the blocks of one pair of opposite quarter turns (`part` 0: the first and third quarters,
+  // 1: the second and fourth): a pair of conjugate views lies in one part, so the two parts
+  // share no measurement.
+  double in_quarters(int part) const {
+    double s = 0;
+    std::int64_t n = 0;
+    for (int b = 0; b < kBlocks; ++b)
+      if ((b * 4 / kBlocks) % 2 == part) {
+        s += sum[static_cast<std::size_t>(b)];
+        n += count[static_cast<std::size_t>(b)];
+      }
+    return n > 0 ? s / static_cast<double>(n) : std::numeric_limits<double>::infinity();
+  }
   double without(int block) const {
     double s = 0;
     std::int64_t n = 0;
@@ -182,6 +195,12 @@ ConjugateRayEstimate conjugate_ray_u0(const FanSinogram& s, double start_px, dou
   for (double w : leave_one) ss += (w - mean) * (w - mean);
   const auto n = static_cast<double>(leave_one.size());
   out.standard_error_px = leave_one.size() > 2 ? std::sqrt(ss * (n - 1) / n) : std::numeric_limits<double>::quiet_NaN();
+  for (int part = 0; part < 2; ++part) {
+    std::vector<double> yp;
+    yp.reserve(m.size());
+    for (const Mismatch& mi : m) yp.push_back(mi.in_quarters(part));
+    (part == 0 ? out.u0_quarters_px[0] : out.u0_quarters_px[1]) = parabola_vertex(x, yp);
+  }
   const Mismatch at_u0 = mismatch(s, period, out.u0_px, out.sense);
   out.rms_mismatch = std::sqrt(at_u0.total());
   out.rms_mismatch_other_sense = std::sqrt(best_other);

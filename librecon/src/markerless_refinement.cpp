@@ -13,6 +13,7 @@
 #include "ctk/core/error.hpp"
 #include "ctk/core/statistics.hpp"
 #include "ctk/recon/detector_pattern.hpp"
+#include "ctk/recon/disjoint_parts.hpp"
 
 namespace ctk {
 
@@ -101,6 +102,10 @@ struct KnobFit {
   double value = 0;
   double standard_error = std::numeric_limits<double>::quiet_NaN();  // unknown when the cost is not a parabola
   bool at_edge = false;                                              // the cost kept falling to the end of the allowed range
+  // The vertex from the first and from the second half of the fit views in time: what moves
+  // during the scan (the object settling, the stage) parts them, which the jackknife over single
+  // views does not see.
+  double first_half = std::numeric_limits<double>::quiet_NaN(), second_half = std::numeric_limits<double>::quiet_NaN();
 };
 
 // Scans one knob over five settings on the fit views, moving the window (by at most its width)
@@ -162,6 +167,13 @@ KnobFit fit_knob(const ConsistencyProbe& probe, State state, const Knob& knob) {
       double ss = 0;
       for (double v : leave_one) ss += (v - mean) * (v - mean);
       out.standard_error = std::sqrt(ss * static_cast<double>(leave_one.size() - 1) / static_cast<double>(leave_one.size()));
+    }
+    // The fit views are in scan order: the halves in time.
+    for (int half = 0; half < 2; ++half) {
+      std::vector<double> t(per_view.size(), 0.0);
+      for (std::size_t i = 0; i < per_view.size(); ++i)
+        for (std::size_t k = half == 0 ? 0 : n / 2; k < (half == 0 ? n / 2 : n); ++k) t[i] += per_view[i][k];
+      (half == 0 ? out.first_half : out.second_half) = parabola_vertex(x, t);
     }
     break;
   }
@@ -286,6 +298,10 @@ Trial try_candidate(const ConsistencyProbe& probe, const State& current, const s
     const double reported = f.value * knob->report_scale + knob->report_offset;
     t.effect.parameters[knob->key] = reported;
     t.effect.uncertainty[knob->key] = f.standard_error * std::abs(knob->report_scale);
+    if (std::isfinite(f.first_half) && std::isfinite(f.second_half) && std::isfinite(f.standard_error))
+      t.effect.halves_in_time[knob->key] = disjoint_parts_json(f.first_half * knob->report_scale + knob->report_offset,
+                                                               f.second_half * knob->report_scale + knob->report_offset,
+                                                               f.standard_error * std::abs(knob->report_scale));
     line << " " << knob->key << " " << reported << " +- " << f.standard_error * std::abs(knob->report_scale);
     if (f.at_edge) {
       t.at_edge = true;
@@ -453,6 +469,7 @@ nlohmann::json refinement_to_json(const RefinementResult& r) {
       j["sharpness_per_mm_before"] = e.sharpness_before;
       j["sharpness_per_mm_after"] = e.sharpness_after;
     }
+    if (!e.halves_in_time.empty()) j["halves_in_time"] = e.halves_in_time;
     if (!e.note.empty()) j["note"] = e.note;
     report.effects.push_back(std::move(reported));
   }

@@ -9,6 +9,7 @@
 #include "ctk/core/error.hpp"
 #include "ctk/measure/measurements.hpp"
 #include "ctk/recon/default_volume.hpp"
+#include "ctk/recon/disjoint_parts.hpp"
 #include "ctk/recon/repeat_exposure.hpp"
 
 namespace ctk {
@@ -103,10 +104,12 @@ RefineScanSummary refine_scan(const ScanDescription& scan, Geometry geometry, co
   return s;
 }
 
-double RefineScanSummary::loop_u0_sigma_px() const {
+double RefineScanSummary::loop_u0_sigma_px(bool covering) const {
   for (const RefinedEffect& e : result.effects)
-    if (e.accepted && e.name == "detector_offset" && e.uncertainty.contains("u0_px") && e.uncertainty.at("u0_px").is_number())
+    if (e.accepted && e.name == "detector_offset" && e.uncertainty.contains("u0_px") && e.uncertainty.at("u0_px").is_number()) {
+      if (covering && e.halves_in_time.contains("u0_px")) return e.halves_in_time.at("u0_px").at("uncertainty").get<double>();
       return e.uncertainty.at("u0_px").get<double>();
+    }
   return 0;
 }
 
@@ -115,25 +118,33 @@ nlohmann::json RefineScanSummary::report() const {
   if (!conjugate) {
     r["cross_check"] = {{"method", "conjugate rays"}, {"note", "not available: " + conjugate_why_not}};
   } else {
-    // Two estimates of one column: where they differ by more than their stated uncertainties
-    // allow, something neither states (the object moving, the yardstick's own error) is at work,
-    // and both uncertainties are scaled by the ratio (the Particle Data Group's scale factor for
-    // inconsistent measurements, S = sqrt(chi^2 / (N - 1)), N = 2).
+    // Two estimates of one column, each with the uncertainty that covers its disjoint parts (the
+    // loop's halves in time, the conjugate pairs' two sets of opposite quarter turns). Where they
+    // differ by more than those allow, something neither states (the yardstick's own error, a
+    // motion both parts share) is at work, and both are scaled by the ratio (the Particle Data
+    // Group's scale factor for inconsistent measurements, S = sqrt(chi^2 / (N - 1)), N = 2).
     const double difference = conjugate->u0_px - loop_u0_px;
-    const double loop_sigma = loop_u0_sigma_px();
-    const double combined = std::hypot(conjugate->standard_error_px, loop_sigma);
+    const double loop_sigma = loop_u0_sigma_px(true);
+    const double quarters_sigma =
+        covering_uncertainty(conjugate->u0_quarters_px[0], conjugate->u0_quarters_px[1], conjugate->standard_error_px);
+    const double combined = std::hypot(quarters_sigma, loop_sigma);
     const double scale = combined > 0 ? std::max(1.0, std::abs(difference) / combined) : 1.0;
     r["cross_check"] = {{"method", "conjugate rays: each line measured half a turn apart must agree"},
                         {"u0_px", conjugate->u0_px},
                         {"uncertainty_px", conjugate->standard_error_px},
+                        {"quarter_turns", disjoint_parts_json(conjugate->u0_quarters_px[0], conjugate->u0_quarters_px[1],
+                                                              conjugate->standard_error_px)},
                         {"rms_mismatch", conjugate->rms_mismatch},
                         {"rms_mismatch_other_sense", conjugate->rms_mismatch_other_sense},
                         {"loop_u0_px", loop_u0_px},
+                        {"loop_uncertainty_px", loop_u0_sigma_px()},
+                        {"loop_uncertainty_covering_px", loop_sigma},
+                        {"uncertainty_covering_px", quarters_sigma},
                         {"difference_px", difference},
                         {"consistent", scale <= 2.0},
                         {"scale_factor", scale},
                         {"loop_uncertainty_scaled_px", loop_sigma * scale},
-                        {"uncertainty_scaled_px", conjugate->standard_error_px * scale}};
+                        {"uncertainty_scaled_px", quarters_sigma * scale}};
   }
   if (repeat)
     r["repeat_exposure"] = {{"views", {0, repeat->last_view}},

@@ -4,7 +4,10 @@ moved sideways by a commanded 0.25 mm = 3.342 px between them: each is imported 
 scanner's record would (its centre estimate `HC` as the principal point, 2.6-2.8 px from where the
 data put the axis) and refined for the detector offset; the loop must accept it with a finite
 uncertainty on every scan, follow the commanded steps (3.342 +- 0.2 px, one direction) and agree
-with the conjugate-ray estimate beside it within 0.3 px. Every 8th of the 3601 views is read (0.8 deg
+with the conjugate-ray estimate beside it within 0.3 px. The uncertainty each states from disjoint
+parts of its scan (the loop's halves in time, the conjugate pairs' opposite quarter turns) must
+cover their difference: the object moves during these scans (the repeat exposure at 360 deg is
+0.4 px off the first view), which the views' scatter alone (0.04 px) did not state. Every 8th of the 3601 views is read (0.8 deg
 apart): on all of them the three refinements take 330 s on 2 cores, on these 45 s, and the steps
 measured are +3.35 and +3.33 px (all views: +3.335, +3.338).  Usage: fan_beam_detector_steps.py CTK DATA_DIR"""
 import argparse
@@ -55,6 +58,16 @@ def main():
             failures.append(f"{which}: uncertainty {sigma}")
         if abs(cross["difference_px"]) > 0.3:
             failures.append(f"{which}: the loop and conjugate rays differ by {cross['difference_px']:.3f} px")
+        halves = effect.get("halves_in_time", {}).get("u0_px")
+        if not halves:
+            failures.append(f"{which}: no estimate from the halves of the scan in time")
+        else:
+            print(f"{which}: halves in time {halves['first']:.3f} / {halves['second']:.3f} -> u0 +- {halves['uncertainty']:.3f} px; "
+                  f"conjugate rays' quarter turns {cross['quarter_turns']['first']:.3f} / {cross['quarter_turns']['second']:.3f}")
+        if not cross.get("consistent"):
+            failures.append(f"{which}: the loop and conjugate rays differ by {cross['difference_px']:.3f} px, beyond the "
+                            f"uncertainties from disjoint parts ({cross.get('loop_uncertainty_covering_px')}, "
+                            f"{cross.get('uncertainty_covering_px')}); scale factor {cross['scale_factor']:.2f}")
         # The scan ends with a new exposure at 360 deg: compared with the first, with a finite error.
         repeat = r.get("repeat_exposure")
         if not repeat or not (math.isfinite(repeat["shift_px"]) and 0 < repeat["shift_sigma_px"] < 0.5):

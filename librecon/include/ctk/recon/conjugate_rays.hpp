@@ -27,8 +27,11 @@ struct FanSinogram {
 struct ConjugateRayEstimate {
   double u0_px = 0;
   double standard_error_px = 0;  // jackknife over blocks of views
-  int sense = 0;                 // s above: the one whose pairs agree (the other disagrees by far)
-  double rms_mismatch = 0;       // between the two measurements of a line at u0, line-integral units
+  // From the first and third quarter turns, and from the second and fourth: disjoint measurements
+  // (each conjugate pair lies within one), parted by whatever moves during the scan.
+  double u0_quarters_px[2] = {0, 0};
+  int sense = 0;            // s above: the one whose pairs agree (the other disagrees by far)
+  double rms_mismatch = 0;  // between the two measurements of a line at u0, line-integral units
   double rms_mismatch_other_sense = 0;
   std::int64_t pairs = 0;  // pairs of measurements compared at u0
 };

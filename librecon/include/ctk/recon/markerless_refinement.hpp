@@ -43,6 +43,9 @@ struct RefinedEffect {
   bool accepted = false;
   int round = 0;
   nlohmann::json parameters, uncertainty;
+  /// Per knob: the estimates from the first and second half of the fit views in time, and the
+  /// uncertainty that covers both (disjoint_parts.hpp).
+  nlohmann::json halves_in_time = nlohmann::json::object();
   double heldout_rms_before = 0, heldout_rms_after = 0, z = 0;
   double sharpness_before = 0, sharpness_after = 0;  // only for accepted effects
   std::vector<std::string> confounded_with;

@@ -35,8 +35,9 @@ struct RefineScanSummary {
   std::size_t clamped_pixels = 0, masked_pixels = 0;  // counts at or below dark; not finite (weight 0)
   std::vector<std::string> left_out;                  // views not used, with the reason
   double seconds = 0;
-  /// The loop's stated uncertainty of the axis' column (0 when the detector offset was not fitted).
-  double loop_u0_sigma_px() const;
+  /// The loop's stated uncertainty of the axis' column (0 when the detector offset was not fitted):
+  /// its views' scatter, or (`covering`) the larger of that and its halves in time's spread.
+  double loop_u0_sigma_px(bool covering = false) const;
   /// ctk-diagnosis/1 (mode "markerless") with the cross-check; the caller adds file names.
   nlohmann::json report() const;
   /// One line: held-out RMS before -> after and the effects accepted.
