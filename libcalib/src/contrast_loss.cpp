@@ -38,26 +38,25 @@ std::vector<int> contrast_sample_views(int projections, int count) {
 
 ContrastLossMeasurement measure_contrast_loss(const std::function<ScanCalibration(const CalibrationOptions&)>& calibrate_sample,
                                               const CalibrationOptions& options) {
-  std::vector<double> rates;
+  std::vector<double> rates;  // the trials, in increasing order
   std::vector<ViewResiduals> residuals;
-  const auto try_rate = [&](double rate, bool at_front) {
+  const auto try_rate = [&](double rate) {
     CalibrationOptions o = options;
     o.contrast_loss = rate;
-    ViewResiduals r = residuals_by_view(calibrate_sample(o));
-    rates.insert(at_front ? rates.begin() : rates.end(), rate);
-    residuals.insert(at_front ? residuals.begin() : residuals.end(), std::move(r));
+    const auto at = static_cast<std::size_t>(std::lower_bound(rates.begin(), rates.end(), rate) - rates.begin());
+    rates.insert(rates.begin() + static_cast<std::ptrdiff_t>(at), rate);
+    residuals.insert(residuals.begin() + static_cast<std::ptrdiff_t>(at), residuals_by_view(calibrate_sample(o)));
   };
   ContrastLossMeasurement m;
   std::vector<double> agreement;
-  std::size_t best = 0;
-  int spheres = 0;
-  // Trials at 0 and one step, then a step beyond an end that agrees better than its neighbour
-  // until neither does (or the range ends). The agreement is judged on the views every trial
-  // calibrated.
-  int lowest = 0, highest = 1;  // the trials' rates in steps
+  std::vector<int> spheres;
+  // Trials at 0 and one step, then a step beyond the last while it agrees better than the one
+  // before (up to the range's end); when 0 agrees best, half a step between. The agreement is
+  // judged on the views every trial calibrated.
+  int highest = 1;  // the last trial's rate in steps
   const int most = static_cast<int>(std::floor(kMostContrastLoss / kStep + 1e-9));
-  try_rate(0, false);
-  try_rate(kStep, false);
+  try_rate(0);
+  try_rate(kStep);
   while (true) {
     std::vector<int> common;
     for (const auto& entry : residuals.front()) {
@@ -66,44 +65,51 @@ ContrastLossMeasurement measure_contrast_loss(const std::function<ScanCalibratio
         common.push_back(v);
     }
     agreement.assign(rates.size(), HUGE_VAL);
-    std::vector<int> used(rates.size(), 0);
+    spheres.assign(rates.size(), 0);
     for (std::size_t t = 0; t < rates.size(); ++t) {
       double sum = 0;
       for (int v : common) {
         sum += residuals[t].at(v).first;
-        used[t] += residuals[t].at(v).second;
+        spheres[t] += residuals[t].at(v).second;
       }
-      if (used[t] > 0) agreement[t] = sum / used[t];
+      if (spheres[t] > 0) agreement[t] = sum / spheres[t];
     }
-    best = static_cast<std::size_t>(std::min_element(agreement.begin(), agreement.end()) - agreement.begin());
     m.views = static_cast<int>(common.size());
-    spheres = used[best];
     const std::size_t last = rates.size() - 1;
-    if (agreement[0] < agreement[1] && lowest > -most)
-      try_rate(--lowest * kStep, true);
-    else if (agreement[last] < agreement[last - 1] && highest < most)
-      try_rate(++highest * kStep, false);
+    if (agreement[last] < agreement[last - 1] && highest < most)
+      try_rate(++highest * kStep);
+    else if (rates.size() == 2 && agreement[0] <= agreement[1])
+      try_rate(kStep / 2);
     else
       break;
   }
   m.trial_rates = rates;
   m.mean_squared_px2 = agreement;
-  m.spheres = spheres;
-  m.rate = rates[best];
   m.sigma = HUGE_VAL;
-  if (m.views == 0 || best == 0 || best + 1 == rates.size()) return m;  // nothing calibrated, or the range's end
-  // A parabola through the best trial and its neighbours: its vertex is the rate, its curvature
-  // the information. The summed squares are N S(rate) over N spheres (2N numbers less 6 per view's
-  // pose); one standard error moves them by the residual variance per number.
-  const double below = agreement[best - 1], at = agreement[best], above = agreement[best + 1];
-  const double curvature = (below - 2 * at + above) / (2 * kStep * kStep);  // S'' / 2
+  const auto best = static_cast<std::size_t>(std::min_element(agreement.begin(), agreement.end()) - agreement.begin());
+  m.spheres = spheres[best];
+  m.rate = rates[best];
+  if (m.views == 0 || (best + 1 == rates.size() && highest >= most)) return m;  // nothing calibrated, or the range's end
+  // A parabola through the best trial and its neighbours (the first three when 0 is best): its
+  // vertex is the rate, its curvature the information. The summed squares are N S(rate) over N
+  // spheres (2N numbers less 6 per view's pose); one standard error moves them by the residual
+  // variance per number.
+  const std::size_t mid = std::clamp<std::size_t>(best, 1, rates.size() - 2);
+  const double x0 = rates[mid - 1], x1 = rates[mid], x2 = rates[mid + 1];
+  const double y0 = agreement[mid - 1], y1 = agreement[mid], y2 = agreement[mid + 1];
+  const double slope01 = (y1 - y0) / (x1 - x0), curvature = ((y2 - y1) / (x2 - x1) - slope01) / (x2 - x0);  // S'' / 2
   if (!(curvature > 0)) return m;
-  m.rate = rates[best] - (above - below) / (4 * curvature * kStep);
-  const double freedom = 2.0 * spheres - 6.0 * m.views;
+  const double vertex = 0.5 * (x0 + x1) - slope01 / (2 * curvature);
+  if (vertex <= 0) {  // no loss: a contrast that grew with the background would stand for another model error
+    m.rate = 0;
+    return m;
+  }
+  m.rate = vertex;
+  const double least = y0 + slope01 * (vertex - x0) + curvature * (vertex - x0) * (vertex - x1);
+  const double freedom = 2.0 * m.spheres - 6.0 * m.views;
   if (freedom <= 0) return m;
-  const double least = at - curvature * (m.rate - rates[best]) * (m.rate - rates[best]);
-  const double variance = least * spheres / freedom;
-  m.sigma = std::sqrt(variance / (spheres * curvature));
+  const double variance = least * m.spheres / freedom;
+  m.sigma = std::sqrt(variance / (m.spheres * curvature));
   m.used = true;
   return m;
 }

@@ -235,7 +235,7 @@ def refine(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] = None
 class CalibrationResult:
     """What the calibration found: the geometry (ctk-geometry/1 dict: one matrix per ok view, a
     reason per rejected one), the report (ctk-calibration-report/1 dict: per-view table, holder
-    wall, robot prior) and a summary."""
+    wall, the spheres' contrast loss, robot prior) and a summary."""
 
     geometry: dict
     report: dict

@@ -59,20 +59,31 @@ TEST(ContrastLoss, TheParabolasVertexWithItsStandardError) {
   EXPECT_EQ(m.spheres, kViews * kSpheres);
 }
 
-TEST(ContrastLoss, StepsTowardsTheBetterAgreementOnEitherSide) {
+TEST(ContrastLoss, StepsOnWhileTheAgreementImproves) {
   ParabolicSample far(0.93);
   EXPECT_NEAR(measured(far).rate, 0.93, 1e-9);
   EXPECT_EQ(far.asked, steps({0, 1, 2, 3, 4, 5, 6}));
+}
+
+TEST(ContrastLoss, NearZeroHalfAStepBetweenAndNeverBelowZero) {
+  ParabolicSample small(0.04);
+  const ContrastLossMeasurement m = measured(small);
+  EXPECT_EQ(small.asked, (std::vector<double>{0, 0.2, 0.1}));
+  EXPECT_NEAR(m.rate, 0.04, 1e-9);
+  EXPECT_TRUE(m.used);
+  // A contrast that grows with the background is no loss: another error of the model.
   ParabolicSample below(-0.13);
-  EXPECT_NEAR(measured(below).rate, -0.13, 1e-9);
-  EXPECT_EQ(below.asked, steps({0, 1, -1, -2}));
+  const ContrastLossMeasurement none = measured(below);
+  EXPECT_EQ(none.rate, 0);
+  EXPECT_FALSE(none.used);
+  EXPECT_EQ(below.asked, (std::vector<double>{0, 0.2, 0.1}));
 }
 
 TEST(ContrastLoss, AnAgreementThatDoesNotCareIsNotAMeasurement) {
   ParabolicSample flat(0.4);
   flat.curvature = 0;  // no sphere on a varying background: every rate fits alike
   const ContrastLossMeasurement m = measured(flat);
-  EXPECT_EQ(flat.asked, steps({0, 1}));
+  EXPECT_EQ(flat.asked, (std::vector<double>{0, 0.2, 0.1}));
   EXPECT_FALSE(std::isfinite(m.sigma));
   EXPECT_FALSE(m.used);
 }

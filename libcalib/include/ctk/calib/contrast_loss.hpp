@@ -18,7 +18,7 @@ namespace ctk {
 struct ContrastLossMeasurement {
   double rate = 0;                       // best agreement, per unit background line integral
   double sigma = 0;                      // its standard error (the agreement's curvature)
-  bool used = false;                     // measured (a minimum within reach): calibration applies it
+  bool used = false;                     // measured above zero: calibration applies it
   int views = 0;                         // sample views calibrated at every trial rate
   int spheres = 0;                       // their spheres used at the best trial
   std::vector<double> trial_rates;       // the rates tried
@@ -28,12 +28,15 @@ struct ContrastLossMeasurement {
 /// Up to `count` views spread evenly over a scan of `projections` views.
 std::vector<int> contrast_sample_views(int projections, int count = 24);
 
-/// Calibrates the sample with `CalibrationOptions::contrast_loss` set to each trial rate, stepping
-/// from 0 and 0.2 towards the better agreement (within +-kMostContrastLoss), and places the best rate
-/// by a parabola through the best trial and its neighbours; it is used whenever that minimum lies
-/// within the trials (a rate near zero then changes little, and a threshold on its significance
-/// left a 2.9-sigma loss unmodelled and its bias accepted as a distortion). `calibrate_sample`
-/// calibrates the same views each time with the options given (image-only poses).
+/// Calibrates the sample with `CalibrationOptions::contrast_loss` set to each trial rate (0 and 0.2,
+/// then 0.2 further while the last agrees better, up to kMostContrastLoss; 0.1 when 0 agrees best)
+/// and places the rate by a parabola through the best trial and its neighbours. A ball's contrast
+/// only falls where more is in the way (hardening and scatter both lower it): a vertex below zero
+/// stands for some other error of the model (on spinning caps with a sample inside, -0.18 on a
+/// monochromatic scan), so the rate is then 0. It is used whenever it is measured: a threshold on
+/// its significance left a 2.9-sigma loss unmodelled and its bias accepted as a distortion.
+/// `calibrate_sample` calibrates the same views each time with the options given (image-only
+/// poses).
 ContrastLossMeasurement measure_contrast_loss(const std::function<ScanCalibration(const CalibrationOptions&)>& calibrate_sample,
                                               const CalibrationOptions& options);
 
