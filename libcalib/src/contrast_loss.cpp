@@ -13,15 +13,16 @@ namespace {
 // polychromatic orbits, so three trials span it.
 constexpr double kStep = 0.2;
 
-// Per view calibrated: its squared residuals summed over its spheres, and how many spheres.
-using ViewResiduals = std::map<int, std::pair<double, int>>;
+// Per (view, sphere) used by a calibrated view: its squared reprojection residual.
+using Residuals = std::map<std::pair<int, int>, double>;
 
-ViewResiduals residuals_by_view(const ScanCalibration& c) {
-  ViewResiduals out;
+Residuals residuals_by_sphere(const ScanCalibration& c) {
+  Residuals out;
   for (std::size_t v = 0; v < c.views.size(); ++v) {
     const ViewCalibration& view = c.views[v];
-    if (view.status == ViewStatus::ok && view.spheres_used > 0)
-      out[static_cast<int>(v)] = {view.rms_px * view.rms_px * view.spheres_used, view.spheres_used};
+    if (view.status != ViewStatus::ok) continue;
+    for (std::size_t k = 0; k < view.spheres.size(); ++k)
+      out[{static_cast<int>(v), view.spheres[k]}] = (view.detected_px[k] - view.fitted_px[k]).squaredNorm();
   }
   return out;
 }
@@ -39,71 +40,76 @@ std::vector<int> contrast_sample_views(int projections, int count) {
 ContrastLossMeasurement measure_contrast_loss(const std::function<ScanCalibration(const CalibrationOptions&)>& calibrate_sample,
                                               const CalibrationOptions& options) {
   std::vector<double> rates;  // the trials, in increasing order
-  std::vector<ViewResiduals> residuals;
+  std::vector<Residuals> residuals;
   const auto try_rate = [&](double rate) {
     CalibrationOptions o = options;
     o.contrast_loss = rate;
     const auto at = static_cast<std::size_t>(std::lower_bound(rates.begin(), rates.end(), rate) - rates.begin());
     rates.insert(rates.begin() + static_cast<std::ptrdiff_t>(at), rate);
-    residuals.insert(residuals.begin() + static_cast<std::ptrdiff_t>(at), residuals_by_view(calibrate_sample(o)));
+    residuals.insert(residuals.begin() + static_cast<std::ptrdiff_t>(at), residuals_by_sphere(calibrate_sample(o)));
   };
   ContrastLossMeasurement m;
   std::vector<double> agreement;
-  std::vector<int> spheres;
-  // Trials at 0 and one step, then a step beyond the last while it agrees better than the one
-  // before (up to the range's end); when 0 agrees best, half a step between. The agreement is
-  // judged on the views every trial calibrated.
-  int highest = 1;  // the last trial's rate in steps
+  int spheres = 0;
+  // Trials at 0 and one step, then a step beyond an end while it agrees better than its neighbour
+  // (within the range); then half a step either side of the best. The agreement is the mean
+  // squared residual over the (view, sphere) pairs every trial used: which spheres a view keeps
+  // changes with the rate, and a view's mean with it (over each trial's own spheres the agreement
+  // jumped by more than the rate moved it, and its parabola put a cap scan's rate at -0.14 where
+  // half steps found +0.08). Spheres some trial lost do not count, even where they say most.
+  int lowest = 0, highest = 1;  // the coarse trials' ends, in steps
   const int most = static_cast<int>(std::floor(kMostContrastLoss / kStep + 1e-9));
   try_rate(0);
   try_rate(kStep);
+  bool refined = false;
   while (true) {
-    std::vector<int> common;
+    std::vector<std::pair<int, int>> common;
     for (const auto& entry : residuals.front()) {
-      const int v = entry.first;
-      if (std::all_of(residuals.begin(), residuals.end(), [v](const ViewResiduals& r) { return r.contains(v); }))
-        common.push_back(v);
+      const std::pair<int, int> key = entry.first;
+      if (std::all_of(residuals.begin(), residuals.end(), [&key](const Residuals& r) { return r.contains(key); }))
+        common.push_back(key);
     }
     agreement.assign(rates.size(), HUGE_VAL);
-    spheres.assign(rates.size(), 0);
-    for (std::size_t t = 0; t < rates.size(); ++t) {
+    for (std::size_t t = 0; t < rates.size() && !common.empty(); ++t) {
       double sum = 0;
-      for (int v : common) {
-        sum += residuals[t].at(v).first;
-        spheres[t] += residuals[t].at(v).second;
-      }
-      if (spheres[t] > 0) agreement[t] = sum / spheres[t];
+      for (const auto& key : common) sum += residuals[t].at(key);
+      agreement[t] = sum / static_cast<double>(common.size());
     }
-    m.views = static_cast<int>(common.size());
+    spheres = static_cast<int>(common.size());
+    std::vector<int> views;
+    for (const auto& key : common)
+      if (views.empty() || views.back() != key.first) views.push_back(key.first);
+    m.views = static_cast<int>(views.size());
     const std::size_t last = rates.size() - 1;
-    if (agreement[last] < agreement[last - 1] && highest < most)
+    const auto best = static_cast<std::size_t>(std::min_element(agreement.begin(), agreement.end()) - agreement.begin());
+    if (!refined && best == 0 && lowest > -most) {
+      try_rate(--lowest * kStep);
+    } else if (!refined && best == last && highest < most) {
       try_rate(++highest * kStep);
-    else if (rates.size() == 2 && agreement[0] <= agreement[1])
-      try_rate(kStep / 2);
-    else
+    } else if (!refined && best != 0 && best != last) {
+      refined = true;  // the coarse minimum has a neighbour each side: half steps about it
+      const double at = rates[best];
+      try_rate(at - kStep / 2);
+      try_rate(at + kStep / 2);
+    } else {
       break;
+    }
   }
   m.trial_rates = rates;
   m.mean_squared_px2 = agreement;
   m.sigma = HUGE_VAL;
   const auto best = static_cast<std::size_t>(std::min_element(agreement.begin(), agreement.end()) - agreement.begin());
-  m.spheres = spheres[best];
+  m.spheres = spheres;
   m.rate = rates[best];
-  if (m.views == 0 || (best + 1 == rates.size() && highest >= most)) return m;  // nothing calibrated, or the range's end
-  // A parabola through the best trial and its neighbours (the first three when 0 is best): its
-  // vertex is the rate, its curvature the information. The summed squares are N S(rate) over N
-  // spheres (2N numbers less 6 per view's pose); one standard error moves them by the residual
-  // variance per number.
-  const std::size_t mid = std::clamp<std::size_t>(best, 1, rates.size() - 2);
-  const double x0 = rates[mid - 1], x1 = rates[mid], x2 = rates[mid + 1];
-  const double y0 = agreement[mid - 1], y1 = agreement[mid], y2 = agreement[mid + 1];
+  if (m.views == 0 || !refined || best == 0 || best + 1 == rates.size()) return m;  // nothing calibrated, or the range's end
+  // A parabola through the best trial and its half-step neighbours: its vertex is the rate, its
+  // curvature the information. The summed squares are N S(rate) over N spheres (2N numbers less 6
+  // per view's pose); one standard error moves them by the residual variance per number.
+  const double x0 = rates[best - 1], x1 = rates[best], x2 = rates[best + 1];
+  const double y0 = agreement[best - 1], y1 = agreement[best], y2 = agreement[best + 1];
   const double slope01 = (y1 - y0) / (x1 - x0), curvature = ((y2 - y1) / (x2 - x1) - slope01) / (x2 - x0);  // S'' / 2
   if (!(curvature > 0)) return m;
   const double vertex = 0.5 * (x0 + x1) - slope01 / (2 * curvature);
-  if (vertex <= 0) {  // no loss: a contrast that grew with the background would stand for another model error
-    m.rate = 0;
-    return m;
-  }
   m.rate = vertex;
   const double least = y0 + slope01 * (vertex - x0) + curvature * (vertex - x0) * (vertex - x1);
   const double freedom = 2.0 * m.spheres - 6.0 * m.views;

@@ -13,8 +13,8 @@ namespace {
 
 constexpr int kViews = 24, kSpheres = 40;
 
-// Every view's squared residual per sphere: `floor` + `curvature` (rate - best)^2, a view
-// (`failing`) not calibrated at rates above 0.5.
+// Every sphere's squared residual: `floor` (1 + v / 10) + `curvature` (rate - best)^2 in view v, a
+// view (`failing`) not calibrated at rates above 0.5.
 struct ParabolicSample {
   explicit ParabolicSample(double best_rate) : best(best_rate) {}
   double best, floor = 0.01, curvature = 0.05;
@@ -29,7 +29,12 @@ struct ParabolicSample {
       if (v == failing && o.contrast_loss > 0.5) continue;  // rejected
       view.status = ViewStatus::ok;
       view.spheres_used = kSpheres;
-      view.rms_px = std::sqrt(floor * (1 + 0.1 * v) + curvature * (o.contrast_loss - best) * (o.contrast_loss - best));
+      const double residual = std::sqrt(floor * (1 + 0.1 * v) + curvature * (o.contrast_loss - best) * (o.contrast_loss - best));
+      for (int k = 0; k < kSpheres; ++k) {
+        view.spheres.push_back(k);
+        view.fitted_px.emplace_back(10.0 * k, 5.0);
+        view.detected_px.push_back(view.fitted_px.back() + Eigen::Vector2d(residual, 0));
+      }
     }
     return c;
   }
@@ -50,40 +55,32 @@ TEST(ContrastLoss, TheParabolasVertexWithItsStandardError) {
   ParabolicSample sample(0.27);
   const ContrastLossMeasurement m = measured(sample);
   EXPECT_NEAR(m.rate, 0.27, 1e-9);
-  EXPECT_EQ(sample.asked, steps({0, 1, 2}));
+  EXPECT_EQ(sample.asked, (std::vector<double>{0, 0.2, 0.4, 0.2 - 0.1, 0.2 + 0.1}));
   // 960 spheres' 1,920 numbers less 144 pose parameters; the mean floor is 0.01 x 2.15.
   const double variance = 0.01 * 2.15 * 960 / (1920 - 144);
   EXPECT_NEAR(m.sigma, std::sqrt(variance / (960 * 0.05)), 1e-9);
   EXPECT_TRUE(m.used);
   EXPECT_EQ(m.views, kViews);
-  EXPECT_EQ(m.spheres, kViews * kSpheres);
+  EXPECT_EQ(m.spheres, kViews * kSpheres);  // (view, sphere) pairs
 }
 
-TEST(ContrastLoss, StepsOnWhileTheAgreementImproves) {
+TEST(ContrastLoss, StepsTowardsTheBetterAgreementOnEitherSideThenHalfSteps) {
   ParabolicSample far(0.93);
   EXPECT_NEAR(measured(far).rate, 0.93, 1e-9);
-  EXPECT_EQ(far.asked, steps({0, 1, 2, 3, 4, 5, 6}));
-}
-
-TEST(ContrastLoss, NearZeroHalfAStepBetweenAndNeverBelowZero) {
-  ParabolicSample small(0.04);
-  const ContrastLossMeasurement m = measured(small);
-  EXPECT_EQ(small.asked, (std::vector<double>{0, 0.2, 0.1}));
-  EXPECT_NEAR(m.rate, 0.04, 1e-9);
-  EXPECT_TRUE(m.used);
-  // A contrast that grows with the background is no loss: another error of the model.
+  std::vector<double> expected = steps({0, 1, 2, 3, 4, 5, 6});
+  expected.insert(expected.end(), {1.0 - 0.1, 1.0 + 0.1});
+  EXPECT_EQ(far.asked, expected);
   ParabolicSample below(-0.13);
-  const ContrastLossMeasurement none = measured(below);
-  EXPECT_EQ(none.rate, 0);
-  EXPECT_FALSE(none.used);
-  EXPECT_EQ(below.asked, (std::vector<double>{0, 0.2, 0.1}));
+  const ContrastLossMeasurement m = measured(below);
+  EXPECT_NEAR(m.rate, -0.13, 1e-9);
+  EXPECT_TRUE(m.used);
+  EXPECT_EQ(below.asked, (std::vector<double>{0, 0.2, -0.2, -0.4, -0.2 - 0.1, -0.2 + 0.1}));
 }
 
 TEST(ContrastLoss, AnAgreementThatDoesNotCareIsNotAMeasurement) {
   ParabolicSample flat(0.4);
   flat.curvature = 0;  // no sphere on a varying background: every rate fits alike
   const ContrastLossMeasurement m = measured(flat);
-  EXPECT_EQ(flat.asked, (std::vector<double>{0, 0.2, 0.1}));
   EXPECT_FALSE(std::isfinite(m.sigma));
   EXPECT_FALSE(m.used);
 }
