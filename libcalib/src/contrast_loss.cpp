@@ -51,13 +51,16 @@ ContrastLossMeasurement measure_contrast_loss(const std::function<ScanCalibratio
   ContrastLossMeasurement m;
   std::vector<double> agreement;
   int spheres = 0;
-  // Trials at 0 and one step, then a step beyond an end while it agrees better than its neighbour
-  // (within the range); then half a step either side of the best. The agreement is the mean
-  // squared residual over the (view, sphere) pairs every trial used: which spheres a view keeps
-  // changes with the rate, and a view's mean with it (over each trial's own spheres the agreement
-  // jumped by more than the rate moved it, and its parabola put a cap scan's rate at -0.14 where
-  // half steps found +0.08). Spheres some trial lost do not count, even where they say most.
-  int lowest = 0, highest = 1;  // the coarse trials' ends, in steps
+  // Trials at 0 and one step, then a step beyond the last while it agrees better than the one
+  // before (within the range); then half a step either side of the best (only above it when 0 is
+  // best). A ball's contrast only falls where more is in the way (hardening and scatter both lower
+  // it), so no rate below zero is tried: a vertex below zero stands for another error of the model
+  // (a monochromatic orbit of 1.3 px spheres measured -0.22 and let a holder mount lead the README
+  // example's base offset). The agreement is the mean squared residual over the (view, sphere)
+  // pairs every trial used: which spheres a view keeps changes with the rate, and a view's mean
+  // with it (over each trial's own spheres it jumped by more than the rate moved it). Spheres some
+  // trial lost do not count, even where they say most.
+  int highest = 1;  // the coarse trials' end, in steps
   const int most = static_cast<int>(std::floor(kMostContrastLoss / kStep + 1e-9));
   try_rate(0);
   try_rate(kStep);
@@ -82,14 +85,12 @@ ContrastLossMeasurement measure_contrast_loss(const std::function<ScanCalibratio
     m.views = static_cast<int>(views.size());
     const std::size_t last = rates.size() - 1;
     const auto best = static_cast<std::size_t>(std::min_element(agreement.begin(), agreement.end()) - agreement.begin());
-    if (!refined && best == 0 && lowest > -most) {
-      try_rate(--lowest * kStep);
-    } else if (!refined && best == last && highest < most) {
+    if (!refined && best == last && highest < most) {
       try_rate(++highest * kStep);
-    } else if (!refined && best != 0 && best != last) {
-      refined = true;  // the coarse minimum has a neighbour each side: half steps about it
+    } else if (!refined && best + 1 < rates.size()) {
+      refined = true;  // half steps about the coarse minimum
       const double at = rates[best];
-      try_rate(at - kStep / 2);
+      if (best > 0) try_rate(at - kStep / 2);
       try_rate(at + kStep / 2);
     } else {
       break;
@@ -101,15 +102,21 @@ ContrastLossMeasurement measure_contrast_loss(const std::function<ScanCalibratio
   const auto best = static_cast<std::size_t>(std::min_element(agreement.begin(), agreement.end()) - agreement.begin());
   m.spheres = spheres;
   m.rate = rates[best];
-  if (m.views == 0 || !refined || best == 0 || best + 1 == rates.size()) return m;  // nothing calibrated, or the range's end
-  // A parabola through the best trial and its half-step neighbours: its vertex is the rate, its
-  // curvature the information. The summed squares are N S(rate) over N spheres (2N numbers less 6
-  // per view's pose); one standard error moves them by the residual variance per number.
-  const double x0 = rates[best - 1], x1 = rates[best], x2 = rates[best + 1];
-  const double y0 = agreement[best - 1], y1 = agreement[best], y2 = agreement[best + 1];
+  if (m.views == 0 || !refined || best + 1 == rates.size()) return m;  // nothing calibrated, or the range's end
+  // A parabola through the best trial and its neighbours (the first three when 0 is best): its
+  // vertex is the rate, its curvature the information. The summed squares are N S(rate) over N
+  // spheres (2N numbers less 6 per view's pose); one standard error moves them by the residual
+  // variance per number.
+  const std::size_t mid = std::max<std::size_t>(best, 1);
+  const double x0 = rates[mid - 1], x1 = rates[mid], x2 = rates[mid + 1];
+  const double y0 = agreement[mid - 1], y1 = agreement[mid], y2 = agreement[mid + 1];
   const double slope01 = (y1 - y0) / (x1 - x0), curvature = ((y2 - y1) / (x2 - x1) - slope01) / (x2 - x0);  // S'' / 2
   if (!(curvature > 0)) return m;
   const double vertex = 0.5 * (x0 + x1) - slope01 / (2 * curvature);
+  if (vertex <= 0) {
+    m.rate = 0;
+    return m;
+  }
   m.rate = vertex;
   const double least = y0 + slope01 * (vertex - x0) + curvature * (vertex - x0) * (vertex - x1);
   const double freedom = 2.0 * m.spheres - 6.0 * m.views;

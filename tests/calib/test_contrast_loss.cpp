@@ -64,17 +64,26 @@ TEST(ContrastLoss, TheParabolasVertexWithItsStandardError) {
   EXPECT_EQ(m.spheres, kViews * kSpheres);  // (view, sphere) pairs
 }
 
-TEST(ContrastLoss, StepsTowardsTheBetterAgreementOnEitherSideThenHalfSteps) {
+TEST(ContrastLoss, StepsOnWhileTheAgreementImprovesThenHalfSteps) {
   ParabolicSample far(0.93);
   EXPECT_NEAR(measured(far).rate, 0.93, 1e-9);
   std::vector<double> expected = steps({0, 1, 2, 3, 4, 5, 6});
   expected.insert(expected.end(), {1.0 - 0.1, 1.0 + 0.1});
   EXPECT_EQ(far.asked, expected);
-  ParabolicSample below(-0.13);
-  const ContrastLossMeasurement m = measured(below);
-  EXPECT_NEAR(m.rate, -0.13, 1e-9);
+}
+
+TEST(ContrastLoss, NearZeroHalfAStepAboveAndNeverBelowZero) {
+  ParabolicSample small(0.04);
+  const ContrastLossMeasurement m = measured(small);
+  EXPECT_EQ(small.asked, (std::vector<double>{0, 0.2, 0.1}));
+  EXPECT_NEAR(m.rate, 0.04, 1e-9);
   EXPECT_TRUE(m.used);
-  EXPECT_EQ(below.asked, (std::vector<double>{0, 0.2, -0.2, -0.4, -0.2 - 0.1, -0.2 + 0.1}));
+  // A contrast that grows with the background is no loss: another error of the model.
+  ParabolicSample below(-0.13);
+  const ContrastLossMeasurement none = measured(below);
+  EXPECT_EQ(below.asked, (std::vector<double>{0, 0.2, 0.1}));
+  EXPECT_EQ(none.rate, 0);
+  EXPECT_FALSE(none.used);
 }
 
 TEST(ContrastLoss, AnAgreementThatDoesNotCareIsNotAMeasurement) {

@@ -18,7 +18,7 @@ namespace ctk {
 struct ContrastLossMeasurement {
   double rate = 0;                       // best agreement, per unit background line integral
   double sigma = 0;                      // its standard error (the agreement's curvature)
-  bool used = false;                     // measured (a minimum inside the trials): calibration applies it
+  bool used = false;                     // measured above zero: calibration applies it
   int views = 0;                         // sample views calibrated at every trial rate
   int spheres = 0;                       // (view, sphere) pairs every trial used
   std::vector<double> trial_rates;       // the rates tried
@@ -29,14 +29,14 @@ struct ContrastLossMeasurement {
 std::vector<int> contrast_sample_views(int projections, int count = 24);
 
 /// Calibrates the sample with `CalibrationOptions::contrast_loss` set to each trial rate (0 and 0.2,
-/// then 0.2 further beyond an end while it agrees better, within +-kMostContrastLoss; then half a
-/// step either side of the best) and places the rate by a parabola through the best trial and its
-/// neighbours. The agreement is the mean squared reprojection residual over the (view, sphere)
-/// pairs every trial used. The rate is used whenever it is measured (a minimum inside the trials):
-/// a threshold on its significance left a 2.9-sigma loss unmodelled and its bias accepted as a
-/// distortion; monochromatic scans measure it near zero (-0.06 +- 0.02 on an orbit).
-/// `calibrate_sample` calibrates the same views each time with the options given (image-only
-/// poses).
+/// then 0.2 further while the last agrees better, up to kMostContrastLoss; then half a step either
+/// side of the best, or above 0 when 0 is best) and places the rate by a parabola through the best
+/// trial and its neighbours. The agreement is the mean squared reprojection residual over the
+/// (view, sphere) pairs every trial used. A ball's contrast only falls where more is in the way, so
+/// a vertex below zero gives 0 (not used). The rate is used whenever it is measured above zero: a
+/// threshold on its significance left a 2.9-sigma loss unmodelled and its bias accepted as a
+/// distortion. `calibrate_sample` calibrates the same views each time with the options given
+/// (image-only poses).
 ContrastLossMeasurement measure_contrast_loss(const std::function<ScanCalibration(const CalibrationOptions&)>& calibrate_sample,
                                               const CalibrationOptions& options);
 
