@@ -60,8 +60,8 @@ CalibrationRun run_calibration(const ScanDescription& scan, const CalibrationRun
     wall_seconds = seconds_since(start);
   }
   // The spheres' contrast loss over their background (a polychromatic beam, scatter), measured in
-  // a sample of views with the wall as modelled, then applied to every view when it is distinct
-  // from zero.
+  // a sample of views with the wall as modelled, then applied to every view when measured above
+  // zero.
   const auto contrast_start = std::chrono::steady_clock::now();
   const std::vector<int> sample = contrast_sample_views(scan.projections.count);
   run.contrast_loss = measure_contrast_loss(
