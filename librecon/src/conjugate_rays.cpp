@@ -199,7 +199,7 @@ ConjugateRayEstimate conjugate_ray_u0(const FanSinogram& s, double start_px, dou
     std::vector<double> yp;
     yp.reserve(m.size());
     for (const Mismatch& mi : m) yp.push_back(mi.in_quarters(part));
-    (part == 0 ? out.u0_quarters_px[0] : out.u0_quarters_px[1]) = parabola_vertex(x, yp);
+    out.u0_quarters_px[part] = parabola_vertex(x, yp);
   }
   const Mismatch at_u0 = mismatch(s, period, out.u0_px, out.sense);
   out.rms_mismatch = std::sqrt(at_u0.total());

@@ -105,7 +105,7 @@ struct KnobFit {
   // The vertex from the first and from the second half of the fit views in time: what moves
   // during the scan (the object settling, the stage) parts them, which the jackknife over single
   // views does not see.
-  double first_half = std::numeric_limits<double>::quiet_NaN(), second_half = std::numeric_limits<double>::quiet_NaN();
+  double halves[2] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
 };
 
 // Scans one knob over five settings on the fit views, moving the window (by at most its width)
@@ -173,7 +173,7 @@ KnobFit fit_knob(const ConsistencyProbe& probe, State state, const Knob& knob) {
       std::vector<double> t(per_view.size(), 0.0);
       for (std::size_t i = 0; i < per_view.size(); ++i)
         for (std::size_t k = half == 0 ? 0 : n / 2; k < (half == 0 ? n / 2 : n); ++k) t[i] += per_view[i][k];
-      (half == 0 ? out.first_half : out.second_half) = parabola_vertex(x, t);
+      out.halves[half] = parabola_vertex(x, t);
     }
     break;
   }
@@ -298,9 +298,9 @@ Trial try_candidate(const ConsistencyProbe& probe, const State& current, const s
     const double reported = f.value * knob->report_scale + knob->report_offset;
     t.effect.parameters[knob->key] = reported;
     t.effect.uncertainty[knob->key] = f.standard_error * std::abs(knob->report_scale);
-    if (std::isfinite(f.first_half) && std::isfinite(f.second_half) && std::isfinite(f.standard_error))
-      t.effect.halves_in_time[knob->key] = disjoint_parts_json(f.first_half * knob->report_scale + knob->report_offset,
-                                                               f.second_half * knob->report_scale + knob->report_offset,
+    if (std::isfinite(f.halves[0]) && std::isfinite(f.halves[1]) && std::isfinite(f.standard_error))
+      t.effect.halves_in_time[knob->key] = disjoint_parts_json(f.halves[0] * knob->report_scale + knob->report_offset,
+                                                               f.halves[1] * knob->report_scale + knob->report_offset,
                                                                f.standard_error * std::abs(knob->report_scale));
     line << " " << knob->key << " " << reported << " +- " << f.standard_error * std::abs(knob->report_scale);
     if (f.at_edge) {
