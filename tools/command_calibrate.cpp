@@ -61,47 +61,6 @@ nlohmann::json calibration_run(const CalibrateOptions& o, const ScanDescription&
           {"max_first_guess_error_deg", c.max_first_guess_error_deg}};
 }
 
-// The pictures beside the geometry: residual per view, view directions, and three views drawn
-// (the median and the worst calibrated view, the first rejected one). Returns their names.
-std::vector<std::string> write_pictures(const ScanDescription& scan, const ScanCalibration& c, const CalibrateOptions& o) {
-  const fs::path stem = fs::path(o.out).replace_extension("");
-  auto named = [&](const std::string& what) { return fs::path(stem.string() + "." + what + ".png"); };
-  std::vector<std::string> written;
-  write_residual_per_view_png(c.views, o.calibration.max_rms_px, named("residuals"));
-  written.push_back(named("residuals").filename().string());
-
-  const std::vector<NominalView> nominal = nominal_views(scan);
-  std::vector<ViewDirection> directions;
-  for (std::size_t v = 0; v < c.views.size(); ++v) {
-    const ViewCalibration& r = c.views[v];
-    std::optional<Rigid> T = r.T_camera_holder ? r.T_camera_holder : nominal[v].T_camera_holder;
-    if (!T && nominal[v].P) T = nominal[v].P->decompose().T_camera_frame;
-    if (T) directions.push_back({source_direction_in_holder(*T), r.status, r.rms_px});
-  }
-  write_view_directions_png(directions, o.calibration.max_rms_px, named("directions"));
-  written.push_back(named("directions").filename().string());
-
-  std::vector<std::size_t> ok, shown;
-  for (std::size_t v = 0; v < c.views.size(); ++v)
-    if (c.views[v].status == ViewStatus::ok) ok.push_back(v);
-  std::sort(ok.begin(), ok.end(), [&](std::size_t a, std::size_t b) { return c.views[a].rms_px < c.views[b].rms_px; });
-  if (!ok.empty()) shown = {ok[ok.size() / 2], ok.back()};
-  for (std::size_t v = 0; v < c.views.size(); ++v)
-    if (c.views[v].status == ViewStatus::rejected && c.views[v].radius_px > 0) {
-      shown.push_back(v);
-      break;
-    }
-  const std::optional<FlatDark> flat_dark = read_flat_dark(scan);
-  for (std::size_t v : shown) {
-    char what[32];
-    std::snprintf(what, sizeof what, "view-%04zu", v);
-    if (std::find(written.begin(), written.end(), named(what).filename().string()) != written.end()) continue;
-    write_detections_png(read_line_integrals(scan, static_cast<int>(v), flat_dark), c.views[v], named(what));
-    written.push_back(named(what).filename().string());
-  }
-  return written;
-}
-
 fs::path report_file(const CalibrateOptions& o) {
   return o.report.empty() ? fs::path(o.out).replace_extension(".report.json") : o.report;
 }
@@ -169,15 +128,12 @@ void run_calibrate(const CalibrateOptions& o) {
   nlohmann::json j = run_result.report();
   j["scan"] = o.scan.string();
   j["geometry"] = o.out.string();
-  j["pictures"] = write_pictures(scan, c, o);
+  j["pictures"] = write_calibration_pictures(scan, c, o.calibration.max_rms_px, fs::path(o.out).replace_extension(""));
   write_text_atomically(report, j.dump(2) + "\n");
   std::vector<fs::path> pictures;
   for (const nlohmann::json& name : j["pictures"]) pictures.push_back(o.out.parent_path() / name.get<std::string>());
-  const std::string next =
-      scan.holder ? "ctk diagnose --scan " + o.scan.string() + " --geometry " + o.out.string() + " --out " +
-                        (o.out.parent_path() / "diagnosis.json").string()
-                  : "ctk reconstruct --scan " + o.scan.string() + " --geometry " + o.out.string() + " --out volume.nrrd";
-  write_run_page("calibrate", run_result.brief(), j, pictures, fs::path(report).replace_extension(".html"), next);
+  write_and_name_run_page("calibrate", run_result.brief(), j, pictures, fs::path(report).replace_extension(".html"),
+                          run_result.next_command(o.scan, o.out));
   outputs.publish();
   if (journal) journal->remove();
   if (c.taken_over > 0) std::cout << c.taken_over << " views taken from the interrupted run, the others calibrated now\n";

@@ -61,15 +61,8 @@ void run_diagnose(const DiagnoseOptions& o) {
   std::vector<fs::path> pictures;
   for (const nlohmann::json& name : report["pictures"])
     pictures.push_back(fs::path(o.out).parent_path() / name.get<std::string>());
-  // With an effect accepted, the corrected scan is calibrated again; without, the calibration stands.
-  const std::string next =
-      whole_holder_off(run.diagnosis)
-          ? "ctk holder measure --scan " + o.scan.string() + " --geometry " + o.geometry.string() + " --out holder.json"
-      : run.diagnosis.accepted.empty()
-          ? "ctk reconstruct --scan " + o.scan.string() + " --geometry " + o.geometry.string() + " --out volume.nrrd"
-          : "ctk calibrate --scan " + corrected_file.string() + " --out " +
-                (fs::path(o.out).parent_path() / "recalibrated.json").string();
-  write_run_page("diagnose", run.brief(), report, pictures, stem.string() + ".html", next);
+  write_and_name_run_page("diagnose", run.brief(), report, pictures, stem.string() + ".html",
+                          run.next_command(o.scan, o.geometry, corrected_file));
 
   outputs.publish();
   std::cout << run.brief() << "\n";

@@ -41,7 +41,7 @@ void print_view(const PlannedViewRecord& v, int wanted, int& calibrated) {
 
 void report_trajectory(const PlanningRun& r) {
   std::cout << r.brief() << "\n";
-  write_run_page("plan", r.brief(), r.report(), r.pictures, r.folder / "plan.html");
+  write_and_name_run_page("plan", r.brief(), r.report(), r.pictures, r.folder / "plan.html");
 }
 
 void report_comparison(const TrajectoryComparison& c) {
@@ -55,7 +55,7 @@ void report_comparison(const TrajectoryComparison& c) {
               c.quality.front().truth_profile_gradient_per_mm2);
   if (c.quality.size() > 3) std::cout << "random draws: " << c.report["random_draws"].dump() << "\n";
   const fs::path page = fs::path(c.file).replace_extension(".html");
-  write_run_page("plan", c.brief(), c.report, {c.picture}, page);
+  write_and_name_run_page("plan", c.brief(), c.report, {c.picture}, page);
   std::cout << "comparison written to " << c.file.string() << ", " << c.picture.filename().string() << " and "
             << page.filename().string() << "\n";
 }

@@ -280,7 +280,7 @@ void run_reconstruct(const ReconstructOptions& o) {
                                     preview_file(o.out, "_sagittal.png")};
   if (write_convergence(run.solver.iterations, preview_file(o.out, "_convergence.png")))
     pictures.push_back(preview_file(o.out, "_convergence.png"));
-  write_run_page("reconstruct", run.brief(), log, pictures, page);
+  write_and_name_run_page("reconstruct", run.brief(), log, pictures, page);
   outputs.publish();
   std::error_code ignored;
   fs::remove(state_file, ignored);  // the run is complete: nothing left to continue

@@ -14,10 +14,10 @@
 #include "ctk/core/error.hpp"
 #include "ctk/core/image_io.hpp"
 #include "ctk/core/output_set.hpp"
-#include "ctk/core/slice_preview.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/run_files.hpp"
 #include "ctk/recon/refine_scan.hpp"
+#include "ctk/recon/refinement_pictures.hpp"
 #include "interruption.hpp"
 #include "measurement_report.hpp"
 #include "option_checks.hpp"
@@ -36,39 +36,6 @@ struct RefineOptions {
 };
 
 fs::path beside(const fs::path& out, const std::string& suffix) { return out.parent_path() / (out.stem().string() + suffix); }
-
-void write_central_slice(const Volume& x, float high, const fs::path& file) {
-  write_slice_preview(x, 2, x.layout.size[2] / 2, 0.0f, high, "1/mm", file);
-}
-
-// After less before on the same central slice, mid-grey 0, black and white at the largest change,
-// so that a change too small to see between the two pictures shows.
-void write_difference_slice(const Volume& before, const Volume& after, const fs::path& file) {
-  Volume d = after;
-  float largest = 1e-12f;
-  for (std::size_t i = 0; i < d.data.size(); ++i) {
-    d.data[i] -= before.data[i];
-    largest = std::max(largest, std::abs(d.data[i]));
-  }
-  write_slice_preview(d, 2, d.layout.size[2] / 2, -largest, largest, "1/mm", file);
-}
-
-// What the final model leaves fixed on the detector: each pixel's mean held-out residual over its
-// standard error, grey 0 at mid-grey, black at -10 and white at +10 or beyond (rows left out of
-// the costs at 0). A one-row detector is drawn as a band 48 rows high.
-void write_pattern_picture(const DetectorPattern& p, const fs::path& file) {
-  const int height = p.rows == 1 ? 48 : p.rows;
-  Volume z(VolumeLayout::centred({p.cols, height, 1}, Eigen::Vector3d::Ones()));
-  for (int row = 0; row < height; ++row)
-    for (int c = 0; c < p.cols; ++c) {
-      const std::size_t i =
-          static_cast<std::size_t>(p.rows == 1 ? 0 : row) * static_cast<std::size_t>(p.cols) + static_cast<std::size_t>(c);
-      const double se = p.standard_error[i];
-      z.at(c, row, 0) =
-          p.used[i] && se > 0 && std::isfinite(se) ? static_cast<float>(std::clamp(p.mean[i] / se, -10.0, 10.0)) : 0.0f;
-    }
-  write_slice_png(z, 2, 0, -10.0f, 10.0f, file);
-}
 
 void run_refine(const RefineOptions& o) {
   const auto start = std::chrono::steady_clock::now();
@@ -123,18 +90,10 @@ void run_refine(const RefineOptions& o) {
   report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_text_atomically(o.out, report.dump(2) + "\n");
 
-  const float high = preview_ceiling(r.volume_before);  // one grey scale for both pictures
-  write_central_slice(r.volume_before, high, beside(o.out, ".before.png"));
-  write_central_slice(r.volume_after, high, beside(o.out, ".after.png"));
-  write_difference_slice(r.volume_before, r.volume_after, beside(o.out, ".difference.png"));
-  write_pattern_picture(r.residual_pattern, beside(o.out, ".pattern.png"));
+  const std::vector<fs::path> pictures = write_refinement_pictures(r, beside(o.out, ""));
   if (!r.model.pixel_offset.empty())
     write_image_float(Image{scan.detector.cols, scan.detector.rows, r.model.pixel_offset}, beside(o.out, ".pixel-offsets.tif"));
-
-  write_run_page("refine", s.brief(), report,
-                 {beside(o.out, ".before.png"), beside(o.out, ".after.png"), beside(o.out, ".difference.png"),
-                  beside(o.out, ".pattern.png")},
-                 beside(o.out, ".html"));
+  write_and_name_run_page("refine", s.brief(), report, pictures, beside(o.out, ".html"));
   outputs.publish();
   std::cout << s.brief() << "\n";
   for (const auto& e : r.effects)

@@ -37,8 +37,10 @@ scan = ctk.import_scan(args.out / "scan.json", matrices, [args.data / f"scan_{k:
                        dark=[args.data / "di000000.tif"])
 print(f"imported {scan['projections']['count']} views into {args.out / 'scan.json'}")
 
-result = ctk.refine(args.out / "scan.json", effects=args.effects)
+# With pictures=, the same pictures and HTML page as `ctk refine` (slices, difference, detector pattern).
+result = ctk.refine(args.out / "scan.json", effects=args.effects, pictures=args.out / "refine")
 print(result.brief)
+print(f"report page: {result.page}")
 for effect in result.accepted:
     print(f"accepted {effect['name']}: {effect['parameters']} +- {effect['uncertainty']}")
 ctk.write_geometry(result.geometry, args.out / "refined-geometry.json")

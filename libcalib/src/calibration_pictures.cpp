@@ -2,10 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 
 #include "ctk/core/chart.hpp"
+#include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/geom/sphere_map.hpp"
+#include "ctk/measure/projection_reading.hpp"
 
 namespace ctk {
 
@@ -94,6 +98,45 @@ void write_view_directions_png(const std::vector<ViewDirection>& views, double t
   chart.legend(
       {{"calibrated", colour::green, Mark::dot}, {"rejected", colour::red, Mark::cross}, {"skipped", colour::grey, Mark::cross}});
   chart.save(png);
+}
+
+std::vector<std::string> write_calibration_pictures(const ScanDescription& scan, const ScanCalibration& c, double threshold_px,
+                                                    const std::filesystem::path& stem) {
+  const auto named = [&](const std::string& what) { return std::filesystem::path(stem.string() + "." + what + ".png"); };
+  std::vector<std::string> written;
+  write_residual_per_view_png(c.views, threshold_px, named("residuals"));
+  written.push_back(named("residuals").filename().string());
+
+  const std::vector<NominalView> nominal = nominal_views(scan);
+  std::vector<ViewDirection> directions;
+  for (std::size_t v = 0; v < c.views.size(); ++v) {
+    const ViewCalibration& r = c.views[v];
+    std::optional<Rigid> T = r.T_camera_holder ? r.T_camera_holder : nominal[v].T_camera_holder;
+    if (!T && nominal[v].P) T = nominal[v].P->decompose().T_camera_frame;
+    if (T) directions.push_back({source_direction_in_holder(*T), r.status, r.rms_px});
+  }
+  write_view_directions_png(directions, threshold_px, named("directions"));
+  written.push_back(named("directions").filename().string());
+
+  std::vector<std::size_t> ok, shown;
+  for (std::size_t v = 0; v < c.views.size(); ++v)
+    if (c.views[v].status == ViewStatus::ok) ok.push_back(v);
+  std::sort(ok.begin(), ok.end(), [&](std::size_t a, std::size_t b) { return c.views[a].rms_px < c.views[b].rms_px; });
+  if (!ok.empty()) shown = {ok[ok.size() / 2], ok.back()};
+  for (std::size_t v = 0; v < c.views.size(); ++v)
+    if (c.views[v].status == ViewStatus::rejected && c.views[v].radius_px > 0) {
+      shown.push_back(v);
+      break;
+    }
+  const std::optional<FlatDark> flat_dark = read_flat_dark(scan);
+  for (std::size_t v : shown) {
+    char what[32];
+    std::snprintf(what, sizeof what, "view-%04zu", v);
+    if (std::find(written.begin(), written.end(), named(what).filename().string()) != written.end()) continue;
+    write_detections_png(read_line_integrals(scan, static_cast<int>(v), flat_dark), c.views[v], named(what));
+    written.push_back(named(what).filename().string());
+  }
+  return written;
 }
 
 }  // namespace ctk

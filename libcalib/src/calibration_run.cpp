@@ -174,4 +174,12 @@ std::string CalibrationRun::wall_and_prior() const {
   return b.str();
 }
 
+std::string CalibrationRun::next_command(const std::filesystem::path& scan_file,
+                                         const std::filesystem::path& geometry_file) const {
+  if (has_holder)
+    return "ctk diagnose --scan " + scan_file.string() + " --geometry " + geometry_file.string() + " --out " +
+           (geometry_file.parent_path() / "diagnosis.json").string();
+  return "ctk reconstruct --scan " + scan_file.string() + " --geometry " + geometry_file.string() + " --out volume.nrrd";
+}
+
 }  // namespace ctk

@@ -131,4 +131,14 @@ std::string DiagnosisRun::brief() const {
   return b.str();
 }
 
+std::string DiagnosisRun::next_command(const std::filesystem::path& scan_file, const std::filesystem::path& geometry_file,
+                                       const std::filesystem::path& corrected_file) const {
+  if (whole_holder_off(diagnosis))
+    return "ctk holder measure --scan " + scan_file.string() + " --geometry " + geometry_file.string() + " --out holder.json";
+  if (diagnosis.accepted.empty())
+    return "ctk reconstruct --scan " + scan_file.string() + " --geometry " + geometry_file.string() + " --out volume.nrrd";
+  return "ctk calibrate --scan " + corrected_file.string() + " --out " +
+         (corrected_file.parent_path() / "recalibrated.json").string();
+}
+
 }  // namespace ctk

@@ -186,4 +186,19 @@ std::string html_report_text(const HtmlReport& r) {
 
 void write_html_report(const HtmlReport& report, const fs::path& file) { write_text_atomically(file, html_report_text(report)); }
 
+std::string picture_caption(const fs::path& png, const fs::path& page) {
+  const std::string stem = page.stem().string().substr(0, page.stem().string().find('.'));
+  std::string name = png.stem().string();
+  if (name.rfind(stem, 0) == 0) name = name.substr(stem.size());
+  while (!name.empty() && (name.front() == '.' || name.front() == '_' || name.front() == '-')) name.erase(0, 1);
+  return name.empty() ? png.filename().string() : name;
+}
+
+void write_run_page(const std::string& command, const std::string& brief, const json& report,
+                    const std::vector<fs::path>& pictures, const fs::path& page, const std::string& next) {
+  HtmlReport r{"ctk " + command, brief, report, {}, next};
+  for (const fs::path& p : pictures) r.pictures.emplace_back(picture_caption(p, page), p);
+  write_html_report(r, page);
+}
+
 }  // namespace ctk

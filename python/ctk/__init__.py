@@ -78,6 +78,10 @@ class SolveResult:
         return self.iterations[-1]["cost"]
 
 
+def _optional_path(path: Optional[str | os.PathLike]) -> Optional[str]:
+    return None if path is None else os.fspath(path)
+
+
 def _iteration_hook(method: str, callback: Optional[Callable[[dict], Optional[bool]]]):
     def hook(log: dict) -> bool:
         _log.info("%s iteration %d: cost %.6g (%.2f s)", method, log["iteration"], log["cost"], log["seconds"])
@@ -193,7 +197,7 @@ def load_measurements(scan: str | os.PathLike, geometry: Optional[str | os.PathL
     and Poisson weights (None for a scan of line integrals), read as `ctk reconstruct` reads
     them: the geometry file's matrices, or the scan's nominal ones; counts become
     -log((I - dark) / (flat - dark)); a declared detector distortion is resampled away."""
-    d = _ctk._load_measurements(os.fspath(scan), None if geometry is None else os.fspath(geometry),
+    d = _ctk._load_measurements(os.fspath(scan), _optional_path(geometry),
                                 statistical_weights, undistort)
     return Measurements(**d)
 
@@ -210,6 +214,8 @@ class RefineResult:
     slice_before: np.ndarray
     slice_after: np.ndarray
     brief: str
+    pictures: list = dataclasses.field(default_factory=list)
+    page: Optional[str] = None
 
     @property
     def accepted(self) -> list:
@@ -219,15 +225,17 @@ class RefineResult:
 
 def refine(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] = None, *,
            effects: Optional[Sequence[str]] = None, coarsening: float = 2.0, blur_arc_deg: float = 0.0,
-           z: float = 3.0) -> RefineResult:
+           z: float = 3.0, pictures: Optional[str | os.PathLike] = None) -> RefineResult:
     """The markerless loop of `ctk refine` on a circular scan: reconstruct from half of the views,
     predict the others, and accept the effects (detector_offset, detector_roll, axis_tilt,
     magnification, angular_blur, beam_hardening, pixel_gain, column_gain; default all) that
     predict held-out views better by more than z standard errors. Each step is logged to the
-    'ctk' logger (INFO); Ctrl-C stops the loop between steps. Nothing is written: save the
-    geometry with write_geometry."""
-    d = _ctk._refine(os.fspath(scan), None if geometry is None else os.fspath(geometry), list(effects or []), coarsening,
-                     blur_arc_deg, z, lambda line: _log.info("refine: %s", line))
+    'ctk' logger (INFO); Ctrl-C stops the loop between steps. Save the geometry with
+    write_geometry. With `pictures` (a path without extension) the pictures and the HTML page
+    `ctk refine` writes are written as <pictures>.before.png ... and <pictures>.html; their paths
+    are in the result's `pictures` and `page`."""
+    d = _ctk._refine(os.fspath(scan), _optional_path(geometry), list(effects or []), coarsening,
+                     blur_arc_deg, z, lambda line: _log.info("refine: %s", line), _optional_path(pictures))
     return RefineResult(**d)
 
 
@@ -240,6 +248,8 @@ class CalibrationResult:
     geometry: dict
     report: dict
     brief: str
+    pictures: list = dataclasses.field(default_factory=list)
+    page: Optional[str] = None
 
     def matrices(self) -> tuple[list[int], np.ndarray]:
         """The ok views and their matrices (views, 3, 4)."""
@@ -247,14 +257,18 @@ class CalibrationResult:
 
 
 def calibrate(scan: str | os.PathLike, *, min_spheres: int = 6, max_rms_px: float = 0.5, search_px: float = 40.0,
-              image_only: bool = False, progress: Optional[Callable[[int, int], None]] = None) -> CalibrationResult:
+              image_only: bool = False, progress: Optional[Callable[[int, int], None]] = None,
+              pictures: Optional[str | os.PathLike] = None) -> CalibrationResult:
     """`ctk calibrate` on a robot scan with a helix holder: every view's matrix from the spheres in
     its image (the robot's forward kinematics as the first guess), an undeclared holder wall (or
     its undeclared ends) measured from the images, the poses combined with the robot's prior
     unless image_only.
-    progress(done, total) after each view; Ctrl-C stops the batch (KeyboardInterrupt). Nothing is
-    written: save the geometry with write_geometry."""
-    d = _ctk._calibrate(os.fspath(scan), min_spheres, max_rms_px, search_px, image_only, progress)
+    progress(done, total) after each view; Ctrl-C stops the batch (KeyboardInterrupt). Save the
+    geometry with write_geometry. With `pictures` (a path without extension) the pictures and the
+    HTML page `ctk calibrate --out <pictures>.json` writes are written (<pictures>.residuals.png, ...,
+    <pictures>.report.html); their paths are in the result's `pictures` and `page`."""
+    d = _ctk._calibrate(os.fspath(scan), min_spheres, max_rms_px, search_px, image_only, progress,
+                        _optional_path(pictures))
     _log.info("%s", d["brief"])
     return CalibrationResult(**d)
 
@@ -292,7 +306,7 @@ def simulate(out: str | os.PathLike, *, phantoms: Sequence[str] = ("helix-holder
     named = None if effects is None else {k: (list(v) if isinstance(v, (tuple, list, np.ndarray)) else v)
                                           for k, v in effects.items()}
     d = _ctk._simulate(os.fspath(out), list(phantoms), os.fspath(holder), trajectory, views, nside, tuple(cap_deg),
-                       None if poses is None else os.fspath(poses), tuple(detector_shape), pitch_mm, sdd_mm, sod_mm,
+                       _optional_path(poses), tuple(detector_shape), pitch_mm, sdd_mm, sod_mm,
                        supersampling, output, flat_counts, dark_counts, kvp, filter_al_mm, robot_noise_mm, robot_noise_deg,
                        seed, named, progress, lambda line: _log.info("simulate: %s", line))
     _log.info("%s", d["brief"])
@@ -335,7 +349,7 @@ def reconstruct(scan: str | os.PathLike, geometry: Optional[str | os.PathLike] =
     Ctrl-C stops it within the current iteration (KeyboardInterrupt)."""
     if held_out_every is not None and held_out_every < 0:
         raise ValueError(f"held_out_every: expected 0 (no views held out) or more, got {held_out_every}")
-    d = _ctk._reconstruct(os.fspath(scan), None if geometry is None else os.fspath(geometry), method, iterations,
+    d = _ctk._reconstruct(os.fspath(scan), _optional_path(geometry), method, iterations,
                           -1 if held_out_every is None else held_out_every, subsets,
                           lambda_, regulariser, huber_delta, tolerance, preconditioner, weighted, undistort, None if size is None else tuple(size), voxel_mm,
                           progress)
@@ -353,6 +367,8 @@ class DiagnosisResult:
     report: dict
     corrected_scan: dict
     brief: str
+    pictures: list = dataclasses.field(default_factory=list)
+    page: Optional[str] = None
 
     @property
     def accepted(self) -> list:
@@ -361,12 +377,15 @@ class DiagnosisResult:
 
 
 def diagnose(scan: str | os.PathLike, geometry: str | os.PathLike, *, repeatability_mm: Optional[float] = None,
-             repeatability_deg: Optional[float] = None) -> DiagnosisResult:
+             repeatability_deg: Optional[float] = None, pictures: Optional[str | os.PathLike] = None) -> DiagnosisResult:
     """`ctk diagnose`: which named effect explains the residual the calibration `geometry` leaves
     (bundle adjustment, held-out acceptance; the robot's repeatability measured on the scan unless
-    given). Each step is logged to the 'ctk' logger."""
+    given). Each step is logged to the 'ctk' logger. With `pictures` (a path without extension)
+    the pictures and the HTML page `ctk diagnose --out <pictures>.json` writes are written
+    (<pictures>.field-before.png, ..., <pictures>.html); their paths are in the result's
+    `pictures` and `page`."""
     d = _ctk._diagnose(os.fspath(scan), os.fspath(geometry), repeatability_mm, repeatability_deg,
-                       lambda line: _log.info("diagnose: %s", line))
+                       lambda line: _log.info("diagnose: %s", line), _optional_path(pictures))
     return DiagnosisResult(**d)
 
 

@@ -16,14 +16,18 @@
 
 #include "bindings.hpp"
 #include "conversions.hpp"
+#include "ctk/calib/calibration_pictures.hpp"
 #include "ctk/calib/calibration_run.hpp"
+#include "ctk/calib/diagnosis_pictures.hpp"
 #include "ctk/calib/diagnosis_run.hpp"
 #include "ctk/calib/holder_measurement.hpp"
+#include "ctk/core/html_report.hpp"
 #include "ctk/geom/import_run.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
 #include "ctk/phantoms/simulation_run.hpp"
 #include "ctk/recon/reconstruction_run.hpp"
 #include "ctk/recon/refine_scan.hpp"
+#include "ctk/recon/refinement_pictures.hpp"
 #include "interruptible.hpp"
 #include "numpy_arrays.hpp"
 #include "python_bridge.hpp"
@@ -122,8 +126,23 @@ py::object import_scan(const fs::path& out, const DoubleArray& matrices, const s
   return imported_scan(run_import(r));
 }
 
+// The pictures a command writes beside its outputs, named in `report["pictures"]` (file names
+// beside `stem`), and its HTML page: their paths under "pictures" and "page".
+void add_pictures_and_page(py::dict& d, const std::string& command, const std::string& brief, nlohmann::json report,
+                           const std::vector<std::string>& names, const fs::path& stem, const fs::path& page) {
+  std::vector<fs::path> files;
+  for (const std::string& name : names) files.push_back(stem.parent_path() / name);
+  report["pictures"] = names;
+  write_run_page(command, brief, report, files, page);
+  std::vector<std::string> paths;
+  for (const fs::path& f : files) paths.push_back(f.string());
+  d["pictures"] = paths;
+  d["page"] = page.string();
+}
+
 py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geometry_file, const std::vector<std::string>& effects,
-                double coarsening, double blur_arc_deg, double z, const py::object& log) {
+                double coarsening, double blur_arc_deg, double z, const py::object& log,
+                const std::optional<fs::path>& pictures) {
   RefineScanOptions o;
   o.effects = effects;
   o.coarsening = coarsening;
@@ -147,6 +166,11 @@ py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geomet
   std::vector<ProjectionMatrix> ok;
   for (int i : s->refined.ok_views()) ok.push_back(*s->refined.views[static_cast<std::size_t>(i)].P);
   d["matrices"] = matrices_to_numpy(ok);
+  if (pictures) {
+    std::vector<std::string> names;
+    for (const fs::path& f : write_refinement_pictures(s->result, *pictures)) names.push_back(f.filename().string());
+    add_pictures_and_page(d, "refine", s->brief(), s->report(), names, *pictures, pictures->string() + ".html");
+  }
   auto slice = [](Volume v) {  // the central axial slice, (y, x)
     const auto s3 = volume_shape(v.layout);
     auto owner = std::make_unique<Volume>(std::move(v));
@@ -159,7 +183,7 @@ py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geomet
 }
 
 py::dict calibrate(const fs::path& scan_file, int min_spheres, double max_rms_px, double search_px, bool image_only,
-                   const py::object& progress) {
+                   const py::object& progress, const std::optional<fs::path>& pictures) {
   CalibrationRunOptions o;
   o.calibration.min_spheres = min_spheres;
   o.calibration.max_rms_px = max_rms_px;
@@ -177,11 +201,16 @@ py::dict calibrate(const fs::path& scan_file, int min_spheres, double max_rms_px
   d["geometry"] = to_python(geometry_to_json(run->calibration.geometry));
   d["report"] = to_python(run->report());
   d["brief"] = run->brief() + "\n" + run->wall_and_prior();
+  if (pictures)
+    add_pictures_and_page(d, "calibrate", run->brief(), run->report(),
+                          write_calibration_pictures(scan, run->calibration, o.calibration.max_rms_px, *pictures), *pictures,
+                          pictures->string() + ".report.html");
   return d;
 }
 
 py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, const std::optional<double>& repeatability_mm,
-                  const std::optional<double>& repeatability_deg, const py::object& log) {
+                  const std::optional<double>& repeatability_deg, const py::object& log,
+                  const std::optional<fs::path>& pictures) {
   DiagnosisRunOptions o;
   o.repeatability_mm = repeatability_mm;
   o.repeatability_deg = repeatability_deg;
@@ -196,6 +225,10 @@ py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, cons
   d["report"] = to_python(run->report());
   d["corrected_scan"] = to_python(scan_to_json(run->corrected));
   d["brief"] = run->brief();
+  if (pictures)
+    add_pictures_and_page(d, "diagnose", run->brief(), run->report(),
+                          write_diagnosis_pictures(run->diagnosis, run->observations, *pictures), *pictures,
+                          pictures->string() + ".html");
   return d;
 }
 
@@ -345,9 +378,9 @@ py::dict simulate(const fs::path& out, const std::vector<std::string>& phantoms,
 
 void bind_workflows(py::module_& m) {
   m.def("_calibrate", &calibrate, py::arg("scan"), py::arg("min_spheres"), py::arg("max_rms_px"), py::arg("search_px"),
-        py::arg("image_only"), py::arg("progress"));
+        py::arg("image_only"), py::arg("progress"), py::arg("pictures"));
   m.def("_diagnose", &diagnose, py::arg("scan"), py::arg("geometry"), py::arg("repeatability_mm"), py::arg("repeatability_deg"),
-        py::arg("log"));
+        py::arg("log"), py::arg("pictures"));
   m.def("circular_matrices", &circular, py::arg("angles_deg"), py::arg("detector_shape"), py::arg("pixel_mm"), py::arg("sod"),
         py::arg("sdd"), py::arg("principal_point") = py::none(), py::arg("sense") = 1, R"doc(
 A circular orbit by its numbers as (views, 3, 4) matrices: rotation axis +z through the origin, the
@@ -392,7 +425,7 @@ images beside it). Returns the scan as read back; keys read and not modelled are
         py::arg("tolerance"), py::arg("preconditioner"), py::arg("weighted"), py::arg("undistort"), py::arg("size"),
         py::arg("voxel_mm"), py::arg("progress"));
   m.def("_refine", &refine, py::arg("scan"), py::arg("geometry"), py::arg("effects"), py::arg("coarsening"),
-        py::arg("blur_arc_deg"), py::arg("z"), py::arg("log"));
+        py::arg("blur_arc_deg"), py::arg("z"), py::arg("log"), py::arg("pictures"));
 }
 
 }  // namespace ctk::python

@@ -22,6 +22,10 @@ def test_the_pepper_example_finds_the_axis_column_and_draws_the_slices(tmp_path,
     assert abs(u0 - 119.2) < 0.3, out  # the scanner's own calibration: 119.13; conjugate rays 119.21
     assert (tmp_path / "pepper.png").stat().st_size > 10_000
     assert (tmp_path / "refined-geometry.json").exists()
+    assert f"report page: {tmp_path / 'refine.html'}" in out
+    for name in ("before", "after", "difference", "pattern"):
+        assert (tmp_path / f"refine.{name}.png").stat().st_size > 1000, name
+    assert (tmp_path / "refine.html").read_text().count("data:image/png;base64,") == 4
 
 
 def test_the_walnut_example_reconstructs_ten_real_views(tmp_path, real_data):

@@ -21,10 +21,24 @@ def robot_scan(tmp_path_factory, ctk_command):
     return folder
 
 
+def assert_same_pictures(result, stem, folder, cli_stem, page_suffix):
+    """The pictures Python wrote under `stem` are those the command wrote under `cli_stem`, byte for
+    byte, and its HTML page shows them."""
+    written = [os.path.basename(p) for p in result.pictures]
+    cli = sorted(f.name[len(cli_stem):] for f in folder.glob(cli_stem + ".*.png"))
+    assert sorted(w[len(stem):] for w in written) == cli and len(cli) >= 3
+    for name in cli:
+        assert (folder / (stem + name)).read_bytes() == (folder / (cli_stem + name)).read_bytes(), name
+    assert result.page == str(folder / (stem + page_suffix))
+    page = open(result.page).read()
+    assert page.count("data:image/png;base64,") == len(cli)
+
+
 def test_calibrate_and_diagnose_from_python_as_the_command_line_does(robot_scan, tmp_path, ctk_command):
     run([ctk_command, "calibrate", "--scan", str(robot_scan / "scan.json"), "--out", str(tmp_path / "cli.json")])
     seen = []
-    result = ctk.calibrate(robot_scan / "scan.json", progress=lambda done, total: seen.append((done, total)))
+    result = ctk.calibrate(robot_scan / "scan.json", progress=lambda done, total: seen.append((done, total)),
+                           pictures=tmp_path / "py")
     assert seen[-1] == (40, 40)
     assert result.report["summary"]["ok"] == 40
     views, P = result.matrices()
@@ -32,8 +46,13 @@ def test_calibrate_and_diagnose_from_python_as_the_command_line_does(robot_scan,
     assert views == cli_views
     np.testing.assert_allclose(P, cli_P, rtol=1e-9, atol=1e-9)
 
+    assert_same_pictures(result, "py", tmp_path, "cli", ".report.html")
+
     ctk.write_geometry(result.geometry, tmp_path / "py.json")
-    d = ctk.diagnose(robot_scan / "scan.json", tmp_path / "py.json")
+    run([ctk_command, "diagnose", "--scan", str(robot_scan / "scan.json"), "--geometry", str(tmp_path / "py.json"),
+         "--out", str(tmp_path / "cli-diagnosis.json")])
+    d = ctk.diagnose(robot_scan / "scan.json", tmp_path / "py.json", pictures=tmp_path / "py-diagnosis")
+    assert_same_pictures(d, "py-diagnosis", tmp_path, "cli-diagnosis", ".html")
     names = [e["name"] for e in d.accepted]
     assert names == ["robot_base_frame"], d.brief
     along_beam = d.accepted[0]["parameters"]["translation_mm"][2]

@@ -5,6 +5,7 @@
 // loss over their background measured on a sample of views and applied; the poses combined
 // with the robot's prior unless asked not to. Returns the calibration and its report; files
 // (geometry, journal, pictures) are the caller's.
+#include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -42,6 +43,9 @@ struct CalibrationRun {
   std::string brief() const;
   /// What was done about the holder's wall and the robot's prior, a line each.
   std::string wall_and_prior() const;
+  /// The command to run next on the scan `scan_file` calibrated into `geometry_file`: the
+  /// diagnosis for a scan with a holder (its report beside the geometry), else the reconstruction.
+  std::string next_command(const std::filesystem::path& scan_file, const std::filesystem::path& geometry_file) const;
 };
 
 /// `progress(done, total)` after each view; `control` takes over an earlier run's views, journals

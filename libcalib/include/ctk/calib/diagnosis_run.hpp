@@ -5,6 +5,7 @@
 // images and modelled as if declared, the spheres' contrast loss over their background measured
 // as ctk calibrate measures it, the bundle adjustment with held-out acceptance; returns the
 // diagnosis, its report and the corrected scan. Files and pictures are the caller's.
+#include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -36,6 +37,11 @@ struct DiagnosisRun {
   nlohmann::json report() const;
   /// The baseline and each accepted effect, a line each.
   std::string brief() const;
+  /// The command to run next on the scan `scan_file` and its calibration `geometry_file`: measuring
+  /// the holder when every sphere is off, calibrating `corrected_file` (the corrected scan, where
+  /// written) again when an effect was accepted, else the reconstruction.
+  std::string next_command(const std::filesystem::path& scan_file, const std::filesystem::path& geometry_file,
+                           const std::filesystem::path& corrected_file) const;
 };
 
 /// Throws InputError naming the scan (no holder) or the geometry (fewer than 10 calibrated views).

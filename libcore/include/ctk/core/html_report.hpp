@@ -28,4 +28,13 @@ std::string html_report_text(const HtmlReport& report);
 /// Written atomically (waiting in the active OutputSet like every output).
 void write_html_report(const HtmlReport& report, const std::filesystem::path& file);
 
+/// "calibrated.residuals.png" beside the page "calibrated.report.html" -> "residuals": the part of
+/// a picture's name after the page's stem (up to its first dot) names what it shows.
+std::string picture_caption(const std::filesystem::path& png, const std::filesystem::path& page);
+
+/// A run's page (`command` as in "ctk calibrate"), each picture captioned by its name, written to `page`.
+void write_run_page(const std::string& command, const std::string& brief, const nlohmann::json& report,
+                    const std::vector<std::filesystem::path>& pictures, const std::filesystem::path& page,
+                    const std::string& next = "");
+
 }  // namespace ctk
