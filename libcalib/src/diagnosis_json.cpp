@@ -118,6 +118,8 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& o) 
     if (f.accepted) effect_parameters_json(f, o, e.parameters, e.uncertainty);
     for (Effect c : f.confounded_with) e.confounded_with.push_back(effect_name(c));
     e.figures = {{"threshold_z", f.threshold_z}, {"raises_in_sample_cost", f.raised_in_sample_cost}};
+    if (f.strength.dof > 0)
+      e.figures["strength"] = {{"chi2", f.strength.chi2}, {"dof", f.strength.dof}, {"threshold_chi2", f.strength_threshold}};
     error_json(e.figures, f.before, f.after, o.setup.robot);
     report.effects.push_back(std::move(e));
   }
@@ -135,7 +137,8 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d, const ScanObservations& o) 
       "an effect is accepted when, fitted on one half of the views (interleaved) and judged on the other, the mean per-view "
       "improvement of the held-out cost passes threshold_z standard errors (Student's t; round r of the greedy search "
       "spends false_acceptance_rate / 2^r, shared by its candidates, so chance accepts anything in a scan with probability "
-      "at most false_acceptance_rate) and its fit on all views does not raise the in-sample cost of the model it extends";
+      "at most false_acceptance_rate), its fit on all views does not raise the in-sample cost of the model it extends, and in "
+      "that fit its parameters stand from none by more than strength.threshold_chi2 (a Wald chi-square at the round's level)";
   report.extra = {
       {"noise",
        {{"centre_sigma_px", o.centre_sigma_px}, {"robot_sigma_mm", o.robot_sigma_mm}, {"robot_sigma_deg", o.robot_sigma_deg}}},

@@ -346,6 +346,20 @@ int parameter_count(Effect e, const ScanObservations& o) {
   return e == Effect::sphere_positions ? 3 * static_cast<int>(o.setup.holder.spheres_mm.size()) : block_size(e);
 }
 
+WaldStatistic effect_strength(const ScanModelFit& fit, const std::vector<Effect>& active, std::size_t slot) {
+  if (fit.covariance.size() == 0 || slot >= active.size() || slot >= fit.covariance_offsets.size()) return {};
+  const Effect e = active[slot];
+  GlobalBlocks g(fit.parameters, fit.parameters.spheres.size());
+  const int start = fit.covariance_offsets[slot];
+  const int size = e == Effect::sphere_positions ? 3 * static_cast<int>(g.p.spheres.size()) : block_size(e);
+  Eigen::VectorXd values(size);
+  for (int i = 0; i < size; ++i)
+    values(i) = e == Effect::sphere_positions ? g.p.spheres[static_cast<std::size_t>(i / 3)](i % 3) : g.block(e)[i];
+  // A distortion's size is its shift at 360 px; its centre is undefined without one.
+  const int measured = e == Effect::detector_distortion ? 1 : size;
+  return wald_statistic(values.head(measured), fit.covariance.block(start, start, measured, measured));
+}
+
 ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>& active, const std::vector<std::size_t>& views,
                             const EffectParameters& start, bool with_covariance) {
   GlobalBlocks g(start, o.setup.holder.spheres_mm.size());

@@ -1,8 +1,12 @@
 // The shared median: odd and even counts (the upper middle value), unsorted input, nothing. The
-// paired z-score against a hand computation, and its cases without spread.
+// paired z-score against a hand computation, and its cases without spread. The chi-square
+// threshold against tabulated quantiles; the Wald statistic against a hand computation and with
+// a gauge's free direction.
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <cmath>
+#include <stdexcept>
 
 #include "ctk/core/statistics.hpp"
 
@@ -28,6 +32,34 @@ TEST(Statistics, PairedZIsTheMeanImprovementInStandardErrors) {
   EXPECT_DOUBLE_EQ(paired_z({1, 1}, {3, 3}), -1e9);
   EXPECT_DOUBLE_EQ(paired_z({2, 5}, {2, 5}), 0.0);
   EXPECT_DOUBLE_EQ(paired_z({}, {}), 0.0);
+}
+
+TEST(Statistics, ChiSquareThresholdIsTheUpperQuantile) {
+  EXPECT_NEAR(chi_square_threshold(0.05, 1), 3.841459, 1e-6);  // 1.96^2
+  EXPECT_NEAR(chi_square_threshold(0.01, 3), 11.344867, 1e-6);
+  EXPECT_NEAR(chi_square_threshold(0.001, 6), 22.457744, 1e-6);
+  EXPECT_THROW(chi_square_threshold(0.0, 2), std::invalid_argument);
+  EXPECT_THROW(chi_square_threshold(0.05, 0), std::invalid_argument);
+}
+
+TEST(Statistics, WaldStatisticWeighsEachDirectionByItsVarianceAndSkipsAGauge) {
+  // Independent: (3 / 1)^2 + (1 / 0.5)^2 = 13.
+  Eigen::Matrix2d independent;
+  independent << 1, 0, 0, 0.25;
+  WaldStatistic w = wald_statistic(Eigen::Vector2d(3, 1), independent);
+  EXPECT_NEAR(w.chi2, 13.0, 1e-12);
+  EXPECT_EQ(w.dof, 2);
+  // Correlated: v' C^-1 v with C = [[2, 1], [1, 2]], v = (1, 1): C^-1 v = (1/3, 1/3), so 2/3.
+  Eigen::Matrix2d correlated;
+  correlated << 2, 1, 1, 2;
+  EXPECT_NEAR(wald_statistic(Eigen::Vector2d(1, 1), correlated).chi2, 2.0 / 3.0, 1e-12);
+  // A gauge leaves (1, -1) free: only the constrained direction (1, 1) / sqrt(2), variance 2, counts.
+  Eigen::Matrix2d gauge;
+  gauge << 1, 1, 1, 1;
+  w = wald_statistic(Eigen::Vector2d(2, 0), gauge);  // along (1, 1) / sqrt(2): sqrt(2), squared 2, over 2
+  EXPECT_NEAR(w.chi2, 1.0, 1e-9);
+  EXPECT_EQ(w.dof, 1);
+  EXPECT_EQ(wald_statistic(Eigen::VectorXd(), Eigen::MatrixXd()).dof, 0);  // no covariance: nothing judged
 }
 
 }  // namespace

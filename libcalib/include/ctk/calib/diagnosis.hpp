@@ -64,6 +64,8 @@ struct EffectFinding {
   double z = 0;                        // held-out improvement in standard errors
   double threshold_z = 0;              // what z had to pass in its round (false_acceptance_rate spent there)
   bool raised_in_sample_cost = false;  // its fit on all views was worse than the model it extends
+  WaldStatistic strength;              // that fit's parameters against none (effect_strength), where judged
+  double strength_threshold = 0;       // what strength.chi2 had to pass in its round
   EffectParameters parameters;         // the final model (all views, every accepted effect and load)
   EffectParameters model_before;       // the model it was tested against
   EffectParameters model_after;        // the model right after it entered (its before/after figures)

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "ctk/calib/scan_model.hpp"
+#include "ctk/core/statistics.hpp"
 
 namespace ctk {
 
@@ -40,5 +41,11 @@ ScanModelFit fit_view_poses(const ScanObservations& observations, const EffectPa
 
 /// Number of parameters an effect adds (sphere offsets: 3 per sphere).
 int parameter_count(Effect e, const ScanObservations& observations);
+
+/// How far the effect `active[slot]` of a fit with covariance stands from none: the Wald statistic
+/// of the parameters that measure its size (all but a distortion's centre, which means nothing
+/// without a distortion) against their marginal covariance. Zero degrees of freedom when the fit
+/// has no covariance.
+WaldStatistic effect_strength(const ScanModelFit& fit, const std::vector<Effect>& active, std::size_t slot);
 
 }  // namespace ctk

@@ -1,7 +1,9 @@
 #pragma once
 // Small statistics shared by the libraries: the median (for an even count, the upper of the two
 // middle values; 0 when there are none), the paired z-score that judges an effect on held-out
-// views, and the vertex of a least-squares parabola (where a scanned cost is least).
+// views, a Wald statistic and its chi-square threshold, and the vertex of a least-squares
+// parabola (where a scanned cost is least).
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -47,6 +49,19 @@ inline double paired_z(const std::vector<double>& before, const std::vector<doub
 /// pairs - 1 degrees of freedom (the z-score is that t statistic). std::invalid_argument unless
 /// 0 < level < 1 and pairs >= 2.
 double one_sided_threshold(double level, std::size_t pairs);
+
+/// The value a chi-square with `dof` degrees of freedom exceeds by chance with probability
+/// `level`. std::invalid_argument unless 0 < level < 1 and dof >= 1.
+double chi_square_threshold(double level, int dof);
+
+/// A Wald statistic: how far `values` stand from zero for their `covariance`, summed over the
+/// directions the covariance constrains (eigenvalues above 1e-10 of the largest; a gauge's free
+/// directions carry no information and are left out), and how many those are.
+struct WaldStatistic {
+  double chi2 = 0;
+  int dof = 0;
+};
+WaldStatistic wald_statistic(const Eigen::VectorXd& values, const Eigen::MatrixXd& covariance);
 
 /// Vertex of the least-squares parabola through (x_i, y_i) (three or more points); NaN when it
 /// opens downwards or is flat.
