@@ -27,6 +27,65 @@ Residuals residuals_by_sphere(const ScanCalibration& c) {
   return out;
 }
 
+// The agreement of each trial: the mean squared residual over the (view, sphere) pairs every
+// trial used. Which spheres a view keeps changes with the rate, and a view's mean with it (over
+// each trial's own spheres it jumped by more than the rate moved it). Spheres some trial lost do
+// not count, even where they say most.
+struct Agreement {
+  std::vector<double> mean_squared;  // per trial; HUGE_VAL when no pair is common
+  int spheres = 0, views = 0;        // the common pairs, and the views they are in
+};
+
+Agreement agreement_over_common_pairs(const std::vector<Residuals>& residuals) {
+  std::vector<std::pair<int, int>> common;
+  for (const auto& entry : residuals.front()) {
+    const std::pair<int, int> key = entry.first;
+    if (std::all_of(residuals.begin(), residuals.end(), [&key](const Residuals& r) { return r.contains(key); }))
+      common.push_back(key);
+  }
+  Agreement a;
+  a.mean_squared.assign(residuals.size(), HUGE_VAL);
+  for (std::size_t t = 0; t < residuals.size() && !common.empty(); ++t) {
+    double sum = 0;
+    for (const auto& key : common) sum += residuals[t].at(key);
+    a.mean_squared[t] = sum / static_cast<double>(common.size());
+  }
+  a.spheres = static_cast<int>(common.size());
+  int previous = -1;
+  for (const auto& key : common)  // ordered by view
+    if (key.first != previous) {
+      ++a.views;
+      previous = key.first;
+    }
+  return a;
+}
+
+// A parabola through the best trial and its neighbours (the first three when 0 is best): its
+// vertex is the rate, its curvature the information. The summed squares are N S(rate) over N
+// spheres (2N numbers less 6 per view's pose); one standard error moves them by the residual
+// variance per number. A vertex at or below zero gives 0, not used.
+void place_by_parabola(std::size_t best, ContrastLossMeasurement& m) {
+  const std::vector<double>& rates = m.trial_rates;
+  const std::vector<double>& agreement = m.mean_squared_px2;
+  const std::size_t mid = std::max<std::size_t>(best, 1);
+  const double x0 = rates[mid - 1], x1 = rates[mid], x2 = rates[mid + 1];
+  const double y0 = agreement[mid - 1], y1 = agreement[mid], y2 = agreement[mid + 1];
+  const double slope01 = (y1 - y0) / (x1 - x0), curvature = ((y2 - y1) / (x2 - x1) - slope01) / (x2 - x0);  // S'' / 2
+  if (!(curvature > 0)) return;
+  const double vertex = 0.5 * (x0 + x1) - slope01 / (2 * curvature);
+  if (vertex <= 0) {
+    m.rate = 0;
+    return;
+  }
+  m.rate = vertex;
+  const double least = y0 + slope01 * (vertex - x0) + curvature * (vertex - x0) * (vertex - x1);
+  const double freedom = 2.0 * m.spheres - 6.0 * m.views;
+  if (freedom <= 0) return;
+  const double variance = least * m.spheres / freedom;
+  m.sigma = std::sqrt(variance / (m.spheres * curvature));
+  m.used = true;
+}
+
 }  // namespace
 
 std::vector<int> contrast_sample_views(int projections, int count) {
@@ -48,43 +107,23 @@ ContrastLossMeasurement measure_contrast_loss(const std::function<ScanCalibratio
     rates.insert(rates.begin() + static_cast<std::ptrdiff_t>(at), rate);
     residuals.insert(residuals.begin() + static_cast<std::ptrdiff_t>(at), residuals_by_sphere(calibrate_sample(o)));
   };
-  ContrastLossMeasurement m;
-  std::vector<double> agreement;
-  int spheres = 0;
   // Trials at 0 and one step, then a step beyond the last while it agrees better than the one
   // before (within the range); then half a step either side of the best (only above it when 0 is
   // best). A ball's contrast only falls where more is in the way (hardening and scatter both lower
   // it), so no rate below zero is tried: a vertex below zero stands for another error of the model
   // (a monochromatic orbit of 1.3 px spheres measured -0.22 and let a holder mount lead the README
-  // example's base offset). The agreement is the mean squared residual over the (view, sphere)
-  // pairs every trial used: which spheres a view keeps changes with the rate, and a view's mean
-  // with it (over each trial's own spheres it jumped by more than the rate moved it). Spheres some
-  // trial lost do not count, even where they say most.
+  // example's base offset).
   int highest = 1;  // the coarse trials' end, in steps
   const int most = static_cast<int>(std::floor(kMostContrastLoss / kStep + 1e-9));
   try_rate(0);
   try_rate(kStep);
   bool refined = false;
+  Agreement a;
   while (true) {
-    std::vector<std::pair<int, int>> common;
-    for (const auto& entry : residuals.front()) {
-      const std::pair<int, int> key = entry.first;
-      if (std::all_of(residuals.begin(), residuals.end(), [&key](const Residuals& r) { return r.contains(key); }))
-        common.push_back(key);
-    }
-    agreement.assign(rates.size(), HUGE_VAL);
-    for (std::size_t t = 0; t < rates.size() && !common.empty(); ++t) {
-      double sum = 0;
-      for (const auto& key : common) sum += residuals[t].at(key);
-      agreement[t] = sum / static_cast<double>(common.size());
-    }
-    spheres = static_cast<int>(common.size());
-    std::vector<int> views;
-    for (const auto& key : common)
-      if (views.empty() || views.back() != key.first) views.push_back(key.first);
-    m.views = static_cast<int>(views.size());
+    a = agreement_over_common_pairs(residuals);
     const std::size_t last = rates.size() - 1;
-    const auto best = static_cast<std::size_t>(std::min_element(agreement.begin(), agreement.end()) - agreement.begin());
+    const auto best =
+        static_cast<std::size_t>(std::min_element(a.mean_squared.begin(), a.mean_squared.end()) - a.mean_squared.begin());
     if (!refined && best == last && highest < most) {
       try_rate(++highest * kStep);
     } else if (!refined && best + 1 < rates.size()) {
@@ -96,34 +135,17 @@ ContrastLossMeasurement measure_contrast_loss(const std::function<ScanCalibratio
       break;
     }
   }
-  m.trial_rates = rates;
-  m.mean_squared_px2 = agreement;
+  ContrastLossMeasurement m;
   m.sigma = HUGE_VAL;
-  const auto best = static_cast<std::size_t>(std::min_element(agreement.begin(), agreement.end()) - agreement.begin());
-  m.spheres = spheres;
+  m.trial_rates = rates;
+  m.mean_squared_px2 = a.mean_squared;
+  m.views = a.views;
+  m.spheres = a.spheres;
+  const auto best =
+      static_cast<std::size_t>(std::min_element(a.mean_squared.begin(), a.mean_squared.end()) - a.mean_squared.begin());
   m.rate = rates[best];
   if (m.views == 0 || !refined || best + 1 == rates.size()) return m;  // nothing calibrated, or the range's end
-  // A parabola through the best trial and its neighbours (the first three when 0 is best): its
-  // vertex is the rate, its curvature the information. The summed squares are N S(rate) over N
-  // spheres (2N numbers less 6 per view's pose); one standard error moves them by the residual
-  // variance per number.
-  const std::size_t mid = std::max<std::size_t>(best, 1);
-  const double x0 = rates[mid - 1], x1 = rates[mid], x2 = rates[mid + 1];
-  const double y0 = agreement[mid - 1], y1 = agreement[mid], y2 = agreement[mid + 1];
-  const double slope01 = (y1 - y0) / (x1 - x0), curvature = ((y2 - y1) / (x2 - x1) - slope01) / (x2 - x0);  // S'' / 2
-  if (!(curvature > 0)) return m;
-  const double vertex = 0.5 * (x0 + x1) - slope01 / (2 * curvature);
-  if (vertex <= 0) {
-    m.rate = 0;
-    return m;
-  }
-  m.rate = vertex;
-  const double least = y0 + slope01 * (vertex - x0) + curvature * (vertex - x0) * (vertex - x1);
-  const double freedom = 2.0 * m.spheres - 6.0 * m.views;
-  if (freedom <= 0) return m;
-  const double variance = least * m.spheres / freedom;
-  m.sigma = std::sqrt(variance / (m.spheres * curvature));
-  m.used = true;
+  place_by_parabola(best, m);
   return m;
 }
 
