@@ -360,6 +360,76 @@ WaldStatistic effect_strength(const ScanModelFit& fit, const std::vector<Effect>
   return wald_statistic(values.head(measured), fit.covariance.block(start, start, measured, measured));
 }
 
+namespace {
+
+// The gauge of every centre free: the list's centroid, orientation and scale stay the declared
+// ones (constraints on the offsets' sums).
+void add_sphere_gauge(ceres::Problem& problem, const ScanObservations& o, GlobalBlocks& g) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& X : o.setup.holder.spheres_mm) centroid += X;
+  centroid /= static_cast<double>(o.setup.holder.spheres_mm.size());
+  auto* gauge = new SphereGauge{{}, 1e3};
+  auto* cost = new ceres::DynamicAutoDiffCostFunction<SphereGauge, 4>(gauge);
+  std::vector<double*> blocks;
+  for (std::size_t k = 0; k < o.setup.holder.spheres_mm.size(); ++k) {
+    gauge->X.push_back(o.setup.holder.spheres_mm[k] - centroid);
+    cost->AddParameterBlock(3);
+    blocks.push_back(g.block(Effect::sphere_positions, k));
+  }
+  cost->SetNumResiduals(7);
+  problem.AddResidualBlock(cost, nullptr, blocks);
+}
+
+ceres::Solver::Options solver_options(ceres::ParameterBlockOrdering* ordering, bool every_centre_free) {
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_SCHUR;
+  options.linear_solver_ordering.reset(ordering);
+  options.max_num_iterations = 50;
+  options.function_tolerance = 1e-10;
+  if (every_centre_free) {
+    // Every centre free: the minimum is flat, and the cost stops changing (1e-10) while the
+    // centres still move by micrometres; held to their own convergence instead.
+    options.function_tolerance = 1e-16;
+    options.parameter_tolerance = 1e-12;
+    options.max_num_iterations = 200;
+  }
+  options.logging_type = ceres::SILENT;
+  // One thread: two summed the Schur complement in an order that changed from run to run, and a
+  // holder measured twice differed by 1.1 um (its second pass's matches followed).
+  options.num_threads = 1;
+  return options;
+}
+
+// The active effects' covariance, in their order (sphere offsets: every sphere's), into `out`.
+void add_covariance(ceres::Problem& problem, GlobalBlocks& g, std::vector<std::array<double, 6>>& poses,
+                    const std::vector<Effect>& active, ScanModelFit& out) {
+  std::vector<const double*> blocks;
+  for (Effect e : active) {
+    out.covariance_offsets.push_back(0);
+    if (e == Effect::sphere_positions)
+      for (std::size_t k = 0; k < g.p.spheres.size(); ++k) {
+        if (problem.HasParameterBlock(g.block(e, k))) blocks.push_back(g.block(e, k));
+      }
+    else if (problem.HasParameterBlock(g.block(e)))
+      blocks.push_back(g.block(e));
+  }
+  int size = 0;
+  for (std::size_t a = 0; a < active.size(); ++a) {
+    out.covariance_offsets[a] = size;
+    size += active[a] == Effect::sphere_positions ? 3 * static_cast<int>(g.p.spheres.size()) : block_size(active[a]);
+  }
+  // The globals' covariance with every per-view pose free (marginalised), not held at its
+  // optimum: a pose and a global effect trade off (a base offset against each view's depth), and
+  // holding the poses understated the globals' uncertainty (3 sigma errors in a population).
+  std::vector<double*> pose_blocks;
+  pose_blocks.reserve(poses.size());
+  for (auto& pose : poses) pose_blocks.push_back(pose.data());
+  if (!blocks.empty() && (!marginal_covariance(problem, pose_blocks, blocks, out.covariance) || out.covariance.rows() != size))
+    out.covariance.resize(0, 0);
+}
+
+}  // namespace
+
 ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>& active, const std::vector<std::size_t>& views,
                             const EffectParameters& start, bool with_covariance) {
   GlobalBlocks g(start, o.setup.holder.spheres_mm.size());
@@ -377,21 +447,7 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
   // place by the rest.
   const bool sphere_subset =
       spheres_free && std::find(start.free_spheres.begin(), start.free_spheres.end(), false) != start.free_spheres.end();
-  if (spheres_free && !sphere_subset) {
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (const auto& X : o.setup.holder.spheres_mm) centroid += X;
-    centroid /= static_cast<double>(o.setup.holder.spheres_mm.size());
-    auto* gauge = new SphereGauge{{}, 1e3};
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<SphereGauge, 4>(gauge);
-    std::vector<double*> blocks;
-    for (std::size_t k = 0; k < o.setup.holder.spheres_mm.size(); ++k) {
-      gauge->X.push_back(o.setup.holder.spheres_mm[k] - centroid);
-      cost->AddParameterBlock(3);
-      blocks.push_back(g.block(Effect::sphere_positions, k));
-    }
-    cost->SetNumResiduals(7);
-    problem.AddResidualBlock(cost, nullptr, blocks);
-  }
+  if (spheres_free && !sphere_subset) add_sphere_gauge(problem, o, g);
   for (Effect e : kModelledEffects) {
     if (e == Effect::sphere_positions) {
       for (std::size_t k = 0; k < g.p.spheres.size(); ++k)
@@ -411,22 +467,7 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
     for (std::size_t k = 0; k < g.p.spheres.size(); ++k)
       if (!start.free_spheres[k] && problem.HasParameterBlock(g.block(Effect::sphere_positions, k)))
         problem.SetParameterBlockConstant(g.block(Effect::sphere_positions, k));
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_SCHUR;
-  options.linear_solver_ordering.reset(ordering);
-  options.max_num_iterations = 50;
-  options.function_tolerance = 1e-10;
-  if (spheres_free && !sphere_subset) {
-    // Every centre free: the minimum is flat, and the cost stops changing (1e-10) while the
-    // centres still move by micrometres; held to their own convergence instead.
-    options.function_tolerance = 1e-16;
-    options.parameter_tolerance = 1e-12;
-    options.max_num_iterations = 200;
-  }
-  options.logging_type = ceres::SILENT;
-  // One thread: two summed the Schur complement in an order that changed from run to run, and a
-  // holder measured twice differed by 1.1 um (its second pass's matches followed).
-  options.num_threads = 1;
+  const ceres::Solver::Options options = solver_options(ordering, spheres_free && !sphere_subset);
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
 
@@ -436,31 +477,7 @@ ScanModelFit fit_scan_model(const ScanObservations& o, const std::vector<Effect>
   size_result(out, views.size());
   for (std::size_t i = 0; i < views.size(); ++i) collect_view(o, o.views[views[i]], poses[i].data(), g.p, out, i);
 
-  if (with_covariance && !active.empty()) {
-    std::vector<const double*> blocks;
-    for (Effect e : active) {
-      out.covariance_offsets.push_back(0);
-      if (e == Effect::sphere_positions)
-        for (std::size_t k = 0; k < g.p.spheres.size(); ++k) {
-          if (problem.HasParameterBlock(g.block(e, k))) blocks.push_back(g.block(e, k));
-        }
-      else if (problem.HasParameterBlock(g.block(e)))
-        blocks.push_back(g.block(e));
-    }
-    int size = 0;
-    for (std::size_t a = 0; a < active.size(); ++a) {
-      out.covariance_offsets[a] = size;
-      size += active[a] == Effect::sphere_positions ? 3 * static_cast<int>(g.p.spheres.size()) : block_size(active[a]);
-    }
-    // The globals' covariance with every per-view pose free (marginalised), not held at its
-    // optimum: a pose and a global effect trade off (a base offset against each view's depth), and
-    // holding the poses understated the globals' uncertainty (3 sigma errors in a population).
-    std::vector<double*> pose_blocks;
-    pose_blocks.reserve(poses.size());
-    for (auto& pose : poses) pose_blocks.push_back(pose.data());
-    if (!blocks.empty() && (!marginal_covariance(problem, pose_blocks, blocks, out.covariance) || out.covariance.rows() != size))
-      out.covariance.resize(0, 0);
-  }
+  if (with_covariance && !active.empty()) add_covariance(problem, g, poses, active, out);
   return out;
 }
 
