@@ -129,6 +129,85 @@ std::shared_ptr<const ProjectionOperator> spread_operator(const ReconstructionPl
   return all.subset(read);
 }
 
+// What this rank reads: in slabs every view, the rows it owns; views split, its share of the
+// views, whole.
+MeasurementOptions reading_options(const ReconstructionPlan& plan, const ReconstructionOptions& o, bool slabs,
+                                   const Communicator& ranks) {
+  MeasurementOptions reading;
+  reading.statistical_weights = plan.weighted;
+  reading.undistort = o.undistort;
+  if (slabs) {
+    const SlabRows& rows = *plan.distribution.rows;
+    MeasurementOptions::RowWindow window;
+    window.height = std::max(1, rows.owned_height(ranks.rank()));
+    for (int k = 0; k < rows.views(); ++k) {
+      window.first.push_back(rows.owned(k, ranks.rank()).first);
+      window.count.push_back(rows.owned(k, ranks.rank()).count);
+    }
+    reading.rows = std::move(window);
+  } else {
+    reading.share = ranks.rank();
+    reading.shares = ranks.size();
+  }
+  return reading;
+}
+
+// One view in `every`, spread over the directions, taken out of `m` to say when the image stops
+// improving (every rank holds out the same views); none when there are too few views.
+std::optional<HeldOutFit> hold_out_views(const ReconstructionPlan& plan, const Geometry& geometry, const Detector& detector,
+                                         int every, const SpreadViews& views, bool views_split,
+                                         const Eigen::Vector3d& volume_centre, const Communicator& ranks, Measurements& m) {
+  const std::vector<int> chosen = held_out_positions(views.matrices, every, volume_centre);
+  if (chosen.empty()) return std::nullopt;
+  std::vector<int> here = views_split ? views.local_positions(chosen) : chosen;
+  std::sort(here.begin(), here.end());
+  std::vector<int> held_indices(chosen.size());
+  std::transform(chosen.begin(), chosen.end(), held_indices.begin(),
+                 [&](int p) { return views.indices[static_cast<std::size_t>(p)]; });
+  Measurements held = take_views(m, here);
+  return std::make_optional<HeldOutFit>(spread_operator(plan, geometry, held, ranks, detector), std::move(held.line_integrals),
+                                        std::move(held.weights), std::move(held_indices),
+                                        static_cast<std::size_t>(detector.rows) * static_cast<std::size_t>(detector.cols));
+}
+
+// What every iterative solver is called with beside its data.
+struct SolverCall {
+  const ProjectionOperator& A;
+  const IterationCallback& on_iteration;
+  Checkpointing* checkpointing;  // null: none (spread over ranks)
+  const std::function<bool()>& stop_requested;
+  StoppingRule stopping;
+};
+
+// The plan's iterative method on the views in `m` (OS-SQS's subsets over the whole run's views,
+// each rank taking its views of every subset).
+SolverReport solve(const ReconstructionPlan& plan, const ReconstructionOptions& o, const SolverCall& call, Measurements& m,
+                   const SpreadViews& views, bool views_split, const Eigen::Vector3d& volume_centre, Volume& x) {
+  const int iterations = o.iteration_count();
+  const ProjectionStack* weights = plan.weighted ? &m.weights : nullptr;
+  if (plan.method == ReconstructionMethod::os_sqs) {
+    OsSqsOptions os;
+    os.epochs = iterations;
+    os.lambda = o.lambda;
+    os.regulariser = o.regulariser;
+    os.huber_delta = o.huber_delta;
+    const int count = o.subsets > 0 ? o.subsets : default_subset_count(static_cast<int>(views.matrices.size()));
+    std::vector<std::vector<int>> subsets = ordered_subsets(views.matrices, count, volume_centre);
+    if (views_split)
+      for (auto& subset : subsets) subset = views.local_positions(subset);
+    return solve_os_sqs(call.A, m.line_integrals, weights, x, subsets, os, call.on_iteration, call.stop_requested, call.stopping);
+  }
+  if (plan.method == ReconstructionMethod::sirt)
+    return solve_sirt(call.A, m.line_integrals, x, {iterations, 1.0, true}, call.on_iteration, call.checkpointing, call.stopping);
+  WlsOptions w;
+  w.iterations = iterations;
+  w.tolerance = o.tolerance;
+  w.lambda = o.lambda;
+  w.regulariser = o.regulariser;
+  w.preconditioner = o.preconditioner;
+  return solve_wls_cg(call.A, m.line_integrals, weights, x, w, call.on_iteration, call.checkpointing, call.stopping);
+}
+
 }  // namespace
 
 void ReconstructionOptions::validate() const {
@@ -276,23 +355,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
                              " GB are available: use a coarser voxel, a smaller volume or fewer views" +
                              (spread ? "" : ", or spread the views over more processes (mpirun)"));
 
-  MeasurementOptions reading;
-  reading.statistical_weights = plan.weighted;
-  reading.undistort = o.undistort;
-  if (slabs) {  // every view, the rows this rank owns
-    const SlabRows& rows = *plan.distribution.rows;
-    MeasurementOptions::RowWindow window;
-    window.height = std::max(1, rows.owned_height(ranks.rank()));
-    for (int k = 0; k < rows.views(); ++k) {
-      window.first.push_back(rows.owned(k, ranks.rank()).first);
-      window.count.push_back(rows.owned(k, ranks.rank()).count);
-    }
-    reading.rows = std::move(window);
-  } else {  // views split: this rank's share of the views, whole
-    reading.share = ranks.rank();
-    reading.shares = ranks.size();
-  }
-  Measurements m = load_measurements(scan, geometry, reading, hooks.reading);
+  Measurements m = load_measurements(scan, geometry, reading_options(plan, o, slabs, ranks), hooks.reading);
   // Views split, the run's views are every rank's, in the geometry's order; in slabs every rank
   // read them all (each its rows), and found the same in them.
   const bool views_split = spread && !slabs;
@@ -322,19 +385,10 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   // Default iterations: one view in `held_out_every`, spread over the directions, is kept out of
   // the solve to say when the image stops improving. Every rank holds out the same views.
   std::optional<HeldOutFit> judge;
-  if (o.stops_on_held_out_views())
-    if (const std::vector<int> chosen = held_out_positions(views.matrices, o.held_out_every, volume_centre); !chosen.empty()) {
-      std::vector<int> here = views_split ? views.local_positions(chosen) : chosen;
-      std::sort(here.begin(), here.end());
-      std::vector<int> held_indices(chosen.size());
-      std::transform(chosen.begin(), chosen.end(), held_indices.begin(),
-                     [&](int p) { return views.indices[static_cast<std::size_t>(p)]; });
-      Measurements held = take_views(m, here);
-      views = spread_views();
-      judge.emplace(spread_operator(plan, geometry, held, ranks, scan.detector), std::move(held.line_integrals),
-                    std::move(held.weights), std::move(held_indices),
-                    static_cast<std::size_t>(scan.detector.rows) * static_cast<std::size_t>(scan.detector.cols));
-    }
+  if (o.stops_on_held_out_views()) {
+    judge = hold_out_views(plan, geometry, scan.detector, o.held_out_every, views, views_split, volume_centre, ranks, m);
+    if (judge) views = spread_views();
+  }
   run.views_used = views.indices;
 
   run.volume = Volume(slabs ? slab_layout(plan.layout, ranks.rank(), ranks.size()) : plan.layout);
@@ -368,33 +422,9 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
     const std::function<bool()> stop_requested = spread ? std::function<bool()>() : hooks.stop_requested;
     const std::shared_ptr<const ProjectionOperator> split = spread_operator(plan, geometry, m, ranks, scan.detector);
     const ProjectionOperator& A = *split;
-    const StoppingRule stopping = judge ? judge->rule() : StoppingRule();
-    if (plan.method == ReconstructionMethod::os_sqs) {
-      OsSqsOptions os;
-      os.epochs = iterations;
-      os.lambda = o.lambda;
-      os.regulariser = o.regulariser;
-      os.huber_delta = o.huber_delta;
-      const int count = o.subsets > 0 ? o.subsets : default_subset_count(static_cast<int>(views.matrices.size()));
-      // The subsets of the whole run's views, each rank taking its views of every subset.
-      std::vector<std::vector<int>> subsets = ordered_subsets(views.matrices, count, volume_centre);
-      if (views_split)
-        for (auto& subset : subsets) subset = views.local_positions(subset);
-      run.solver = solve_os_sqs(A, m.line_integrals, plan.weighted ? &m.weights : nullptr, run.volume, subsets, os, on_iteration,
-                                stop_requested, stopping);
-    } else if (plan.method == ReconstructionMethod::sirt) {
-      run.solver = solve_sirt(A, m.line_integrals, run.volume, {iterations, 1.0, true}, on_iteration,
-                              spread ? nullptr : &checkpointing, stopping);
-    } else {
-      WlsOptions w;
-      w.iterations = iterations;
-      w.tolerance = o.tolerance;
-      w.lambda = o.lambda;
-      w.regulariser = o.regulariser;
-      w.preconditioner = o.preconditioner;
-      run.solver = solve_wls_cg(A, m.line_integrals, plan.weighted ? &m.weights : nullptr, run.volume, w, on_iteration,
-                                spread ? nullptr : &checkpointing, stopping);
-    }
+    const SolverCall call{A, on_iteration, spread ? nullptr : &checkpointing, stop_requested,
+                          judge ? judge->rule() : StoppingRule()};
+    run.solver = solve(plan, o, call, m, views, views_split, volume_centre, run.volume);
     if (judge) {
       judge->restore_best(run.volume);
       run.held_out = judge->report();
