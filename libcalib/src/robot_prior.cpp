@@ -181,6 +181,74 @@ EffectParameters fit_robot_model(const ScanObservations& o, const std::vector<st
   return p;
 }
 
+// Fits the model with the repeatability assumed, measures the repeatability about it, refits
+// (four rounds). Views whose image and robot disagree beyond both noises (p < 0.001) take no part
+// in either. False (with the reason in `result`) when too few views agree.
+bool measure_repeatability_and_consistency(const ScanObservations& o, const std::vector<std::size_t>& views,
+                                           const std::vector<Matrix6>& image_covariance, const RobotPriorOptions& options,
+                                           Repeatability& repeatability, std::vector<std::size_t>& consistent,
+                                           EffectParameters& model, RobotPriorFit& result) {
+  for (int round = 0; round < 4; ++round) {
+    const Matrix6 prior_covariance = prior_information(repeatability).inverse();
+    model = fit_robot_model(o, consistent, image_covariance, prior_covariance, model);
+    std::vector<Deviation> deviations(o.views.size()), of_consistent;
+    for (std::size_t i : views)
+      deviations[i] = {flange_deviation(o.setup, model, *o.views[i].joints, o.views[i].T_calibrated), image_covariance[i]};
+    for (std::size_t i : consistent) of_consistent.push_back(deviations[i]);
+    repeatability = measure_repeatability(of_consistent, repeatability);
+    const Matrix6 measured = prior_information(repeatability).inverse();
+    consistent.clear();
+    result.inconsistent_views.clear();
+    for (std::size_t i : views) {
+      const Deviation& d = deviations[i];
+      if (d.n.dot((d.image_covariance + measured).ldlt().solve(d.n)) <= kConsistent)
+        consistent.push_back(i);
+      else
+        result.inconsistent_views.push_back(o.views[i].view);
+    }
+    if (static_cast<int>(consistent.size()) < options.min_views) {
+      result.reason = "only " + std::to_string(consistent.size()) + " views agree with the robot's model";
+      return false;
+    }
+  }
+  return true;
+}
+
+// One view's combined pose `T` written into the calibration: its matrix, residuals and pose
+// uncertainty (image and prior). Returns its rotation uncertainty from the image alone and combined.
+std::pair<double, double> combine_view(const ScanDescription& scan, const ScanObservations& o, const EffectParameters& model,
+                                       const Matrix6& prior, const ViewObservations& v, const Rigid& T, ScanCalibration& c) {
+  ViewCalibration& out = c.views[static_cast<std::size_t>(v.view)];
+  const FlangeChain chain = flange_chain(o.setup, model, *v.joints);
+  const Vector6 n = flange_deviation(o.setup, model, *v.joints, T);
+  const Matrix6 image = image_information(o, v, chain, n);
+  const Matrix6 covariance = (image + prior).inverse();
+  const double image_sigma = rotation_sigma_deg(chain, image.inverse());
+  // The holder origin's uncertainty in camera axes.
+  Eigen::Matrix<double, 3, 6> G;
+  for (int q = 0; q < 6; ++q) {
+    Vector6 d = Vector6::Zero();
+    d(q) = 1e-6;
+    G.col(q) = (perturbed(chain, n, d).translation() - perturbed(chain, n, -d).translation()) / 2e-6;
+  }
+  const Eigen::Matrix3d origin = G * covariance * G.transpose();
+  for (int a = 0; a < 3; ++a) out.translation_sigma_mm[a] = std::sqrt(origin(a, a));
+  out.rotation_sigma_deg = rotation_sigma_deg(chain, covariance);
+
+  out.T_camera_holder = T;
+  out.P = view_camera(scan, v.view).P(T);
+  double sq = 0;
+  for (std::size_t k = 0; k < out.spheres.size(); ++k) {
+    out.fitted_px[k] = out.P->project(scan.holder->spheres_mm[static_cast<std::size_t>(out.spheres[k])]);
+    sq += (out.detected_px[k] - out.fitted_px[k]).squaredNorm();
+  }
+  out.rms_px = out.spheres.empty() ? 0.0 : std::sqrt(sq / static_cast<double>(out.spheres.size()));
+  GeometryView& g = c.geometry.views[static_cast<std::size_t>(v.view)];
+  g.P = out.P;
+  g.rms_px = out.rms_px;
+  return {image_sigma, out.rotation_sigma_deg};
+}
+
 }  // namespace
 
 void RobotPriorOptions::validate() const {
@@ -223,34 +291,11 @@ RobotPriorFit combine_with_robot(const ScanDescription& scan, ScanCalibration& c
     image_covariance[i] =
         image_information(o, v, chain, flange_deviation(o.setup, declared, *v.joints, v.T_calibrated)).inverse();
   }
-  // Fit the model with the repeatability assumed, measure the repeatability about it, refit. Views
-  // whose image and robot disagree beyond both noises (p < 0.001) take no part in either.
   Repeatability repeatability{options.start_sigma_mm, options.start_sigma_deg};
   std::vector<std::size_t> consistent = views;
   EffectParameters model;
-  for (int round = 0; round < 4; ++round) {
-    const Matrix6 prior_covariance = prior_information(repeatability).inverse();
-    model = fit_robot_model(o, consistent, image_covariance, prior_covariance, model);
-    std::vector<Deviation> deviations(o.views.size()), of_consistent;
-    for (std::size_t i : views)
-      deviations[i] = {flange_deviation(o.setup, model, *o.views[i].joints, o.views[i].T_calibrated), image_covariance[i]};
-    for (std::size_t i : consistent) of_consistent.push_back(deviations[i]);
-    repeatability = measure_repeatability(of_consistent, repeatability);
-    const Matrix6 measured = prior_information(repeatability).inverse();
-    consistent.clear();
-    result.inconsistent_views.clear();
-    for (std::size_t i : views) {
-      const Deviation& d = deviations[i];
-      if (d.n.dot((d.image_covariance + measured).ldlt().solve(d.n)) <= kConsistent)
-        consistent.push_back(i);
-      else
-        result.inconsistent_views.push_back(o.views[i].view);
-    }
-    if (static_cast<int>(consistent.size()) < options.min_views) {
-      result.reason = "only " + std::to_string(consistent.size()) + " views agree with the robot's model";
-      return result;
-    }
-  }
+  if (!measure_repeatability_and_consistency(o, views, image_covariance, options, repeatability, consistent, model, result))
+    return result;
   model = fit_robot_model(o, consistent, image_covariance, prior_information(repeatability).inverse(), model);
   // Every view, the model fixed: its pose from its spheres and the prior.
   o.robot_sigma_mm = repeatability.sigma_mm;
@@ -261,36 +306,9 @@ RobotPriorFit combine_with_robot(const ScanDescription& scan, ScanCalibration& c
   const Matrix6 prior = prior_information(repeatability);
   for (std::size_t slot = 0; slot < views.size(); ++slot) {
     const ViewObservations& v = o.views[views[slot]];
-    ViewCalibration& out = c.views[static_cast<std::size_t>(v.view)];
-    const Rigid& T = combined.poses[slot];
-    const FlangeChain chain = flange_chain(o.setup, model, *v.joints);
-    const Vector6 n = flange_deviation(o.setup, model, *v.joints, T);
-    const Matrix6 image = image_information(o, v, chain, n);
-    const Matrix6 covariance = (image + prior).inverse();
-    image_sigma.push_back(rotation_sigma_deg(chain, image.inverse()));
-    combined_sigma.push_back(rotation_sigma_deg(chain, covariance));
-    // The holder origin's uncertainty in camera axes.
-    Eigen::Matrix<double, 3, 6> G;
-    for (int q = 0; q < 6; ++q) {
-      Vector6 d = Vector6::Zero();
-      d(q) = 1e-6;
-      G.col(q) = (perturbed(chain, n, d).translation() - perturbed(chain, n, -d).translation()) / 2e-6;
-    }
-    const Eigen::Matrix3d origin = G * covariance * G.transpose();
-    for (int a = 0; a < 3; ++a) out.translation_sigma_mm[a] = std::sqrt(origin(a, a));
-    out.rotation_sigma_deg = combined_sigma.back();
-
-    out.T_camera_holder = T;
-    out.P = view_camera(scan, v.view).P(T);
-    double sq = 0;
-    for (std::size_t k = 0; k < out.spheres.size(); ++k) {
-      out.fitted_px[k] = out.P->project(scan.holder->spheres_mm[static_cast<std::size_t>(out.spheres[k])]);
-      sq += (out.detected_px[k] - out.fitted_px[k]).squaredNorm();
-    }
-    out.rms_px = out.spheres.empty() ? 0.0 : std::sqrt(sq / static_cast<double>(out.spheres.size()));
-    GeometryView& g = c.geometry.views[static_cast<std::size_t>(v.view)];
-    g.P = out.P;
-    g.rms_px = out.rms_px;
+    const auto [image, combined_view] = combine_view(scan, o, model, prior, v, combined.poses[slot], c);
+    image_sigma.push_back(image);
+    combined_sigma.push_back(combined_view);
   }
   result.applied = true;
   result.views = static_cast<int>(views.size());
