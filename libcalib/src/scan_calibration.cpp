@@ -32,6 +32,56 @@ void share_views(const std::vector<int>& mine, const Communicator& ranks, std::v
     }
 }
 
+// One view from its image, its first guess and the scan's camera; whatever its data provoke is
+// its rejection with the reason, never the batch's end.
+ViewCalibration calibrate_scan_view(const ScanDescription& scan, int v, const FirstGuess& guess,
+                                    const std::optional<FlatDark>& flat_dark, const CalibrationOptions& options) {
+  ViewCalibration out;
+  if (!guess.T_camera_holder) {
+    out.status = ViewStatus::skipped;
+    out.reason = "no pose: " + guess.reason;
+    return out;
+  }
+  try {
+    const Image image = read_line_integrals(scan, v, flat_dark);
+    const ViewCamera camera = view_camera(scan, v);
+    out = calibrate_view(image, camera.K, camera.from_nominal * *guess.T_camera_holder, *scan.holder, scan.detector, options,
+                         scan.distortion);
+    if (out.T_camera_holder) out.T_camera_holder = camera.from_nominal.inverse() * *out.T_camera_holder;
+  } catch (const InputError& e) {
+    out = ViewCalibration{};
+    out.status = ViewStatus::rejected;
+    out.reason = std::string("unreadable image: ") + e.what();
+  } catch (const std::exception& e) {
+    out = ViewCalibration{};
+    out.status = ViewStatus::rejected;
+    out.reason = std::string("calibration failed: ") + e.what();
+  }
+  return out;
+}
+
+// The views' matrices (ok views) and reasons (the others) as a calibrated geometry.
+Geometry calibrated_geometry(const ScanDescription& scan, const std::vector<ViewCalibration>& views) {
+  Geometry geometry;
+  geometry.detector = scan.detector;
+  geometry.origin = "calibrated";
+  for (std::size_t v = 0; v < views.size(); ++v) {
+    const ViewCalibration& c = views[v];
+    GeometryView g;
+    g.index = static_cast<int>(v);
+    g.projection = scan.projections.file_name(static_cast<int>(v));
+    g.status = c.status;
+    g.reason = c.reason;
+    if (c.status == ViewStatus::ok) {
+      g.P = c.P;
+      g.rms_px = c.rms_px;
+      g.spheres_used = c.spheres_used;
+    }
+    geometry.views.push_back(g);
+  }
+  return geometry;
+}
+
 ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<FirstGuess>& guesses,
                                 const CalibrationOptions& options, const std::function<void(int, int)>& progress,
                                 const BatchControl* control, const Communicator& ranks) {
@@ -74,27 +124,7 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
       ++left_undone;
       return;
     }
-    if (!guess.T_camera_holder) {
-      out.status = ViewStatus::skipped;
-      out.reason = "no pose: " + guess.reason;
-    } else {
-      try {
-        const Image image = read_line_integrals(scan, v, flat_dark);
-        const ViewCamera camera = view_camera(scan, v);
-        out = calibrate_view(image, camera.K, camera.from_nominal * *guess.T_camera_holder, *scan.holder, scan.detector, options,
-                             scan.distortion);
-        if (out.T_camera_holder) out.T_camera_holder = camera.from_nominal.inverse() * *out.T_camera_holder;
-      } catch (const InputError& e) {
-        out = ViewCalibration{};
-        out.status = ViewStatus::rejected;
-        out.reason = std::string("unreadable image: ") + e.what();
-      } catch (const std::exception& e) {
-        // Whatever else one view's data provokes is that view's rejection, never the batch's end.
-        out = ViewCalibration{};
-        out.status = ViewStatus::rejected;
-        out.reason = std::string("calibration failed: ") + e.what();
-      }
-    }
+    out = calibrate_scan_view(scan, v, guess, flat_dark, options);
     finished[static_cast<std::size_t>(v)] = 1;
 #pragma omp critical(ctk_calibration_progress)
     {
@@ -109,22 +139,7 @@ ScanCalibration calibrate_views(const ScanDescription& scan, const std::vector<F
   result.left_undone = left_undone;
   result.taken_over = static_cast<int>(std::count(finished.begin(), finished.end(), 2));
 
-  result.geometry.detector = scan.detector;
-  result.geometry.origin = "calibrated";
-  for (int v = 0; v < n; ++v) {
-    const ViewCalibration& c = result.views[static_cast<std::size_t>(v)];
-    GeometryView g;
-    g.index = v;
-    g.projection = scan.projections.file_name(v);
-    g.status = c.status;
-    g.reason = c.reason;
-    if (c.status == ViewStatus::ok) {
-      g.P = c.P;
-      g.rms_px = c.rms_px;
-      g.spheres_used = c.spheres_used;
-    }
-    result.geometry.views.push_back(g);
-  }
+  result.geometry = calibrated_geometry(scan, result.views);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
