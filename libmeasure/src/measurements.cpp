@@ -34,31 +34,13 @@ void keep_views(Measurements& m, const std::vector<int>& kept) {
   m.matrices = std::move(matrices);
 }
 
-}  // namespace
-
-void MeasurementOptions::validate() const {
-  require_option(shares >= 1, "MeasurementOptions.shares", "at least 1", shares);
-  require_option(share >= 0 && share < shares, "MeasurementOptions.share", "a number in 0 .. shares - 1", share);
-  if (rows) {
-    require_option(rows->height >= 1, "MeasurementOptions.rows.height", "at least 1", rows->height);
-    for (std::size_t k = 0; k < rows->first.size() && k < rows->count.size(); ++k)
-      require_option(rows->first[k] >= 0 && rows->count[k] >= 0 && rows->count[k] <= rows->height, "MeasurementOptions.rows",
-                     "windows within the stacks' height, from row 0 on", rows->count[k]);
-  }
-}
-
-Measurements load_measurements(const ScanDescription& scan, const Geometry& geometry, const MeasurementOptions& options,
-                               const std::function<void(int, int)>& progress) {
-  const Detector& d = scan.detector;
-  if (geometry.detector.cols != d.cols || geometry.detector.rows != d.rows)
-    throw InputError(geometry.source(), json_key("detector"),
-                     std::to_string(geometry.detector.cols) + " x " + std::to_string(geometry.detector.rows) +
-                         " pixels, but the scan's detector is " + std::to_string(d.cols) + " x " + std::to_string(d.rows));
-  options.validate();
-  Measurements m;
+// The geometry's ok views this share reads (their scan indices and matrices into `m`, their
+// positions among the ok views into `positions`), each checked against the scan; returns the
+// number of ok views.
+int select_views(const ScanDescription& scan, const Geometry& geometry, const MeasurementOptions& options, Measurements& m,
+                 std::vector<int>& positions) {
   int position = -1;           // among the ok views
   std::vector<int> described;  // the scan views of the ok views so far
-  std::vector<int> positions;  // each view read: its position among the ok views
   for (int i : geometry.ok_views()) {
     ++position;
     const GeometryView& v = geometry.views[static_cast<std::size_t>(i)];
@@ -82,10 +64,86 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
     m.view_indices.push_back(v.index);
     m.matrices.push_back(*v.P);
   }
+  return position + 1;
+}
+
+// A declared radial distortion: the resampling onto the matrices' pinhole grid (when asked), and
+// what was done in `m.distortion_note`.
+std::optional<DetectorUndistortion> undistortion_for(const ScanDescription& scan, const MeasurementOptions& options,
+                                                     Measurements& m) {
+  std::optional<DetectorUndistortion> undistortion;
+  if (!scan.distortion) return undistortion;
+  const Detector& d = scan.detector;
+  std::ostringstream note;
+  note << "the scan declares a radial detector distortion (k1 " << scan.distortion->k1_per_px2 << " per px^2 about ("
+       << scan.distortion->centre_px.x() << ", " << scan.distortion->centre_px.y() << ")); ";
+  if (options.undistort) {
+    undistortion.emplace(d.cols, d.rows, *scan.distortion);
+    note << "the images are resampled onto the matrices' pinhole grid (largest shift " << std::setprecision(3)
+         << undistortion->largest_shift_px() << " px";
+    if (const int off = undistortion->pixels_measured_outside(); off > 0)
+      note << "; " << off << " pixels per view were measured off the detector and "
+           << (m.weights.views ? "get weight zero" : "repeat its edge");
+    note << ")";
+  } else {
+    note << "the images are used as measured (the projector is a pinhole)";
+  }
+  m.distortion_note = note.str();
+  return undistortion;
+}
+
+// Each view's clamped and non-finite pixels counted and noted; a view with too many non-finite
+// pixels left out.
+void count_and_leave_out(const std::vector<std::size_t>& clamped, const std::vector<std::size_t>& masked, std::size_t pixels,
+                         Measurements& m) {
+  std::vector<int> kept;
+  const int n = static_cast<int>(m.view_indices.size());
+  for (int k = 0; k < n; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    const std::string view = "view " + std::to_string(m.view_indices[i]) + ": ";
+    m.clamped_pixels += clamped[i];
+    if (clamped[i] > 0)
+      m.notes.push_back(view + std::to_string(clamped[i]) + " pixels clamped (counts at or below dark, or above the flat)");
+    if (static_cast<double>(masked[i]) > kMostMaskedFraction * static_cast<double>(pixels)) {
+      m.left_out.push_back(view + std::to_string(masked[i]) + " of " + std::to_string(pixels) +
+                           " pixels are not finite numbers (NaN or infinite): left out");
+      continue;
+    }
+    m.masked_pixels += masked[i];
+    if (masked[i] > 0) m.notes.push_back(view + std::to_string(masked[i]) + " pixels not finite (NaN or infinite): masked");
+    kept.push_back(k);
+  }
+  if (static_cast<int>(kept.size()) < n) keep_views(m, kept);
+}
+
+}  // namespace
+
+void MeasurementOptions::validate() const {
+  require_option(shares >= 1, "MeasurementOptions.shares", "at least 1", shares);
+  require_option(share >= 0 && share < shares, "MeasurementOptions.share", "a number in 0 .. shares - 1", share);
+  if (rows) {
+    require_option(rows->height >= 1, "MeasurementOptions.rows.height", "at least 1", rows->height);
+    for (std::size_t k = 0; k < rows->first.size() && k < rows->count.size(); ++k)
+      require_option(rows->first[k] >= 0 && rows->count[k] >= 0 && rows->count[k] <= rows->height, "MeasurementOptions.rows",
+                     "windows within the stacks' height, from row 0 on", rows->count[k]);
+  }
+}
+
+Measurements load_measurements(const ScanDescription& scan, const Geometry& geometry, const MeasurementOptions& options,
+                               const std::function<void(int, int)>& progress) {
+  const Detector& d = scan.detector;
+  if (geometry.detector.cols != d.cols || geometry.detector.rows != d.rows)
+    throw InputError(geometry.source(), json_key("detector"),
+                     std::to_string(geometry.detector.cols) + " x " + std::to_string(geometry.detector.rows) +
+                         " pixels, but the scan's detector is " + std::to_string(d.cols) + " x " + std::to_string(d.rows));
+  options.validate();
+  Measurements m;
+  std::vector<int> positions;  // each view read: its position among the ok views
+  const int ok_views = select_views(scan, geometry, options, m, positions);
   const int n = static_cast<int>(m.view_indices.size());
   const bool counts = scan.projections.kind == ProjectionKind::counts;
   const std::optional<MeasurementOptions::RowWindow>& window = options.rows;
-  if (window && (static_cast<int>(window->first.size()) != position + 1 || window->count.size() != window->first.size()))
+  if (window && (static_cast<int>(window->first.size()) != ok_views || window->count.size() != window->first.size()))
     throw std::invalid_argument("load_measurements: the row window does not have one entry per ok view");
   if (window)
     for (std::size_t k = 0; k < window->first.size(); ++k)
@@ -95,24 +153,7 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
   const int height = window ? window->height : d.rows;
   m.line_integrals = ProjectionStack(n, height, d.cols);
   if (counts && options.statistical_weights) m.weights = ProjectionStack(n, height, d.cols);
-  std::optional<DetectorUndistortion> undistortion;
-  if (scan.distortion) {
-    std::ostringstream note;
-    note << "the scan declares a radial detector distortion (k1 " << scan.distortion->k1_per_px2 << " per px^2 about ("
-         << scan.distortion->centre_px.x() << ", " << scan.distortion->centre_px.y() << ")); ";
-    if (options.undistort) {
-      undistortion.emplace(d.cols, d.rows, *scan.distortion);
-      note << "the images are resampled onto the matrices' pinhole grid (largest shift " << std::setprecision(3)
-           << undistortion->largest_shift_px() << " px";
-      if (const int off = undistortion->pixels_measured_outside(); off > 0)
-        note << "; " << off << " pixels per view were measured off the detector and "
-             << (m.weights.views ? "get weight zero" : "repeat its edge");
-      note << ")";
-    } else {
-      note << "the images are used as measured (the projector is a pinhole)";
-    }
-    m.distortion_note = note.str();
-  }
+  const std::optional<DetectorUndistortion> undistortion = undistortion_for(scan, options, m);
   const std::optional<FlatDark> flat_dark = read_flat_dark(scan);
   std::vector<std::size_t> clamped(static_cast<std::size_t>(n), 0), masked(static_cast<std::size_t>(n), 0);
   int done = 0;
@@ -144,24 +185,7 @@ Measurements load_measurements(const ScanDescription& scan, const Geometry& geom
 #pragma omp critical(ctk_measurements_progress)
     if (progress) progress(++done, n);
   });
-  std::vector<int> kept;
-  const std::size_t pixels = full_pixels;
-  for (int k = 0; k < n; ++k) {
-    const auto i = static_cast<std::size_t>(k);
-    const std::string view = "view " + std::to_string(m.view_indices[i]) + ": ";
-    m.clamped_pixels += clamped[i];
-    if (clamped[i] > 0)
-      m.notes.push_back(view + std::to_string(clamped[i]) + " pixels clamped (counts at or below dark, or above the flat)");
-    if (static_cast<double>(masked[i]) > kMostMaskedFraction * static_cast<double>(pixels)) {
-      m.left_out.push_back(view + std::to_string(masked[i]) + " of " + std::to_string(pixels) +
-                           " pixels are not finite numbers (NaN or infinite): left out");
-      continue;
-    }
-    m.masked_pixels += masked[i];
-    if (masked[i] > 0) m.notes.push_back(view + std::to_string(masked[i]) + " pixels not finite (NaN or infinite): masked");
-    kept.push_back(k);
-  }
-  if (static_cast<int>(kept.size()) < n) keep_views(m, kept);
+  count_and_leave_out(clamped, masked, full_pixels, m);
   return m;
 }
 
