@@ -170,6 +170,30 @@ std::optional<HeldOutFit> hold_out_views(const ReconstructionPlan& plan, const G
                                         static_cast<std::size_t>(detector.rows) * static_cast<std::size_t>(detector.cols));
 }
 
+// One process's checkpoints: saved through the hooks under the run's identity, every
+// `hooks.checkpoint_every` iterations and on a stop request; an earlier run's state (not for
+// OS-SQS, which keeps none) into `saved`, for the solver to continue from.
+Checkpointing checkpointing_for(const ReconstructionPlan& plan, const ReconstructionOptions& o, const Measurements& m,
+                                const ReconstructionHooks& hooks, std::optional<SolverState>& saved) {
+  Checkpointing checkpointing;
+  const nlohmann::json identity = run_identity(plan, o, m);
+  if (hooks.resume && plan.method != ReconstructionMethod::os_sqs) saved = hooks.resume(identity);
+  checkpointing.save = [&hooks, identity](const SolverSnapshot& state) {
+    if (hooks.save) hooks.save(state, identity);
+  };
+  checkpointing.every = hooks.checkpoint_every;
+  checkpointing.stop_requested = hooks.stop_requested;
+  checkpointing.resume = saved ? &*saved : nullptr;
+  return checkpointing;
+}
+
+// The median of the steps of a growing count (bytes handed on per iteration).
+std::size_t median_step(const std::vector<std::size_t>& counts) {
+  std::vector<double> steps;
+  for (std::size_t i = 1; i < counts.size(); ++i) steps.push_back(static_cast<double>(counts[i] - counts[i - 1]));
+  return static_cast<std::size_t>(median_in_place(steps));
+}
+
 // What every iterative solver is called with beside its data.
 struct SolverCall {
   const ProjectionOperator& A;
@@ -409,16 +433,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
     // A state spread over ranks is not saved: checkpoints, continuing and stops are one process's.
     std::optional<SolverState> saved;  // OS-SQS keeps no state to continue
     Checkpointing checkpointing;
-    if (!spread) {
-      const nlohmann::json identity = run_identity(plan, o, m);
-      if (hooks.resume && plan.method != ReconstructionMethod::os_sqs) saved = hooks.resume(identity);
-      checkpointing.save = [&hooks, identity](const SolverSnapshot& state) {
-        if (hooks.save) hooks.save(state, identity);
-      };
-      checkpointing.every = hooks.checkpoint_every;
-      checkpointing.stop_requested = hooks.stop_requested;
-    }
-    checkpointing.resume = saved ? &*saved : nullptr;
+    if (!spread) checkpointing = checkpointing_for(plan, o, m, hooks, saved);
     const std::function<bool()> stop_requested = spread ? std::function<bool()>() : hooks.stop_requested;
     const std::shared_ptr<const ProjectionOperator> split = spread_operator(plan, geometry, m, ranks, scan.detector);
     const ProjectionOperator& A = *split;
@@ -430,11 +445,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
       run.held_out = judge->report();
     }
   }
-  if (spread && bytes_at.size() > 1) {
-    std::vector<double> per_iteration;
-    for (std::size_t i = 1; i < bytes_at.size(); ++i) per_iteration.push_back(static_cast<double>(bytes_at[i] - bytes_at[i - 1]));
-    run.counted_bytes_per_iteration = static_cast<std::size_t>(median_in_place(per_iteration));
-  }
+  if (spread && bytes_at.size() > 1) run.counted_bytes_per_iteration = median_step(bytes_at);
   for (const std::string& peak : ranks.gather(std::to_string(peak_resident_bytes())))
     run.peak_resident_bytes.push_back(std::stoull(peak));
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
