@@ -153,6 +153,105 @@ void write_slabs(const Volume& mine, const VolumeLayout& whole, const Communicat
   write_slice_preview(sagittal, 0, 0, 0.0f, high, "1/mm", preview_file(out, "_sagittal.png"));
 }
 
+// Which views the geometry describes, and how many of the scan's (a geometry of part of the scan
+// is legitimate, views being matched by index, but so is a slip of the wrong file: say so).
+void say_which_views(const ScanDescription& scan, const Geometry& geometry, bool given) {
+  const int described = static_cast<int>(geometry.views.size());
+  std::cout << "geometry: " << (!given ? geometry.origin + " (from the scan file)" : geometry.description()) << ", "
+            << geometry.ok_views().size() << " of " << described << " views ok (the others are not used)";
+  if (described != scan.projections.count)
+    std::cout << "; it describes " << described << " of the scan's " << scan.projections.count << " projections";
+  std::cout << "\n";
+}
+
+void require_state_to_continue(ReconstructionMethod method, bool spread, const fs::path& state_file) {
+  if (method == ReconstructionMethod::fdk) throw InputError("--resume", "", "fdk is not iterative: there is nothing to continue");
+  if (method == ReconstructionMethod::os_sqs)
+    throw InputError("--resume", "", "os-sqs keeps no state to continue (its momentum restarts): run it again");
+  if (spread) throw InputError("--resume", "", "a run spread over MPI ranks keeps no state to continue: run it again");
+  if (!fs::exists(state_file)) throw InputError("--resume", "", "no saved state at " + state_file.string() + " to continue");
+}
+
+// The run told on the console as it goes (its plan, what was read, progress), and its state
+// saved beside --out and continued from there.
+ReconstructionHooks console_hooks(const ReconstructOptions& o, bool spread, const fs::path& state_file, Progress& reading,
+                                  std::optional<Progress>& solving) {
+  // A saved state continues only the run that saved it: the same files, data, volume and solver.
+  // A file is named by where it is (symbolic links and ".." resolved): the same scan spelt
+  // another way is the same scan.
+  const auto place = [](const fs::path& p) {
+    std::error_code ec;
+    const fs::path resolved = fs::weakly_canonical(fs::absolute(p), ec);
+    return (ec ? fs::absolute(p).lexically_normal() : resolved).string();
+  };
+  const nlohmann::json files_used = {{"scan", place(o.scan)},
+                                     {"geometry", o.geometry.empty() ? std::string("nominal") : place(o.geometry)}};
+  const auto with_files = [files_used](nlohmann::json identity) {
+    identity.update(files_used);
+    return identity;
+  };
+  ReconstructionHooks hooks;
+  hooks.planned = [spread, &solving](const ReconstructionPlan& plan) {
+    const VolumeLayout& l = plan.layout;
+    std::cout << "volume " << l.size[0] << " x " << l.size[1] << " x " << l.size[2] << " voxels of " << l.voxel_mm.x()
+              << " mm (holder frame, centred on the holder origin)\n"
+              << "memory plan (" << to_string(plan.method) << (spread ? ", per rank" : "") << "): " << plan.memory().describe()
+              << "; available " << static_cast<double>(plan.available_bytes) / 1e9 << " GB\n";
+    if (spread) std::cout << "spread over " << plan.distribution.ranks << " ranks:\n" << plan.distribution.describe() << "\n";
+    solving.emplace(to_string(plan.method), "iterations");
+  };
+  hooks.reading = std::ref(reading);
+  hooks.measured = [](const Measurements& m) {
+    if (!m.distortion_note.empty()) std::cout << m.distortion_note << "\n";
+    if (m.clamped_pixels > 0)
+      std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
+    report_masked_and_left_out(m.masked_pixels, m.left_out);  // run_reconstruction then requires views left
+  };
+  hooks.iterating = [&solving](int done, int total) { (*solving)(done, total); };
+  hooks.resume = [&o, state_file, with_files](const nlohmann::json& identity) -> std::optional<SolverState> {
+    if (!o.resume) {
+      if (fs::exists(state_file))
+        std::cout << "note: " << state_file.string()
+                  << " holds the state of an interrupted run; this run starts afresh (--resume continues it)\n";
+      return std::nullopt;
+    }
+    nlohmann::json saved_run;
+    SolverState saved = read_solver_state(state_file, saved_run);
+    require_same_run(saved_run, with_files(identity), state_file.string(), "run",
+                     "continue with the same inputs and options, or start afresh without --resume");
+    std::cout << "continuing " << saved.solver << " after iteration " << saved.iteration << " (state " << state_file.string()
+              << ")\n";
+    return saved;
+  };
+  hooks.checkpoint_every = o.checkpoint_every;
+  hooks.save = [state_file, with_files](const SolverSnapshot& state, const nlohmann::json& identity) {
+    write_solver_state(state, with_files(identity), state_file);
+  };
+  hooks.stop_requested = [] { return InterruptionWatch::requested(); };
+
+  return hooks;
+}
+
+// The volume (slabs gathered from the ranks), its previews, the log and the page.
+void write_outputs(const ReconstructionRun& run, const ReconstructOptions& o, const Geometry& geometry, const fs::path& log_file,
+                   const fs::path& page, bool slabs, const Communicator& ranks) {
+  if (slabs) {
+    write_slabs(run.volume, run.plan.layout, ranks, o.out);
+  } else {
+    write_volume(run.volume, o.out);
+    write_previews(run.volume, o.out);
+  }
+  nlohmann::json log = run.report();
+  log["scan"] = o.scan.string();
+  log["geometry"] = o.geometry.empty() ? geometry.origin : geometry.description();
+  write_text_atomically(log_file, log.dump(2) + "\n");
+  std::vector<fs::path> pictures = {preview_file(o.out, "_axial.png"), preview_file(o.out, "_coronal.png"),
+                                    preview_file(o.out, "_sagittal.png")};
+  if (write_convergence(run.solver.iterations, preview_file(o.out, "_convergence.png")))
+    pictures.push_back(preview_file(o.out, "_convergence.png"));
+  write_and_name_run_page("reconstruct", run.brief(), log, pictures, page);
+}
+
 void run_reconstruct(const ReconstructOptions& o) {
   const Communicator& ranks = world();
   const bool spread = ranks.size() > 1;
@@ -175,81 +274,15 @@ void run_reconstruct(const ReconstructOptions& o) {
   const Geometry geometry = geometry_or_nominal(scan, o.scan, o.geometry);
   const ReconstructionOptions options = library_options(o);
   options.validate();
-  const int described = static_cast<int>(geometry.views.size());
-  std::cout << "geometry: " << (o.geometry.empty() ? geometry.origin + " (from the scan file)" : geometry.description()) << ", "
-            << geometry.ok_views().size() << " of " << described << " views ok (the others are not used)";
-  // A geometry of part of the scan is legitimate (views are matched by index), but so is a slip
-  // of the wrong file: say so.
-  if (described != scan.projections.count)
-    std::cout << "; it describes " << described << " of the scan's " << scan.projections.count << " projections";
-  std::cout << "\n";
-  if (o.resume && options.method == ReconstructionMethod::fdk)
-    throw InputError("--resume", "", "fdk is not iterative: there is nothing to continue");
-  if (o.resume && options.method == ReconstructionMethod::os_sqs)
-    throw InputError("--resume", "", "os-sqs keeps no state to continue (its momentum restarts): run it again");
-  if (o.resume && spread)
-    throw InputError("--resume", "", "a run spread over MPI ranks keeps no state to continue: run it again");
-  if (o.resume && !fs::exists(state_file))
-    throw InputError("--resume", "", "no saved state at " + state_file.string() + " to continue");
+  say_which_views(scan, geometry, !o.geometry.empty());
+  if (o.resume) require_state_to_continue(options.method, spread, state_file);
 
-  // A saved state continues only the run that saved it: the same files, data, volume and solver.
-  // A file is named by where it is (symbolic links and ".." resolved): the same scan spelt
-  // another way is the same scan.
-  const auto place = [](const fs::path& p) {
-    std::error_code ec;
-    const fs::path resolved = fs::weakly_canonical(fs::absolute(p), ec);
-    return (ec ? fs::absolute(p).lexically_normal() : resolved).string();
-  };
-  const nlohmann::json files_used = {{"scan", place(o.scan)},
-                                     {"geometry", o.geometry.empty() ? std::string("nominal") : place(o.geometry)}};
-  const auto with_files = [&](nlohmann::json identity) {
-    identity.update(files_used);
-    return identity;
-  };
   Progress reading("reading projections", "views");
   std::optional<Progress> solving;
   // Spread over ranks, Ctrl-C ends the run at once (mpirun passes it to every rank): nothing is saved.
   std::optional<InterruptionWatch> watch;
   if (!spread) watch.emplace();
-  ReconstructionHooks hooks;
-  hooks.planned = [&](const ReconstructionPlan& plan) {
-    const VolumeLayout& l = plan.layout;
-    std::cout << "volume " << l.size[0] << " x " << l.size[1] << " x " << l.size[2] << " voxels of " << l.voxel_mm.x()
-              << " mm (holder frame, centred on the holder origin)\n"
-              << "memory plan (" << to_string(plan.method) << (spread ? ", per rank" : "") << "): " << plan.memory().describe()
-              << "; available " << static_cast<double>(plan.available_bytes) / 1e9 << " GB\n";
-    if (spread) std::cout << "spread over " << plan.distribution.ranks << " ranks:\n" << plan.distribution.describe() << "\n";
-    solving.emplace(to_string(plan.method), "iterations");
-  };
-  hooks.reading = std::ref(reading);
-  hooks.measured = [&](const Measurements& m) {
-    if (!m.distortion_note.empty()) std::cout << m.distortion_note << "\n";
-    if (m.clamped_pixels > 0)
-      std::cout << "clamped " << m.clamped_pixels << " pixels (counts at or below dark, or above the flat)\n";
-    report_masked_and_left_out(m.masked_pixels, m.left_out);  // run_reconstruction then requires views left
-  };
-  hooks.iterating = [&](int done, int total) { (*solving)(done, total); };
-  hooks.resume = [&](const nlohmann::json& identity) -> std::optional<SolverState> {
-    if (!o.resume) {
-      if (fs::exists(state_file))
-        std::cout << "note: " << state_file.string()
-                  << " holds the state of an interrupted run; this run starts afresh (--resume continues it)\n";
-      return std::nullopt;
-    }
-    nlohmann::json saved_run;
-    SolverState saved = read_solver_state(state_file, saved_run);
-    require_same_run(saved_run, with_files(identity), state_file.string(), "run",
-                     "continue with the same inputs and options, or start afresh without --resume");
-    std::cout << "continuing " << saved.solver << " after iteration " << saved.iteration << " (state " << state_file.string()
-              << ")\n";
-    return saved;
-  };
-  hooks.checkpoint_every = o.checkpoint_every;
-  hooks.save = [&](const SolverSnapshot& state, const nlohmann::json& identity) {
-    write_solver_state(state, with_files(identity), state_file);
-  };
-  hooks.stop_requested = [] { return InterruptionWatch::requested(); };
-
+  const ReconstructionHooks hooks = console_hooks(o, spread, state_file, reading, solving);
   const ReconstructionRun run = run_reconstruction(scan, geometry, options, hooks, ranks);
   if (run.stopped() && options.method == ReconstructionMethod::os_sqs)
     throw Interrupted("stopped after epoch " + std::to_string(run.solver.iterations.back().iteration) +
@@ -266,21 +299,7 @@ void run_reconstruct(const ReconstructOptions& o) {
     if (slabs) ranks.send(0, std::span<const float>(run.volume.data.data(), run.volume.data.size()));
     return;
   }
-  if (slabs) {
-    write_slabs(run.volume, run.plan.layout, ranks, o.out);
-  } else {
-    write_volume(run.volume, o.out);
-    write_previews(run.volume, o.out);
-  }
-  nlohmann::json log = run.report();
-  log["scan"] = o.scan.string();
-  log["geometry"] = o.geometry.empty() ? geometry.origin : geometry.description();
-  write_text_atomically(log_file, log.dump(2) + "\n");
-  std::vector<fs::path> pictures = {preview_file(o.out, "_axial.png"), preview_file(o.out, "_coronal.png"),
-                                    preview_file(o.out, "_sagittal.png")};
-  if (write_convergence(run.solver.iterations, preview_file(o.out, "_convergence.png")))
-    pictures.push_back(preview_file(o.out, "_convergence.png"));
-  write_and_name_run_page("reconstruct", run.brief(), log, pictures, page);
+  write_outputs(run, o, geometry, log_file, page, slabs, ranks);
   outputs.publish();
   std::error_code ignored;
   fs::remove(state_file, ignored);  // the run is complete: nothing left to continue

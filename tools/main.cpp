@@ -51,6 +51,28 @@ void refuse_empty_values(CLI::App& app) {
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) refuse_empty_values(*sub);
 }
 
+// CLI11 answers a mistyped subcommand ("ctk reconstuct", "ctk import circulr") with "A
+// subcommand is required", which hides the typo: follow the words down the subcommands and name
+// the first that is none of them, with those there are. False when one was named.
+bool subcommands_exist(CLI::App& app, int argc, char** argv) {
+  std::string path = "ctk";
+  CLI::App* level = &app;
+  for (int i = 1; i < argc && argv[i][0] != '-'; ++i) {
+    const std::vector<CLI::App*> subs = level->get_subcommands([](CLI::App*) { return true; });
+    if (subs.empty()) break;  // the words from here on are this subcommand's arguments
+    try {
+      level = level->get_subcommand(argv[i]);
+      path += " " + level->get_name();
+    } catch (const CLI::OptionNotFound&) {
+      std::cerr << path << ": unknown subcommand '" << argv[i] << "'; the subcommands are:";
+      for (const CLI::App* sub : subs) std::cerr << " " << sub->get_name();
+      std::cerr << "\nRun with --help for more information.\n";
+      return false;
+    }
+  }
+  return true;
+}
+
 int run(int argc, char** argv) {
   // Every view passes through a few image-sized buffers (2 MB at 720 x 720). By default glibc maps
   // each from the kernel and unmaps it when freed, so the pages are faulted in and zeroed again
@@ -73,24 +95,7 @@ int run(int argc, char** argv) {
   ctk::tools::register_reconstruct(app);
   ctk::tools::register_bench(app);
   refuse_empty_values(app);
-  // CLI11 answers a mistyped subcommand ("ctk reconstuct", "ctk import circulr") with "A
-  // subcommand is required", which hides the typo: follow the words down the subcommands and
-  // name the first that is none of them, with those there are.
-  std::string path = "ctk";
-  CLI::App* level = &app;
-  for (int i = 1; i < argc && argv[i][0] != '-'; ++i) {
-    const std::vector<CLI::App*> subs = level->get_subcommands([](CLI::App*) { return true; });
-    if (subs.empty()) break;  // the words from here on are this subcommand's arguments
-    try {
-      level = level->get_subcommand(argv[i]);
-      path += " " + level->get_name();
-    } catch (const CLI::OptionNotFound&) {
-      std::cerr << path << ": unknown subcommand '" << argv[i] << "'; the subcommands are:";
-      for (const CLI::App* sub : subs) std::cerr << " " << sub->get_name();
-      std::cerr << "\nRun with --help for more information.\n";
-      return 2;
-    }
-  }
+  if (!subcommands_exist(app, argc, argv)) return 2;
   // Under mpirun, the first rank speaks for the run; the others report only their errors.
   const ctk::Communicator& ranks = ctk::world();
   const std::string rank_prefix =
