@@ -315,6 +315,79 @@ Trial try_candidate(const ConsistencyProbe& probe, const State& current, const s
   return t;
 }
 
+// Among the eligible trials (best first), the first whose reconstruction keeps its edges: one that
+// blurs them (beyond `sharpness_tolerance`) compensates the yardstick's own errors, not the
+// geometry, and is dropped with that note. The winner's volume and sharpness are kept.
+std::optional<std::size_t> first_that_keeps_edges(const ConsistencyProbe& probe, const VolumeLayout& fine,
+                                                  const RefinementOptions& options, const std::vector<std::size_t>& eligible,
+                                                  std::vector<Trial>& trials, std::vector<bool>& dropped, double& sharpness,
+                                                  Volume& volume_after, const std::function<void(const std::string&)>& log) {
+  for (std::size_t i : eligible) {
+    Volume after = probe.reconstruct_all(trials[i].after.geometry, trials[i].after.model, fine);
+    const double s_after = edge_sharpness(after);
+    if (trials[i].can_blur && s_after < (1 - options.sharpness_tolerance) * sharpness) {
+      trials[i].effect.note = "held-out views improve, but the reconstruction's edges blur (sharpness " +
+                              std::to_string(sharpness) + " -> " + std::to_string(s_after) +
+                              " per mm): the candidate compensates the yardstick, not the geometry";
+      dropped[i] = true;
+      if (log) log("not accepted " + trials[i].effect.name + ": " + trials[i].effect.note);
+      continue;
+    }
+    trials[i].effect.sharpness_before = sharpness;
+    trials[i].effect.sharpness_after = s_after;
+    volume_after = std::move(after);
+    sharpness = s_after;
+    return i;
+  }
+  return std::nullopt;
+}
+
+// The candidates tried again next round: not the winner, not those whose fit ran to the edge, had
+// no minimum or blurred the volume, nor, once a detector pattern is in the model, the other
+// description of it (it would replace it); those go to `rejected`, as all do in the last round.
+std::vector<Candidate> still_to_try(const std::vector<Candidate>& remaining, std::vector<Trial>& trials, std::size_t winner,
+                                    const std::vector<bool>& dropped, bool last_round, std::vector<RefinedEffect>& rejected) {
+  const Trial& win = trials[winner];
+  const bool pattern_won = remaining[winner].pattern != Candidate::Pattern::none;
+  std::vector<Candidate> next;
+  for (std::size_t i = 0; i < trials.size(); ++i) {
+    if (i == winner) continue;
+    const bool alternative = pattern_won && remaining[i].pattern != Candidate::Pattern::none;
+    if (alternative)
+      trials[i].effect.note = "another description of the detector pattern, which " + win.effect.name + " describes in the model";
+    if (alternative || dropped[i] || trials[i].at_edge || trials[i].undetermined || last_round)
+      rejected.push_back(trials[i].effect);
+    else
+      next.push_back(remaining[i]);
+  }
+  return next;
+}
+
+RefinedEffect with_rejection_note(RefinedEffect e) {
+  if (e.note.empty()) e.note = "the held-out views do not improve beyond chance";
+  if (e.name == "angular_blur")
+    e.note +=
+        "; in a circular scan at constant speed, views blurred over an arc are exact projections of the "
+        "rotation-averaged object, so blur is not observable by consistency, only in resolution";
+  return e;
+}
+
+// A fixed detector pattern the model misses shows as a per-pixel mean residual over the judge
+// views far outside its standard error.
+void find_residual_pattern(const ConsistencyProbe& probe, const State& state, RefinementResult& result) {
+  ProjectionStack residuals;
+  probe.judge_costs(state.geometry, state.model, &residuals);
+  std::vector<int> all(static_cast<std::size_t>(residuals.views));
+  std::iota(all.begin(), all.end(), 0);
+  result.residual_pattern = mean_pattern(residuals, all, probe.row_margin(), false, -1.0);
+  const double pattern = pattern_statistic(result.residual_pattern);
+  result.structured = pattern > 2.0;
+  std::ostringstream note;
+  note << "fixed detector pattern of the held-out residual: mean (mean/se)^2 per pixel over the judge views " << pattern
+       << " (about 1 when there is none)";
+  result.unexplained_note = note.str();
+}
+
 }  // namespace
 
 void RefinementOptions::validate() const {
@@ -370,26 +443,9 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
     std::sort(eligible.begin(), eligible.end(), [&](std::size_t a, std::size_t b) {
       return trials[a].effect.heldout_rms_after < trials[b].effect.heldout_rms_after;
     });
-    std::optional<std::size_t> winner;
     std::vector<bool> dropped(trials.size(), false);
-    for (std::size_t i : eligible) {
-      Volume after = probe.reconstruct_all(trials[i].after.geometry, trials[i].after.model, fine);
-      const double s_after = edge_sharpness(after);
-      if (trials[i].can_blur && s_after < (1 - options.sharpness_tolerance) * sharpness) {
-        trials[i].effect.note = "held-out views improve, but the reconstruction's edges blur (sharpness " +
-                                std::to_string(sharpness) + " -> " + std::to_string(s_after) +
-                                " per mm): the candidate compensates the yardstick, not the geometry";
-        dropped[i] = true;
-        if (log) log("not accepted " + trials[i].effect.name + ": " + trials[i].effect.note);
-        continue;
-      }
-      winner = i;
-      trials[i].effect.sharpness_before = sharpness;
-      trials[i].effect.sharpness_after = s_after;
-      result.volume_after = std::move(after);
-      sharpness = s_after;
-      break;
-    }
+    const std::optional<std::size_t> winner =
+        first_that_keeps_edges(probe, fine, options, eligible, trials, dropped, sharpness, result.volume_after, log);
     if (!winner) {
       for (auto& t : trials) rejected.push_back(t.effect);
       remaining.clear();
@@ -408,50 +464,16 @@ RefinementResult refine_markerless(const ConsistencyProbe& probe, const VolumeLa
       log("accepted " + win.effect.name + "; sharpness " + std::to_string(win.effect.sharpness_before) + " -> " +
           std::to_string(sharpness));
     result.effects.push_back(win.effect);
-    // Candidates whose fit ran to the edge, had no minimum or blurred the volume are not tried again;
-    // nor, once a detector pattern is in the model, the other description of it (it would replace it).
-    const bool pattern_won = remaining[*winner].pattern != Candidate::Pattern::none;
-    std::vector<Candidate> next;
-    for (std::size_t i = 0; i < trials.size(); ++i) {
-      if (i == *winner) continue;
-      const bool alternative = pattern_won && remaining[i].pattern != Candidate::Pattern::none;
-      if (alternative)
-        trials[i].effect.note =
-            "another description of the detector pattern, which " + win.effect.name + " describes in the model";
-      if (alternative || dropped[i] || trials[i].at_edge || trials[i].undetermined || round == options.max_rounds)
-        rejected.push_back(trials[i].effect);
-      else
-        next.push_back(remaining[i]);
-    }
-    remaining = std::move(next);
+    remaining = still_to_try(remaining, trials, *winner, dropped, round == options.max_rounds, rejected);
   }
-  for (auto& e : rejected) {
-    if (e.note.empty()) e.note = "the held-out views do not improve beyond chance";
-    if (e.name == "angular_blur")
-      e.note +=
-          "; in a circular scan at constant speed, views blurred over an arc are exact projections of the "
-          "rotation-averaged object, so blur is not observable by consistency, only in resolution";
-    result.effects.push_back(e);
-  }
+  for (RefinedEffect& e : rejected) result.effects.push_back(with_rejection_note(std::move(e)));
   result.geometry = state.geometry;
   result.model = state.model;
   result.heldout_rms_after = rms(judge);
   result.sharpness_after = sharpness;
   if (result.volume_after.data.empty()) result.volume_after = result.volume_before;
 
-  // A fixed detector pattern the model misses shows as a per-pixel mean residual over the judge
-  // views far outside its standard error.
-  ProjectionStack residuals;
-  probe.judge_costs(state.geometry, state.model, &residuals);
-  std::vector<int> all(static_cast<std::size_t>(residuals.views));
-  std::iota(all.begin(), all.end(), 0);
-  result.residual_pattern = mean_pattern(residuals, all, probe.row_margin(), false, -1.0);
-  const double pattern = pattern_statistic(result.residual_pattern);
-  result.structured = pattern > 2.0;
-  std::ostringstream note;
-  note << "fixed detector pattern of the held-out residual: mean (mean/se)^2 per pixel over the judge views " << pattern
-       << " (about 1 when there is none)";
-  result.unexplained_note = note.str();
+  find_residual_pattern(probe, state, result);
   return result;
 }
 
