@@ -106,6 +106,7 @@ void add_sense_option(CLI::App* cmd, int& sense, const char* what) {
 
 }  // namespace
 
+// NOLINTNEXTLINE(readability-function-size): one statement per option, in the order --help lists them
 void register_import(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("import", "Turn a scan described elsewhere into ctk-scan/1 with per-view matrices");
   cmd->require_subcommand(1);

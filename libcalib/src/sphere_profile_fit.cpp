@@ -149,6 +149,32 @@ class PixelAverages {
   std::vector<double> corners_;
 };
 
+// The pixels within `reach` of some ball's start in the box [c0, c1] x [r0, r1], as offsets from
+// `origin`, with their values and the background shape's.
+struct WindowPixels {
+  std::vector<Eigen::Vector2d> offsets;
+  std::vector<double> values, shape_values;
+  std::vector<bool> clear;  // no ball within a pixel of it: what the starting background is fitted to
+};
+
+WindowPixels window_pixels(const Image& im, std::span<const SphereDetection> spheres, const Eigen::Vector2d& origin, double reach,
+                           double radius_px, const PixelAverages& shape_average, int c0, int r0, int c1, int r1) {
+  WindowPixels w;
+  for (int r = r0; r <= r1; ++r)
+    for (int c = c0; c <= c1; ++c) {
+      const Eigen::Vector2d pixel(c, r);
+      double nearest = 1e300;
+      for (const auto& s : spheres) nearest = std::min(nearest, (pixel - s.uv).norm());
+      if (nearest > reach) continue;
+      w.offsets.push_back(pixel - origin);
+      w.values.push_back(
+          im.pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c)]);
+      w.shape_values.push_back(shape_average(c, r));
+      w.clear.push_back(nearest > radius_px + 1);
+    }
+  return w;
+}
+
 }  // namespace
 
 void ProfileFitOptions::validate() const {
@@ -173,21 +199,12 @@ std::vector<bool> refine_cluster_by_profile_fit(const Image& im, double radius_p
   const int r0 = static_cast<int>(std::floor(box.min().y() - reach)), r1 = static_cast<int>(std::ceil(box.max().y() + reach));
   if (c0 < 0 || r0 < 0 || c1 >= im.cols || r1 >= im.rows) return refined;
 
-  std::vector<Eigen::Vector2d> offsets;
-  std::vector<double> values, shape_values;
-  std::vector<bool> clear;  // no ball within a pixel of it: what the starting background is fitted to
-  const PixelAverages shape_average(shape, c0, r0, c1, r1);
-  for (int r = r0; r <= r1; ++r)
-    for (int c = c0; c <= c1; ++c) {
-      const Eigen::Vector2d pixel(c, r);
-      double nearest = 1e300;
-      for (const auto& s : spheres) nearest = std::min(nearest, (pixel - s.uv).norm());
-      if (nearest > reach) continue;
-      offsets.push_back(pixel - origin);
-      values.push_back(im.pixels[static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c)]);
-      shape_values.push_back(shape_average(c, r));
-      clear.push_back(nearest > radius_px + 1);
-    }
+  WindowPixels window =
+      window_pixels(im, spheres, origin, reach, radius_px, PixelAverages(shape, c0, r0, c1, r1), c0, r0, c1, r1);
+  std::vector<Eigen::Vector2d>& offsets = window.offsets;
+  std::vector<double>& values = window.values;
+  std::vector<double>& shape_values = window.shape_values;
+  const std::vector<bool>& clear = window.clear;
   const int pixels = static_cast<int>(values.size());
 
   // Parameters relative to the reference point keep the numbers small and well scaled. The

@@ -248,6 +248,7 @@ std::vector<int> NxTomo::frames_of(NxFrameKind k) const {
   return out;
 }
 
+// NOLINTNEXTLINE(readability-function-size): one field per statement, each refused by its name
 NxTomo read_nxtomo(const fs::path& file, const std::string& entry_name) {
   const Reader r(file);
   NxTomo scan;

@@ -207,6 +207,7 @@ Geometry geometry_for_scan(const ScanDescription& scan, const Geometry& geometry
 
 ScanDescription read_scan(const fs::path& file) { return scan_from_json(read_json_file(file), file); }
 
+// NOLINTNEXTLINE(readability-function-size): one key per statement, each refused by its name
 ScanDescription scan_from_json(const nlohmann::json& root, const fs::path& file) {
   ScanDescription scan;
   scan.folder = file.has_parent_path() ? file.parent_path() : fs::path(".");

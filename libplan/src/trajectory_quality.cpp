@@ -21,11 +21,11 @@ std::array<int, 3> centre_of_mass_voxel(const Volume& truth, const SampleRegion&
           static_cast<int>(std::lround(sum.z() / mass))};
 }
 
-TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const SampleRegion& region,
-                                     const std::array<int, 3>& through, float absorber_above_per_mm) {
-  if (!(x.layout == truth.layout))
-    throw std::invalid_argument("trajectory_quality: the truth must have the reconstruction's layout");
-  TrajectoryQuality q;
+namespace {
+
+// The RMSE over the region, and over its voxels away from the absorbers.
+void add_rmse(const Volume& x, const Volume& truth, const SampleRegion& region, float absorber_above_per_mm,
+              TrajectoryQuality& q) {
   const auto& n = x.layout.size;
   // An absorber voxel, or a face neighbour of one (partial volume, the absorber's own blur).
   auto near_absorber = [&](int i, int j, int k) {
@@ -53,8 +53,12 @@ TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const
         }
   q.rmse_per_mm = count ? std::sqrt(sum2 / static_cast<double>(count)) : 0.0;
   q.rmse_outside_absorbers_per_mm = outside ? std::sqrt(outside_sum2 / static_cast<double>(outside)) : 0.0;
+}
 
-  // Every pair of neighbouring voxels in the region across which the truth changes.
+// Every pair of neighbouring voxels in the region across which the truth changes: the mean
+// gradient there, per axis and over all.
+void add_edge_gradients(const Volume& x, const Volume& truth, const SampleRegion& region, TrajectoryQuality& q) {
+  const auto& n = x.layout.size;
   double all_gradient = 0, all_truth = 0;
   std::size_t edges = 0;
   for (int axis = 0; axis < 3; ++axis) {
@@ -81,7 +85,13 @@ TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const
     q.edge_gradient_per_mm2 = all_gradient / static_cast<double>(edges);
     q.truth_edge_gradient_per_mm2 = all_truth / static_cast<double>(edges);
   }
+}
 
+// The line profiles through `through` along each axis, and their mean gradient where the truth
+// has an edge.
+void add_line_profiles(const Volume& x, const Volume& truth, const SampleRegion& region, const std::array<int, 3>& through,
+                       TrajectoryQuality& q) {
+  const auto& n = x.layout.size;
   double gradient = 0, truth_gradient = 0;
   std::size_t steps = 0;
   for (int axis = 0; axis < 3; ++axis) {
@@ -105,6 +115,18 @@ TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const
     q.profile_gradient_per_mm2 = gradient / static_cast<double>(steps);
     q.truth_profile_gradient_per_mm2 = truth_gradient / static_cast<double>(steps);
   }
+}
+
+}  // namespace
+
+TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const SampleRegion& region,
+                                     const std::array<int, 3>& through, float absorber_above_per_mm) {
+  if (!(x.layout == truth.layout))
+    throw std::invalid_argument("trajectory_quality: the truth must have the reconstruction's layout");
+  TrajectoryQuality q;
+  add_rmse(x, truth, region, absorber_above_per_mm, q);
+  add_edge_gradients(x, truth, region, q);
+  add_line_profiles(x, truth, region, through, q);
   return q;
 }
 

@@ -474,6 +474,7 @@ HWY_INLINE void back_along_x_in_bands(DF df, const RayTable& t, int k_begin, int
 }
 #endif
 
+// NOLINTNEXTLINE(readability-function-size): its stages share the thread's workspace and the scatter in flight
 void BackRays(const RayTable& t, int axis, int k_begin, int k_end, float* HWY_RESTRICT volume) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;

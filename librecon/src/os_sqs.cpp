@@ -54,6 +54,7 @@ void OsSqsOptions::validate() const {
                  "0 (a quadratic penalty) or a finite positive number", huber_delta);
 }
 
+// NOLINTNEXTLINE(readability-function-size): the subset loop in one piece: what it carries from step to step stays in view
 SolverReport solve_os_sqs(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
                           const std::vector<std::vector<int>>& subsets, const OsSqsOptions& o,
                           const IterationCallback& on_iteration, const std::function<bool()>& stop_requested,

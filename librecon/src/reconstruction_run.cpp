@@ -129,6 +129,14 @@ std::shared_ptr<const ProjectionOperator> spread_operator(const ReconstructionPl
   return all.subset(read);
 }
 
+void require_memory(const ReconstructionPlan& plan, bool spread) {
+  if (plan.memory().total_bytes() > plan.available_bytes)
+    throw std::runtime_error("the run needs " + plan.memory().describe() + (spread ? " per rank" : "") + " but only " +
+                             std::to_string(static_cast<double>(plan.available_bytes) / 1e9) +
+                             " GB are available: use a coarser voxel, a smaller volume or fewer views" +
+                             (spread ? "" : ", or spread the views over more processes (mpirun)"));
+}
+
 // What this rank reads: in slabs every view, the rows it owns; views split, its share of the
 // views, whole.
 MeasurementOptions reading_options(const ReconstructionPlan& plan, const ReconstructionOptions& o, bool slabs,
@@ -373,11 +381,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   const ReconstructionPlan& plan = run.plan;
   const bool slabs = spread && plan.distribution.decomposition == Decomposition::slabs;
   if (hooks.planned) hooks.planned(plan);
-  if (plan.memory().total_bytes() > plan.available_bytes)
-    throw std::runtime_error("the run needs " + plan.memory().describe() + (spread ? " per rank" : "") + " but only " +
-                             std::to_string(static_cast<double>(plan.available_bytes) / 1e9) +
-                             " GB are available: use a coarser voxel, a smaller volume or fewer views" +
-                             (spread ? "" : ", or spread the views over more processes (mpirun)"));
+  require_memory(plan, spread);
 
   Measurements m = load_measurements(scan, geometry, reading_options(plan, o, slabs, ranks), hooks.reading);
   // Views split, the run's views are every rank's, in the geometry's order; in slabs every rank

@@ -65,6 +65,7 @@ SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b,
   return solve_wls_cg(A, b, weights, x, residual, o, on_iteration, checkpointing, stopping);
 }
 
+// NOLINTNEXTLINE(readability-function-size): the CG recurrence in one piece: what it carries from step to step stays in view
 SolverReport solve_wls_cg(const ProjectionOperator& A, const ProjectionStack& b, const ProjectionStack* weights, Volume& x,
                           ProjectionStack& residual, const WlsOptions& o, const IterationCallback& on_iteration,
                           const Checkpointing* checkpointing, const StoppingRule& stopping) {

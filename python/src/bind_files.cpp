@@ -146,6 +146,7 @@ void write_rtk(const DoubleArray& matrices, const fs::path& file, const std::arr
 
 }  // namespace
 
+// NOLINTNEXTLINE(readability-function-size): one binding per statement, as Python's help lists them
 void bind_files(py::module_& m) {
   m.def(
       "read_volume",
