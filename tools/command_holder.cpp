@@ -5,6 +5,7 @@
 
 #include "commands.hpp"
 #include "ctk/calib/holder_measurement.hpp"
+#include "ctk/calib/holder_pictures.hpp"
 #include "ctk/core/atomic_write.hpp"
 #include "ctk/core/output_set.hpp"
 #include "ctk/geom/holder_file.hpp"
@@ -12,6 +13,7 @@
 #include "interruption.hpp"
 #include "option_checks.hpp"
 #include "progress.hpp"
+#include "run_page.hpp"
 
 namespace ctk::tools {
 
@@ -30,6 +32,9 @@ void run_measure(const MeasureOptions& o) {
   files.scan_to_read("--scan", o.scan, scan);
   files.input("--geometry", o.geometry);
   files.output("--out", o.out);
+  const fs::path stem = fs::path(o.out).replace_extension("");
+  files.output("the HTML report beside --out", stem.string() + ".html");
+  files.output_family("pictures beside --out", stem.string() + ".", ".png");
   files.check();
   OutputSet outputs;
   for (const auto& w : scan.warnings) std::cerr << "warning: " << w << "\n";
@@ -41,7 +46,13 @@ void run_measure(const MeasureOptions& o) {
     return run_holder_measurement(scan, geometry, o.run, std::ref(progress),
                                   [](const std::string& s) { std::cout << s << std::endl; });
   });
-  write_text_atomically(o.out, m.holder_file(o.scan.string()).dump(2) + "\n");
+  const nlohmann::json holder = m.holder_file(o.scan.string());
+  write_text_atomically(o.out, holder.dump(2) + "\n");
+  std::vector<fs::path> pictures;
+  for (const std::string& name : write_holder_pictures(m, stem)) pictures.push_back(o.out.parent_path() / name);
+  write_and_name_run_page(
+      "holder measure", m.brief(), holder, pictures, stem.string() + ".html",
+      "declare \"holder\": \"" + o.out.filename().string() + "\" in the scans of this holder, then ctk calibrate");
   outputs.publish();
   std::cout << "holder file " << o.out.string() << ": declare it in a scan as \"holder\": \"" << o.out.filename().string()
             << "\" (a path relative to the scan's folder)\n";

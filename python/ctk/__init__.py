@@ -389,12 +389,16 @@ def diagnose(scan: str | os.PathLike, geometry: str | os.PathLike, *, repeatabil
     return DiagnosisResult(**d)
 
 
-def measure_holder(scan: str | os.PathLike, geometry: str | os.PathLike, *, min_views: int = 60) -> dict:
+def measure_holder(scan: str | os.PathLike, geometry: str | os.PathLike, *, min_views: int = 60,
+                   pictures: Optional[str | os.PathLike] = None) -> dict:
     """`ctk holder measure`: every sphere's centre of the holder `scan` declares, measured from the
     scan's calibrated `geometry` (60 or more well-spread views) with its uncertainty. Returns the
     ctk-holder/1 file as a dict (`measurement` says how; write it with json and name it in a
-    scan's `holder`). Each step is logged to the 'ctk' logger."""
-    d = _ctk._measure_holder(os.fspath(scan), os.fspath(geometry), min_views, lambda line: _log.info("holder: %s", line))
+    scan's `holder`). Each step is logged to the 'ctk' logger. With `pictures` (a path without
+    extension) the command's picture and page are written too: <pictures>.spheres.png and
+    <pictures>.html."""
+    d = _ctk._measure_holder(os.fspath(scan), os.fspath(geometry), min_views, lambda line: _log.info("holder: %s", line),
+                             _optional_path(pictures))
     _log.info("%s", d["brief"])
     return d["holder"]
 

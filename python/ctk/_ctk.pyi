@@ -85,7 +85,8 @@ def _diagnose(scan: str, geometry: str, repeatability_mm: Optional[float], repea
 def _reconstruct(scan: str, geometry: Optional[str], method: str, iterations: int, held_out_every: int, subsets: int, lambda_: float, regulariser: str,
                  huber_delta: float, tolerance: float, preconditioner: str, weighted: bool, undistort: bool, size: Optional[tuple[int, int, int]], voxel_mm: float,
                  progress: Optional[Callable[[int, int], None]], pictures: Optional[str]) -> dict[str, Any]: ...
-def _measure_holder(scan: str, geometry: str, min_views: int, log: Callable[[str], None]) -> dict[str, Any]: ...
+def _measure_holder(scan: str, geometry: str, min_views: int, log: Callable[[str], None],
+                    pictures: Optional[str]) -> dict[str, Any]: ...
 def _simulate(out: str, phantoms: list[str], holder: str, trajectory: str, views: int, nside: int, cap_deg: tuple[float, float],
               poses: Optional[str], detector_shape: tuple[int, int], pitch_mm: float, sdd_mm: float, sod_mm: float,
               supersampling: int, output: str, flat_counts: float, dark_counts: float, kvp: Optional[float],

@@ -21,6 +21,7 @@
 #include "ctk/calib/diagnosis_pictures.hpp"
 #include "ctk/calib/diagnosis_run.hpp"
 #include "ctk/calib/holder_measurement.hpp"
+#include "ctk/calib/holder_pictures.hpp"
 #include "ctk/core/html_report.hpp"
 #include "ctk/geom/import_run.hpp"
 #include "ctk/geom/nominal_geometry.hpp"
@@ -232,7 +233,8 @@ py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, cons
   return d;
 }
 
-py::dict measure_holder(const fs::path& scan_file, const fs::path& geometry_file, int min_views, const py::object& log) {
+py::dict measure_holder(const fs::path& scan_file, const fs::path& geometry_file, int min_views, const py::object& log,
+                        const std::optional<fs::path>& pictures) {
   HolderMeasurementOptions o;
   o.min_views = min_views;
   o.validate();
@@ -245,6 +247,9 @@ py::dict measure_holder(const fs::path& scan_file, const fs::path& geometry_file
   py::dict d;
   d["holder"] = to_python(run->holder_file(scan_file.string()));
   d["brief"] = run->brief();
+  if (pictures)
+    add_pictures_and_page(d, "holder measure", run->brief(), run->holder_file(scan_file.string()),
+                          write_holder_pictures(*run, *pictures), *pictures, pictures->string() + ".html");
   return d;
 }
 
@@ -417,7 +422,8 @@ images beside it). Returns the scan as read back; keys read and not modelled are
         py::arg("sod_mm"), py::arg("supersampling"), py::arg("output"), py::arg("flat_counts"), py::arg("dark_counts"),
         py::arg("kvp"), py::arg("filter_al_mm"), py::arg("robot_noise_mm"), py::arg("robot_noise_deg"), py::arg("seed"),
         py::arg("effects"), py::arg("progress"), py::arg("log"));
-  m.def("_measure_holder", &measure_holder, py::arg("scan"), py::arg("geometry"), py::arg("min_views"), py::arg("log"));
+  m.def("_measure_holder", &measure_holder, py::arg("scan"), py::arg("geometry"), py::arg("min_views"), py::arg("log"),
+        py::arg("pictures"));
   m.def("_reconstruction_defaults", &reconstruction_defaults);
   m.def("_simulation_defaults", &simulation_defaults);
   m.def("_reconstruct", &reconstruct, py::arg("scan"), py::arg("geometry"), py::arg("method"), py::arg("iterations"),

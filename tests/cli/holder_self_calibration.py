@@ -29,8 +29,11 @@ checks = {
     "pose error with the measured holder within 25 % of the true holder's": s["measured"]["grid_error_rms_px"] < 1.25 * s["true"]["grid_error_rms_px"],
     "pose error with the measured holder below 80 % of the declared one's": s["measured"]["grid_error_rms_px"] < 0.8 * s["declared"]["grid_error_rms_px"],
 }
-# Ctrl-C half way: exit 130, the earlier holder file as it was.
 case = "holder-self-calibration/reference-0.1-1"
+page = open(f"{case}/holder.html").read()
+checks["the page beside the holder file shows its picture and says what to do next"] = (
+    page.count("data:image/png;base64,") == 1 and "declare &quot;holder&quot;: &quot;holder.json&quot;" in page)
+# Ctrl-C half way: exit 130, the earlier holder file as it was.
 before = open(f"{case}/holder.json").read()
 run = subprocess.Popen([ctk, "holder", "measure", "--scan", f"{case}/a/scan.json", "--geometry", f"{case}/a-cal.json", "--out",
                         f"{case}/holder.json"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
