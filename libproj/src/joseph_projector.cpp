@@ -206,8 +206,7 @@ TableAxes axes_fewest_first(const std::vector<AxisSamples>& samples, int buffer)
 
 }  // namespace
 
-// NOLINTNEXTLINE(readability-function-size): the double-buffered tables and the parallel region that overlaps
-// their filling with the slab tasks stay together
+// NOLINTNEXTLINE(readability-function-size): the two tables and the region overlapping their fill stay together
 void JosephProjector::back(ConstStackSpan y, const std::vector<ProjectionMatrix>& views, VolumeSpan x) const {
   check_stack_matches_views(y.views, y.rows, y.cols, views.size());
   std::fill_n(x.data, x.layout.voxel_count(), 0.0f);

@@ -410,9 +410,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   const auto& n = plan.layout.size;
   const Eigen::Vector3d volume_centre =
       0.5 * (plan.layout.centre_of(0, 0, 0) + plan.layout.centre_of(n[0] - 1, n[1] - 1, n[2] - 1));
-  // Default iterations: one view in `held_out_every`, spread over the directions, is kept out of
-  // the solve to say when the image stops improving. Every rank holds out the same views.
-  std::optional<HeldOutFit> judge;
+  std::optional<HeldOutFit> judge;  // default iterations: stopped where held-out views stop fitting better
   if (o.stops_on_held_out_views()) {
     judge = hold_out_views(plan, geometry, scan.detector, o.held_out_every, views, views_split, volume_centre, ranks, m);
     if (judge) views = spread_views();
