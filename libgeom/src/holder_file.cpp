@@ -40,11 +40,27 @@ std::vector<Eigen::Vector3d> spheres_on_helix(const JsonNode& node, const Helix&
   return Holder::on_helix(helix, 1.0, n, tau[0], tau[1]).spheres_mm;
 }
 
+// A mesh named relative to the file that names it (a holder or a scan file) is found beside it.
+HolderBody body_from_json(const JsonNode& node) {
+  node.warn_unknown_keys({"mesh", "unit_mm", "material"});
+  HolderBody body;
+  body.mesh = node.at("mesh").string();
+  if (body.mesh.empty()) node.at("mesh").fail("expected the body's STL file");
+  if (body.mesh.is_relative() && !node.file().empty()) body.mesh = std::filesystem::path(node.file()).parent_path() / body.mesh;
+  if (node.has("unit_mm")) {
+    const JsonNode unit = node.at("unit_mm");
+    body.unit_mm = unit.positive_number();
+    if (!(body.unit_mm >= 1e-6 && body.unit_mm <= 1e6)) unit.fail("expected 1e-6 to 1e6 mm per file unit");
+  }
+  if (node.has("material")) body.material = node.at("material").string();
+  return body;
+}
+
 }  // namespace
 
 Holder holder_from_json(const JsonNode& node) {
   node.warn_unknown_keys(
-      {"format", "name", "measurement", "helix", "sphere_diameter_mm", "spheres_mm", "spheres_on_helix", "wall"});
+      {"format", "name", "measurement", "helix", "sphere_diameter_mm", "spheres_mm", "spheres_on_helix", "wall", "body"});
   Holder h;
   h.helix = helix_from_json(node.at("helix"));
   h.sphere_diameter_mm = node.at("sphere_diameter_mm").length_mm();
@@ -73,6 +89,7 @@ Holder holder_from_json(const JsonNode& node) {
                   std::to_string(h.tau_max()) + " mm)");
     }
   }
+  if (node.has("body")) h.body = body_from_json(node.at("body"));
   return h;
 }
 
@@ -87,6 +104,10 @@ nlohmann::json holder_to_json(const Holder& h) {
     j["wall"] = {{"inner_radius_mm", h.wall->inner_radius_mm}, {"outer_radius_mm", h.wall->outer_radius_mm}};
     if (h.wall->ends_mm) j["wall"]["ends_mm"] = {h.wall->ends_mm->x(), h.wall->ends_mm->y()};
   }
+  if (h.body)
+    j["body"] = {{"mesh", std::filesystem::absolute(h.body->mesh).lexically_normal().string()},
+                 {"unit_mm", h.body->unit_mm},
+                 {"material", h.body->material}};
   return j;
 }
 

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <memory>
 
 #include "ctk/core/error.hpp"
+#include "ctk/phantoms/material_attenuation.hpp"
 
 namespace ctk {
 
@@ -42,9 +44,19 @@ Phantom helix_holder_phantom(const Holder& holder) {
   const Eigen::Vector2d ends = wall.ends_mm.value_or(*reference.ends_mm);
   const Vector3d centre(0, 0, 0.5 * (ends.x() + ends.y()));
   const double height = ends.y() - ends.x();
-  p.primitives.push_back(Primitive::cylinder(centre, wall.outer_radius_mm, height, kIdentity, material::pom, "POM tube"));
-  p.primitives.push_back(Primitive::cylinder(centre, wall.inner_radius_mm, height, kIdentity, -material::pom, "POM tube bore"));
-  made_of(p, 0, "pom");
+  if (holder.body) {  // the lab's own body, as drawn
+    const HolderBody& body = *holder.body;
+    if (!is_known_material(body.material))
+      throw InputError(body.mesh.string(), "material", "\"" + body.material + "\" is not a material the simulator knows");
+    auto mesh = std::make_shared<const TriangleMesh>(TriangleMesh::read_stl(body.mesh, body.unit_mm));
+    p.primitives.push_back(Primitive::from_mesh(std::move(mesh), Vector3d::Zero(), kIdentity,
+                                                linear_attenuation_per_mm(body.material, kReferenceEnergyKeV), "holder body"));
+    made_of(p, 0, body.material.c_str());
+  } else {
+    p.primitives.push_back(Primitive::cylinder(centre, wall.outer_radius_mm, height, kIdentity, material::pom, "POM tube"));
+    p.primitives.push_back(Primitive::cylinder(centre, wall.inner_radius_mm, height, kIdentity, -material::pom, "POM tube bore"));
+    made_of(p, 0, "pom");
+  }
   const std::size_t spheres = p.primitives.size();
   for (std::size_t k = 0; k < holder.spheres_mm.size(); ++k)
     p.primitives.push_back(Primitive::sphere(holder.spheres_mm[k], 0.5 * holder.sphere_diameter_mm, material::aluminium,

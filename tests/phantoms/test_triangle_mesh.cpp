@@ -1,7 +1,8 @@
 // A CAD part from its STL mesh: a box written as binary and as ASCII STL, read back, gives the
 // box primitive's exact chords and inside test along random rays, from outside and from inside;
 // placed by a phantom file it projects as the box does; an open or badly wound mesh is refused
-// naming its file.
+// naming its file. A holder file's `body` mesh is drawn in place of the tube, found beside the
+// holder file, its material's attenuation at the reference energy.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -11,6 +12,9 @@
 
 #include "../test_support.hpp"
 #include "ctk/core/error.hpp"
+#include "ctk/geom/holder_file.hpp"
+#include "ctk/phantoms/builtin_phantoms.hpp"
+#include "ctk/phantoms/material_attenuation.hpp"
 #include "ctk/phantoms/phantom.hpp"
 #include "ctk/phantoms/render.hpp"
 #include "ctk/phantoms/triangle_mesh.hpp"
@@ -115,6 +119,42 @@ TEST(TriangleMesh, APhantomFilePlacesTheMeshAndProjectsItAsTheBox) {
   EXPECT_LT(difference, 1e-5);
   EXPECT_NEAR(part.attenuation_at({1, 1, 1}), 0.05, 1e-12);
   EXPECT_EQ(part.attenuation_at({7, 1, 1}), 0.0);
+}
+
+TEST(TriangleMesh, AHolderFilesBodyIsDrawnInPlaceOfTheTube) {
+  const auto dir = testing::scratch_dir();
+  std::filesystem::create_directories(dir / "cad");
+  // A 10 x 10 x 120 mm bar of PVC along the holder axis, drawn in cm, centred on the origin.
+  auto triangles = box_triangles(1, 1, 12);
+  for (auto& t : triangles)
+    for (auto& v : t) v -= Eigen::Vector3d(0.5, 0.5, 6);
+  write_binary(dir / "cad" / "bar.stl", triangles);
+  testing::write_text(dir / "holder.json", R"({"format": "ctk-holder/1", "helix": {"radius_mm": 28, "pitch_mm": 40,
+    "phase_rad": 0}, "sphere_diameter_mm": 2, "spheres_on_helix": {"count": 5, "tau_mm": [-20, 20]},
+    "body": {"mesh": "cad/bar.stl", "unit_mm": 10, "material": "pvc"}})");
+  const Holder holder = holder_named((dir / "holder.json").string());
+  ASSERT_TRUE(holder.body);
+  EXPECT_EQ(holder.body->mesh, dir / "cad" / "bar.stl");  // beside the file that names it
+  const Phantom p = helix_holder_phantom(holder);
+  ASSERT_EQ(p.primitives.size(), 6u);  // the body and five spheres, no tube
+  const double mu = linear_attenuation_per_mm("pvc", kReferenceEnergyKeV);
+  EXPECT_NEAR(p.attenuation_at({0, 0, 0}), mu, 1e-12);
+  EXPECT_NEAR(p.attenuation_at({4.9, 0, 59}), mu, 1e-12);
+  EXPECT_EQ(p.attenuation_at({5.1, 0, 0}), 0.0);   // outside the bar
+  EXPECT_EQ(p.attenuation_at({26.5, 0, 0}), 0.0);  // where the tube would be
+  EXPECT_NEAR(p.primitives[0].chord_mm({-50, 0, 0}, {1, 0, 0}), 10.0, 1e-5);
+  EXPECT_EQ(p.primitives[0].material, "pvc");
+  EXPECT_EQ(holder_to_json(holder)["body"]["mesh"], (dir / "cad" / "bar.stl").string());
+  testing::write_text(dir / "unknown.json", R"({"format": "ctk-holder/1", "helix": {"radius_mm": 28, "pitch_mm": 40,
+    "phase_rad": 0}, "sphere_diameter_mm": 2, "spheres_on_helix": {"count": 5, "tau_mm": [-20, 20]},
+    "body": {"mesh": "cad/bar.stl", "material": "unobtainium"}})");
+  try {
+    helix_holder_phantom(holder_named((dir / "unknown.json").string()));
+    ADD_FAILURE() << "an unknown material was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("unobtainium"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("bar.stl"), std::string::npos) << e.what();
+  }
 }
 
 TEST(TriangleMesh, AnOpenOrBadlyWoundMeshIsRefusedNamingItsFile) {

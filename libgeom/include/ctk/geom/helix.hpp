@@ -2,7 +2,9 @@
 // The calibration holder: a helix of metal spheres in the holder frame H (scan-format.md):
 // h(tau) = (r cos(rho tau + phi), r sin(rho tau + phi), tau).
 #include <Eigen/Core>
+#include <filesystem>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "ctk/geom/projection_matrix.hpp"
@@ -33,6 +35,14 @@ struct HolderWall {
   double chord_mm(const Eigen::Vector3d& point, const Eigen::Vector3d& direction) const;
 };
 
+/// The body a lab has drawn (its CAD mesh): what the simulator draws in place of the wall's tube.
+/// Calibration still models the shadow of the wall the holder declares, if any.
+struct HolderBody {
+  std::filesystem::path mesh;  // STL, binary or ASCII, in the holder frame; absolute once read
+  double unit_mm = 1.0;        // the file's length unit in mm
+  std::string material = "pom";
+};
+
 struct Holder {
   Helix helix;
   double sphere_diameter_mm = 0;
@@ -40,6 +50,7 @@ struct Holder {
   /// When declared, calibration models the wall's shadow under each sphere, so spheres seen on the
   /// wall's steep silhouette can be used too.
   std::optional<HolderWall> wall;
+  std::optional<HolderBody> body;
 
   /// n spheres equally spaced in tau over [tau_begin, tau_end] — how a helix holder is designed.
   static Holder on_helix(const Helix& helix, double sphere_diameter_mm, int count, double tau_begin, double tau_end);

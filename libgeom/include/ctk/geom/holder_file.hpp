@@ -15,7 +15,8 @@ namespace ctk {
 /// The holder block: `helix` {radius_mm, rho_rad_per_mm or pitch_mm, phase_rad},
 /// `sphere_diameter_mm`, the centres as `spheres_mm` [[u, v, w], ...] or as `spheres_on_helix`
 /// {count, tau_mm: [first, last]} (equally spaced in tau), and optionally `wall`
-/// {inner_radius_mm, outer_radius_mm, ends_mm}. Refusals name the file and the key.
+/// {inner_radius_mm, outer_radius_mm, ends_mm} and `body` {mesh: an STL file (relative: beside the
+/// file naming it), unit_mm (1), material ("pom")}. Refusals name the file and the key.
 Holder holder_from_json(const JsonNode& node);
 /// The block as holder_from_json reads it (centres always listed).
 nlohmann::json holder_to_json(const Holder& holder);
