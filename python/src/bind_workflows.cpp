@@ -132,11 +132,15 @@ py::object import_scan(const fs::path& out, const DoubleArray& matrices, const s
 void add_pictures_and_page(py::dict& d, const std::string& command, const std::string& brief, nlohmann::json report,
                            const std::vector<std::string>& names, const fs::path& stem, const fs::path& page) {
   std::vector<fs::path> files;
-  for (const std::string& name : names) files.push_back(stem.parent_path() / name);
+  std::vector<std::string> paths;
+  files.reserve(names.size());
+  paths.reserve(names.size());
+  for (const std::string& name : names) {
+    files.push_back(stem.parent_path() / name);
+    paths.push_back(files.back().string());
+  }
   report["pictures"] = names;
   write_run_page(command, brief, report, files, page);
-  std::vector<std::string> paths;
-  for (const fs::path& f : files) paths.push_back(f.string());
   d["pictures"] = paths;
   d["page"] = page.string();
 }
