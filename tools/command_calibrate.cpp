@@ -128,12 +128,12 @@ void run_calibrate(const CalibrateOptions& o) {
   nlohmann::json j = run_result.report();
   j["scan"] = o.scan.string();
   j["geometry"] = o.out.string();
-  j["pictures"] = write_calibration_pictures(scan, c, o.calibration.max_rms_px, fs::path(o.out).replace_extension(""));
+  const std::vector<std::string> pictures =
+      write_calibration_pictures(scan, c, o.calibration.max_rms_px, fs::path(o.out).replace_extension(""));
+  j["pictures"] = pictures;
   write_text_atomically(report, j.dump(2) + "\n");
-  std::vector<fs::path> pictures;
-  for (const nlohmann::json& name : j["pictures"]) pictures.push_back(o.out.parent_path() / name.get<std::string>());
-  write_and_name_run_page("calibrate", run_result.brief(), j, pictures, fs::path(report).replace_extension(".html"),
-                          run_result.next_command(o.scan, o.out));
+  write_and_name_run_page("calibrate", run_result.brief(), j, pictures_beside(o.out, pictures),
+                          fs::path(report).replace_extension(".html"), run_result.next_command(o.scan, o.out));
   outputs.publish();
   if (journal) journal->remove();
   if (c.taken_over > 0) std::cout << c.taken_over << " views taken from the interrupted run, the others calibrated now\n";

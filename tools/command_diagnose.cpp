@@ -53,15 +53,13 @@ void run_diagnose(const DiagnoseOptions& o) {
   nlohmann::json report = run.report();
   report["scan"] = o.scan.string();
   report["geometry"] = o.geometry.string();
-  report["pictures"] = write_diagnosis_pictures(d, observations, stem);
+  const std::vector<std::string> pictures = write_diagnosis_pictures(d, observations, stem);
+  report["pictures"] = pictures;
   // Relative names in the corrected scan find the same files from where it is written.
   write_scan(relocated_scan(run.corrected, corrected_file), corrected_file);
   report["corrected_scan"] = corrected_file.string();
   write_text_atomically(o.out, report.dump(2) + "\n");
-  std::vector<fs::path> pictures;
-  for (const nlohmann::json& name : report["pictures"])
-    pictures.push_back(fs::path(o.out).parent_path() / name.get<std::string>());
-  write_and_name_run_page("diagnose", run.brief(), report, pictures, stem.string() + ".html",
+  write_and_name_run_page("diagnose", run.brief(), report, pictures_beside(o.out, pictures), stem.string() + ".html",
                           run.next_command(o.scan, o.geometry, corrected_file));
 
   outputs.publish();

@@ -48,8 +48,7 @@ void run_measure(const MeasureOptions& o) {
   });
   const nlohmann::json holder = m.holder_file(o.scan.string());
   write_text_atomically(o.out, holder.dump(2) + "\n");
-  std::vector<fs::path> pictures;
-  for (const std::string& name : write_holder_pictures(m, stem)) pictures.push_back(o.out.parent_path() / name);
+  const std::vector<fs::path> pictures = pictures_beside(o.out, write_holder_pictures(m, stem));
   write_and_name_run_page(
       "holder measure", m.brief(), holder, pictures, stem.string() + ".html",
       "declare \"holder\": \"" + o.out.filename().string() + "\" in the scans of this holder, then ctk calibrate");

@@ -90,7 +90,7 @@ void run_refine(const RefineOptions& o) {
   report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_text_atomically(o.out, report.dump(2) + "\n");
 
-  const std::vector<fs::path> pictures = write_refinement_pictures(r, beside(o.out, ""));
+  const std::vector<fs::path> pictures = pictures_beside(o.out, write_refinement_pictures(r, beside(o.out, "")));
   if (!r.model.pixel_offset.empty())
     write_image_float(Image{scan.detector.cols, scan.detector.rows, r.model.pixel_offset}, beside(o.out, ".pixel-offsets.tif"));
   write_and_name_run_page("refine", s.brief(), report, pictures, beside(o.out, ".html"));

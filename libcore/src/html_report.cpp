@@ -194,6 +194,13 @@ std::string picture_caption(const fs::path& png, const fs::path& page) {
   return name.empty() ? png.filename().string() : name;
 }
 
+std::vector<fs::path> pictures_beside(const fs::path& file, const std::vector<std::string>& names) {
+  std::vector<fs::path> paths;
+  paths.reserve(names.size());
+  for (const std::string& name : names) paths.push_back(file.parent_path() / name);
+  return paths;
+}
+
 void write_run_page(const std::string& command, const std::string& brief, const json& report,
                     const std::vector<fs::path>& pictures, const fs::path& page, const std::string& next) {
   HtmlReport r{"ctk " + command, brief, report, {}, next};

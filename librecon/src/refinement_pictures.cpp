@@ -45,14 +45,15 @@ void write_pattern_picture(const DetectorPattern& p, const std::filesystem::path
 
 }  // namespace
 
-std::vector<std::filesystem::path> write_refinement_pictures(const RefinementResult& r, const std::filesystem::path& stem) {
+std::vector<std::string> write_refinement_pictures(const RefinementResult& r, const std::filesystem::path& stem) {
   const auto named = [&](const char* what) { return std::filesystem::path(stem.string() + "." + what + ".png"); };
   const float high = preview_ceiling(r.volume_before);  // one grey scale for both slices
   write_central_slice(r.volume_before, high, named("before"));
   write_central_slice(r.volume_after, high, named("after"));
   write_difference_slice(r.volume_before, r.volume_after, named("difference"));
   write_pattern_picture(r.residual_pattern, named("pattern"));
-  return {named("before"), named("after"), named("difference"), named("pattern")};
+  return {named("before").filename().string(), named("after").filename().string(), named("difference").filename().string(),
+          named("pattern").filename().string()};
 }
 
 }  // namespace ctk

@@ -131,16 +131,12 @@ py::object import_scan(const fs::path& out, const DoubleArray& matrices, const s
 // beside `stem`), and its HTML page: their paths under "pictures" and "page".
 void add_pictures_and_page(py::dict& d, const std::string& command, const std::string& brief, nlohmann::json report,
                            const std::vector<std::string>& names, const fs::path& stem, const fs::path& page) {
-  std::vector<fs::path> files;
-  std::vector<std::string> paths;
-  files.reserve(names.size());
-  paths.reserve(names.size());
-  for (const std::string& name : names) {
-    files.push_back(stem.parent_path() / name);
-    paths.push_back(files.back().string());
-  }
+  const std::vector<fs::path> files = pictures_beside(stem, names);
   report["pictures"] = names;
   write_run_page(command, brief, report, files, page);
+  std::vector<std::string> paths;
+  paths.reserve(files.size());
+  for (const fs::path& f : files) paths.push_back(f.string());
   d["pictures"] = paths;
   d["page"] = page.string();
 }
@@ -165,17 +161,16 @@ py::dict refine(const fs::path& scan_file, const std::optional<fs::path>& geomet
   std::optional<RefineScanSummary> s;
   bridge.run_stoppable([&] { s = refine_scan(scan, geometry, o, say); });
   py::dict d;
-  d["report"] = to_python(s->report());
+  const nlohmann::json report = s->report();
+  d["report"] = to_python(report);
   d["geometry"] = to_python(geometry_to_json(s->refined));
   d["brief"] = s->brief();
   std::vector<ProjectionMatrix> ok;
   for (int i : s->refined.ok_views()) ok.push_back(*s->refined.views[static_cast<std::size_t>(i)].P);
   d["matrices"] = matrices_to_numpy(ok);
-  if (pictures) {
-    std::vector<std::string> names;
-    for (const fs::path& f : write_refinement_pictures(s->result, *pictures)) names.push_back(f.filename().string());
-    add_pictures_and_page(d, "refine", s->brief(), s->report(), names, *pictures, pictures->string() + ".html");
-  }
+  if (pictures)
+    add_pictures_and_page(d, "refine", s->brief(), report, write_refinement_pictures(s->result, *pictures), *pictures,
+                          pictures->string() + ".html");
   auto slice = [](Volume v) {  // the central axial slice, (y, x)
     const auto s3 = volume_shape(v.layout);
     auto owner = std::make_unique<Volume>(std::move(v));
@@ -204,10 +199,11 @@ py::dict calibrate(const fs::path& scan_file, int min_spheres, double max_rms_px
   bridge.raise_if_stopped();
   py::dict d;
   d["geometry"] = to_python(geometry_to_json(run->calibration.geometry));
-  d["report"] = to_python(run->report());
+  const nlohmann::json report = run->report();
+  d["report"] = to_python(report);
   d["brief"] = run->brief() + "\n" + run->wall_and_prior();
   if (pictures)
-    add_pictures_and_page(d, "calibrate", run->brief(), run->report(),
+    add_pictures_and_page(d, "calibrate", run->brief(), report,
                           write_calibration_pictures(scan, run->calibration, o.calibration.max_rms_px, *pictures), *pictures,
                           pictures->string() + ".report.html");
   return d;
@@ -227,11 +223,12 @@ py::dict diagnose(const fs::path& scan_file, const fs::path& geometry_file, cons
   interruptible([&] { run = run_diagnosis(scan, geometry, o, {}, bridge.log(log)); });
   bridge.raise_if_stopped();
   py::dict d;
-  d["report"] = to_python(run->report());
+  const nlohmann::json report = run->report();
+  d["report"] = to_python(report);
   d["corrected_scan"] = to_python(scan_to_json(run->corrected));
   d["brief"] = run->brief();
   if (pictures)
-    add_pictures_and_page(d, "diagnose", run->brief(), run->report(),
+    add_pictures_and_page(d, "diagnose", run->brief(), report,
                           write_diagnosis_pictures(run->diagnosis, run->observations, *pictures), *pictures,
                           pictures->string() + ".html");
   return d;
@@ -249,11 +246,12 @@ py::dict measure_holder(const fs::path& scan_file, const fs::path& geometry_file
   interruptible([&] { run = run_holder_measurement(scan, geometry, o, {}, bridge.log(log)); });
   bridge.raise_if_stopped();
   py::dict d;
-  d["holder"] = to_python(run->holder_file(scan_file.string()));
+  const nlohmann::json holder = run->holder_file(scan_file.string());
+  d["holder"] = to_python(holder);
   d["brief"] = run->brief();
   if (pictures)
-    add_pictures_and_page(d, "holder measure", run->brief(), run->holder_file(scan_file.string()),
-                          write_holder_pictures(*run, *pictures), *pictures, pictures->string() + ".html");
+    add_pictures_and_page(d, "holder measure", run->brief(), holder, write_holder_pictures(*run, *pictures), *pictures,
+                          pictures->string() + ".html");
   return d;
 }
 

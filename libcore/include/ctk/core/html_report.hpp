@@ -32,6 +32,10 @@ void write_html_report(const HtmlReport& report, const std::filesystem::path& fi
 /// a picture's name after the page's stem (up to its first dot) names what it shows.
 std::string picture_caption(const std::filesystem::path& png, const std::filesystem::path& page);
 
+/// The pictures a run wrote beside `file` (its stem, or any file in their folder), named as the
+/// picture writers return them, as paths.
+std::vector<std::filesystem::path> pictures_beside(const std::filesystem::path& file, const std::vector<std::string>& names);
+
 /// A run's page (`command` as in "ctk calibrate"), each picture captioned by its name, written to `page`.
 void write_run_page(const std::string& command, const std::string& brief, const nlohmann::json& report,
                     const std::vector<std::filesystem::path>& pictures, const std::filesystem::path& page,

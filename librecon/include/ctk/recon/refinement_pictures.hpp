@@ -3,6 +3,7 @@
 // before and after (one grey scale), their difference, and what the final model still leaves
 // fixed on the detector.
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "ctk/recon/markerless_refinement.hpp"
@@ -10,7 +11,7 @@
 namespace ctk {
 
 /// Writes `<stem>.before.png`, `<stem>.after.png`, `<stem>.difference.png` and `<stem>.pattern.png`;
-/// returns their paths in that order.
-std::vector<std::filesystem::path> write_refinement_pictures(const RefinementResult& r, const std::filesystem::path& stem);
+/// returns their file names in that order.
+std::vector<std::string> write_refinement_pictures(const RefinementResult& r, const std::filesystem::path& stem);
 
 }  // namespace ctk
