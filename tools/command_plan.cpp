@@ -179,6 +179,9 @@ void register_plan(CLI::App& app) {
                   "With --compare: random trajectories to compare with (random/, random-2/ ...), summarised by mean and range")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
+  cmd->add_option("--compare-directions", o->simulated.compare_directions,
+                  "With --compare or --compare-only: ctk-directions/1 files, trajectories of one's own scored beside the others")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--eval-size", o->simulated.comparison.size,
                   "Voxels per axis of a cube for the comparison reconstructions (0: a volume holding the holder and the sample)")
       ->check(CLI::Range(0, 2048))

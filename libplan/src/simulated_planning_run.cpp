@@ -16,6 +16,7 @@
 #include "ctk/measure/measurements.hpp"
 #include "ctk/phantoms/builtin_phantoms.hpp"
 #include "ctk/phantoms/render.hpp"
+#include "ctk/plan/direction_list.hpp"
 #include "ctk/plan/plan_pictures.hpp"
 #include "ctk/plan/simulated_acquisition.hpp"
 
@@ -31,17 +32,32 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 // The folder of the k-th random trajectory (k from 0): random/, random-2/, random-3/ ...
 std::string random_name(int k) { return k == 0 ? "random" : "random-" + std::to_string(k + 1); }
 
-std::vector<std::string> compared_names(int random_draws) {
+std::vector<std::string> compared_names(int random_draws, const std::vector<DirectionList>& given) {
   std::vector<std::string> names = {"planned", "whole-sphere"};
   for (int k = 0; k < random_draws; ++k) names.push_back(random_name(k));
+  for (const DirectionList& list : given) names.push_back(list.name);
   return names;
 }
 
-// The whole-sphere and the random trajectories with as many views as the planned one. Each gets a
-// lab of its own, so its n-th shot draws the same robot and photon noise as the planned one's n-th
-// shot, whatever the planned run asked before (the comparison does not drift with the planner).
-void acquire_others(const SimulatedPlanRequest& o, const ScanSimulation& simulation, const PlanningSetup& setup, int n,
-                    const SimulatedPlanningHooks& hooks, std::vector<PlanningRun>& runs) {
+// The trajectories the request gives as direction lists, each name once.
+std::vector<DirectionList> given_trajectories(const SimulatedPlanRequest& o) {
+  std::vector<DirectionList> given;
+  for (const fs::path& file : o.compare_directions) {
+    DirectionList list = read_direction_list(file);
+    for (const DirectionList& earlier : given)
+      if (earlier.name == list.name)
+        throw InputError(file.string(), "name", "'" + list.name + "' names another given trajectory too; each needs its own");
+    given.push_back(std::move(list));
+  }
+  return given;
+}
+
+// The whole-sphere, the random and the given trajectories with as many views as the planned one.
+// Each gets a lab of its own, so its n-th shot draws the same robot and photon noise as the planned
+// one's n-th shot, whatever the planned run asked before (the comparison does not drift with the
+// planner).
+void acquire_others(const SimulatedPlanRequest& o, const std::vector<DirectionList>& given, const ScanSimulation& simulation,
+                    const PlanningSetup& setup, int n, const SimulatedPlanningHooks& hooks, std::vector<PlanningRun>& runs) {
   struct Other {
     std::string name;
     std::vector<Eigen::Vector3d> order;
@@ -49,6 +65,7 @@ void acquire_others(const SimulatedPlanRequest& o, const ScanSimulation& simulat
   std::vector<Other> others = {{"whole-sphere", whole_sphere_order(o.plan.candidate_nside)}};
   for (int k = 0; k < o.random_draws; ++k)
     others.push_back({random_name(k), random_directions(6 * n, o.plan.seed + 17 + static_cast<std::uint64_t>(k))});
+  for (const DirectionList& list : given) others.push_back({list.name, list.directions});
   for (const Other& other : others) {
     const auto start = Clock::now();
     PlanningOptions p = o.plan.planning_options();
@@ -106,15 +123,14 @@ Volume evaluation_reconstruction(const fs::path& folder, const VolumeLayout& lay
 // One random trajectory is a lottery (on sample 2, six draws of 100 views ranged from 0.00199 to
 // 0.00223 in RMSE), so with several draws the planned one is also set against their spread: each
 // figure's mean, least and greatest, and how many draws did better than the planned trajectory.
-// `quality` holds the planned trajectory, the whole sphere, then the random draws.
-nlohmann::json random_draw_summary(const std::vector<TrajectoryQuality>& quality) {
-  const std::size_t draws = quality.size() - 2;
+// `quality` holds the planned trajectory, the whole sphere, then the `draws` random draws.
+nlohmann::json random_draw_summary(const std::vector<TrajectoryQuality>& quality, std::size_t draws) {
   nlohmann::json summary = {{"count", draws}};
   const TrajectoryQuality& planned = quality.front();
   auto figure = [&](const char* key, double TrajectoryQuality::*member, bool lower_is_better) {
     double sum = 0, least = 1e300, most = -1e300;
     int better = 0;
-    for (std::size_t i = 2; i < quality.size(); ++i) {
+    for (std::size_t i = 2; i < 2 + draws; ++i) {
       const double v = quality[i].*member;
       sum += v;
       least = std::min(least, v);
@@ -131,11 +147,11 @@ nlohmann::json random_draw_summary(const std::vector<TrajectoryQuality>& quality
   return summary;
 }
 
-TrajectoryComparison compare(const SimulatedPlanRequest& o, const ScanSimulation& simulation,
-                             const SimulatedPlanningHooks& hooks) {
+TrajectoryComparison compare(const SimulatedPlanRequest& o, const std::vector<DirectionList>& given,
+                             const ScanSimulation& simulation, const SimulatedPlanningHooks& hooks) {
   const Phantom& sample = simulation.sample;
   TrajectoryComparison c;
-  c.names = compared_names(o.random_draws);
+  c.names = compared_names(o.random_draws, given);
   for (const std::string& name : c.names)
     if (!fs::exists(o.out / name / "scan.json"))
       throw InputError((o.out / name / "scan.json").string(), "",
@@ -187,7 +203,7 @@ TrajectoryComparison compare(const SimulatedPlanRequest& o, const ScanSimulation
               {"truth_edge_gradient_per_mm2", planned.truth_edge_gradient_per_mm2},
               {"truth_profile_gradient_per_mm2", planned.truth_profile_gradient_per_mm2},
               {"trajectories", table},
-              {"random_draws", random_draw_summary(c.quality)}};
+              {"random_draws", random_draw_summary(c.quality, static_cast<std::size_t>(o.random_draws))}};
   // The acquisition's settings are known only when this run acquired (not with compare_only).
   if (!o.compare_only) {
     c.report["spectrum"] = {{"kvp", o.kvp}, {"filter_al_mm", o.filter_al_mm}};
@@ -234,6 +250,8 @@ void SimulatedPlanRequest::validate() const {
   require_option(filter_al_mm >= 0, "SimulatedPlanRequest.filter_al_mm", "0 or more", filter_al_mm);
   require_option(flat_counts >= 1, "SimulatedPlanRequest.flat_counts", "at least 1", flat_counts);
   require_option(random_draws >= 1, "SimulatedPlanRequest.random_draws", "at least 1", random_draws);
+  require_choice(compare_directions.empty() || compare || compare_only, "SimulatedPlanRequest.compare_directions",
+                 "direction lists only with compare or compare_only", "lists without a comparison");
 }
 
 std::string TrajectoryComparison::brief() const {
@@ -266,11 +284,13 @@ SimulatedPlanningRun run_simulated_planning(const SimulatedPlanRequest& request,
   for (const std::string& name : request.phantoms)
     if (fs::path(name).extension() == ".json") files.input("phantoms", name);
   if (fs::path(request.holder).extension() == ".json") files.input("holder", request.holder);
+  for (const fs::path& file : request.compare_directions) files.input("compare_directions", file);
   files.output_folder("out", request.out);
   files.check();
+  const std::vector<DirectionList> given = given_trajectories(request);
   SimulatedPlanningRun run;
   if (request.compare_only) {
-    run.comparison = compare(request, simulated_world(request), hooks);
+    run.comparison = compare(request, given, simulated_world(request), hooks);
     run.seconds = seconds_since(start);
     return run;
   }
@@ -286,8 +306,9 @@ SimulatedPlanningRun run_simulated_planning(const SimulatedPlanRequest& request,
     if (run.trajectories.front().result.calibrated() == 0)
       throw std::runtime_error("no view of the planned trajectory could be calibrated: nothing to compare (" +
                                run.trajectories.front().brief() + ")");
-    acquire_others(request, lab.simulation(), setup, run.trajectories.front().result.calibrated(), hooks, run.trajectories);
-    run.comparison = compare(request, lab.simulation(), hooks);
+    acquire_others(request, given, lab.simulation(), setup, run.trajectories.front().result.calibrated(), hooks,
+                   run.trajectories);
+    run.comparison = compare(request, given, lab.simulation(), hooks);
   }
   run.seconds = seconds_since(start);
   return run;

@@ -84,7 +84,8 @@ def plan(out: str | os.PathLike, *, phantoms: Sequence[str], holder: str | os.Pa
          seed: int = 1, coarse_size: int = 128, coarse_voxel_mm: float = 0.75, binning: int = 3,
          detector_shape: tuple[int, int] = (720, 720), pitch_mm: float = 0.6, sdd_mm: float = 2150.0,
          sod_mm: float = 1360.0, kvp: float = 90.0, filter_al_mm: float = 2.0, flat_counts: float = 1e4,
-         compare: bool = False, compare_only: bool = False, random_draws: int = 1, eval_size: int = 0,
+         compare: bool = False, compare_only: bool = False, random_draws: int = 1,
+         compare_directions: Sequence[str | os.PathLike] = (), eval_size: int = 0,
          eval_voxel_mm: float = 0.5, eval_iterations: int = 20, eval_lambda: float = 3.0, eval_binning: int = 2,
          callback: Optional[ViewCallback] = None) -> PlanResult:
     """`ctk plan --phantom`: an absorption-aware spherical trajectory planned against the
@@ -93,7 +94,8 @@ def plan(out: str | os.PathLike, *, phantoms: Sequence[str], holder: str | os.Pa
     each view calibrated from its spheres, written to `out`/planned. compare: the whole-sphere and
     `random_draws` random trajectories of as many views are acquired too, each reconstructed alike
     (WLS-CG, eval_*; eval_size 0: a volume holding the holder and the sample) and scored against
-    the voxelised truth (comparison.json). compare_only: score the trajectories already in `out`.
+    the voxelised truth (comparison.json), as are the trajectories of `compare_directions`
+    (ctk-directions/1 files, see write_directions). compare_only: score the trajectories already in `out`.
     The keywords are the command's options (detector_shape is (rows, cols)).
 
     callback(trajectory, record) sees every request as it is settled (its trajectory.json entry);
@@ -104,6 +106,7 @@ def plan(out: str | os.PathLike, *, phantoms: Sequence[str], holder: str | os.Pa
     keywords["out"] = os.fspath(out)
     keywords["phantoms"] = [os.fspath(p) for p in phantoms]
     keywords["holder"] = os.fspath(holder)
+    keywords["compare_directions"] = [os.fspath(p) for p in compare_directions]
     keywords["detector_shape"] = list(detector_shape)
     d = _ctk._plan(keywords, _hook(callback), lambda line: _log.info("plan: %s", line))
     if d["stopped"]:
@@ -141,3 +144,34 @@ def read_plan_comparison(file: str | os.PathLike) -> dict:
     """comparison.json (ctk-plan-comparison/1) as a dict: per trajectory the RMSE, the RMSE outside
     the absorbers and the edge and profile gradients, and the random draws' spread."""
     return read_report(file, "ctk-plan-comparison/1", {"trajectories": dict, "random_draws": dict})
+
+
+def planning_directions(nside: int = 8, order: str = "healpix") -> np.ndarray:
+    """The planner's directions (n, 3), unit beam directions in the holder frame: its candidates,
+    the HEALPix cell centres of `nside` (order 'healpix'), or the same cells in the order the
+    whole-sphere trajectory takes them ('whole-sphere': each next one farthest from those before)."""
+    return _ctk._planning_directions(nside, order)
+
+
+def view_matrix(direction, *, detector_shape: tuple[int, int] = (720, 720), pitch_mm: float = 0.6,
+                sdd_mm: float = 2150.0, sod_mm: float = 1360.0) -> np.ndarray:
+    """The 3 x 4 matrix of a view along `direction` (holder frame) with the detector centred on
+    the beam at the setup's distances, as the planner pictures a view (a robot's view along the
+    same direction differs by its roll and its errors). detector_shape is (rows, cols)."""
+    return _ctk._view_matrix(tuple(float(x) for x in direction), tuple(detector_shape), pitch_mm, sdd_mm,
+                             sod_mm)[0]
+
+
+def read_directions(file: str | os.PathLike) -> tuple[str, np.ndarray]:
+    """A ctk-directions/1 file: the trajectory's name and its directions (n, 3) in the order they
+    are tried."""
+    d = _ctk._read_directions(os.fspath(file))
+    return d["name"], d["directions"]
+
+
+def write_directions(file: str | os.PathLike, name: str, directions) -> None:
+    """Writes a trajectory as ctk-directions/1 (beam directions in the holder frame, tried in order
+    until the trajectory has its views, so spares may follow), for plan(compare_directions=...) and
+    `ctk plan --compare-directions`. `name` becomes its folder: lower-case letters, digits and '-',
+    none of the comparison's own names."""
+    _ctk._write_directions(os.fspath(file), name, np.asarray(directions, dtype=np.float64))

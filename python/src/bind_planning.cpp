@@ -13,6 +13,10 @@
 
 #include "bindings.hpp"
 #include "conversions.hpp"
+#include "ctk/geom/trajectory.hpp"
+#include "ctk/plan/direction_damage.hpp"
+#include "ctk/plan/direction_list.hpp"
+#include "ctk/plan/plan_trajectory.hpp"
 #include "ctk/plan/planned_scan.hpp"
 #include "ctk/plan/simulated_planning_run.hpp"
 #include "interruptible.hpp"
@@ -105,6 +109,9 @@ void take_simulated(Keywords& k, SimulatedPlanRequest& r) {
   k.take("phantoms", r.phantoms);
   k.take("holder", r.holder);
   take_path(k, "out", r.out);
+  std::vector<std::string> lists;
+  k.take("compare_directions", lists);
+  r.compare_directions.assign(lists.begin(), lists.end());
   std::array<int, 2> shape{r.rows, r.cols};
   k.take("detector_shape", shape);
   r.rows = shape[0];
@@ -196,14 +203,67 @@ py::dict plan_defaults() {
   const SimulatedPlanRequest s;
   simulated_keywords(s, put);
   d["detector_shape"] = py::make_tuple(s.rows, s.cols);
+  d["compare_directions"] = py::tuple();
   const LabPlanRequest l;
   lab_keywords(l, put);
   return d;
 }
 
+py::array_t<double> directions_to_numpy(const std::vector<Eigen::Vector3d>& directions) {
+  py::array_t<double> a({static_cast<py::ssize_t>(directions.size()), py::ssize_t{3}});
+  auto r = a.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < directions.size(); ++i)
+    for (int k = 0; k < 3; ++k) r(static_cast<py::ssize_t>(i), k) = directions[i][k];
+  return a;
+}
+
+std::vector<Eigen::Vector3d> directions_from_numpy(const py::array_t<double, py::array::c_style | py::array::forcecast>& a) {
+  if (a.ndim() != 2 || a.shape(1) != 3) throw py::value_error("directions: expected an array of shape (n, 3)");
+  const auto r = a.unchecked<2>();
+  std::vector<Eigen::Vector3d> d;
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) d.emplace_back(r(i, 0), r(i, 1), r(i, 2));
+  return d;
+}
+
+// The planner's directions: its candidates (HEALPix cell centres) or the whole sphere's order.
+py::array_t<double> planning_directions(int nside, const std::string& order) {
+  if (nside < 1) throw py::value_error("nside: expected at least 1, got " + std::to_string(nside));
+  if (order == "healpix") return directions_to_numpy(HealpixSphere(nside).directions());
+  if (order == "whole-sphere") return directions_to_numpy(whole_sphere_order(nside));
+  throw py::value_error("order: expected 'healpix' or 'whole-sphere', got '" + order + "'");
+}
+
+// The matrix of a view along `direction` with the detector centred on the beam, as the planner
+// pictures it (a robot's view along the same direction differs by its roll and its errors).
+py::array_t<double> view_matrix(const std::array<double, 3>& beam, const std::array<int, 2>& detector_shape, double pitch_mm,
+                                double sdd_mm, double sod_mm) {
+  const Eigen::Vector3d direction(beam[0], beam[1], beam[2]);
+  if (direction.norm() < 1e-9) throw py::value_error("direction: expected a vector of non-zero length");
+  const Detector detector{detector_shape[1], detector_shape[0], pitch_mm, pitch_mm};
+  return matrices_to_numpy({virtual_view(direction, Intrinsics::from_setup(sdd_mm, detector, detector.centre_px()), sod_mm)});
+}
+
+py::dict read_directions(const fs::path& file) {
+  const DirectionList list = read_direction_list(file);
+  py::dict d;
+  d["name"] = list.name;
+  d["directions"] = directions_to_numpy(list.directions);
+  return d;
+}
+
+void write_directions(const fs::path& file, const std::string& name,
+                      const py::array_t<double, py::array::c_style | py::array::forcecast>& directions) {
+  write_direction_list(file, {name, directions_from_numpy(directions)});
+}
+
 }  // namespace
 
 void bind_planning(py::module_& m) {
+  m.def("_planning_directions", &planning_directions, py::arg("nside"), py::arg("order"));
+  m.def("_view_matrix", &view_matrix, py::arg("direction"), py::arg("detector_shape"), py::arg("pitch_mm"), py::arg("sdd_mm"),
+        py::arg("sod_mm"));
+  m.def("_read_directions", &read_directions, py::arg("file"));
+  m.def("_write_directions", &write_directions, py::arg("file"), py::arg("name"), py::arg("directions"));
   m.def("_plan", &plan_simulated, py::arg("keywords"), py::arg("callback"), py::arg("log"));
   m.def("_plan_lab", &plan_lab, py::arg("keywords"), py::arg("callback"));
   m.def("_plan_defaults", &plan_defaults);

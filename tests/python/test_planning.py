@@ -19,10 +19,19 @@ SMALL = dict(views=8, scout_nside=1, coarse_size=48, coarse_voxel_mm=2.0, binnin
 
 
 def test_plan_compares_trajectories_and_writes_what_the_command_line_writes(tmp_path, ctk_command):
+    # A trajectory of one's own: the whole sphere's order as a direction list, so it must be
+    # acquired and scored exactly as the whole sphere is (a lab of its own, the same noise).
+    mine = tmp_path / "mine.json"
+    ctk.write_directions(mine, "mine", ctk.planning_directions(8, "whole-sphere"))
+    name, directions = ctk.read_directions(mine)
+    assert name == "mine" and directions.shape == (768, 3)
     result = ctk.plan(tmp_path / "py", phantoms=["sample-2"], compare=True, random_draws=2, eval_voxel_mm=2.4,
-                      eval_iterations=3, **SMALL)
+                      eval_iterations=3, compare_directions=[mine], **SMALL)
     assert not result.stopped
-    assert list(result.trajectories) == ["planned", "whole-sphere", "random", "random-2"]
+    assert list(result.trajectories) == ["planned", "whole-sphere", "random", "random-2", "mine"]
+    figures = result.comparison["trajectories"]
+    assert figures["mine"] == figures["whole-sphere"]
+    assert figures["mine"] != figures["random"]
     planned = result.planned
     calibrated = [v for v in planned.views if v.get("calibrated")]
     assert len(calibrated) == 8
@@ -83,6 +92,13 @@ def test_bad_plans_are_refused_by_name(tmp_path):
         ctk.plan(tmp_path / "c", phantoms=["sample-2"], eval_voxel_mm=0)
     with pytest.raises(ValueError, match="LabPlanRequest.timeout_s"):
         ctk.plan_lab(tmp_path, tmp_path / "scan.json", tmp_path / "out", timeout_s=0)
+    reserved = tmp_path / "reserved.json"
+    ctk.write_directions(reserved, "random-3", [[1, 0, 0]])
+    with pytest.raises(ctk.InputError, match="'random-3' is a trajectory the comparison makes itself") as refused:
+        ctk.plan(tmp_path / "e", phantoms=["sample-2"], compare=True, compare_directions=[reserved])
+    assert refused.value.file == str(reserved) and refused.value.key == "name"
+    with pytest.raises(ValueError, match="SimulatedPlanRequest.compare_directions"):
+        ctk.plan(tmp_path / "f", phantoms=["sample-2"], compare_directions=[reserved])
     with pytest.raises(ctk.InputError) as missing:
         ctk.plan(tmp_path / "d", phantoms=["sample-2"], compare_only=True)
     assert "planned" in str(missing.value)

@@ -39,6 +39,8 @@ struct SimulatedPlanRequest {
   bool compare = false;                                    // also acquire and score the whole-sphere and random trajectories
   bool compare_only = false;                               // score the trajectories already in `out` (no acquisition)
   int random_draws = 1;                                    // random trajectories, each a draw of its own
+  /// ctk-directions/1 files: trajectories of one's own, acquired and scored beside the others.
+  std::vector<std::filesystem::path> compare_directions;
   ComparisonOptions comparison;
   void validate() const;  // std::invalid_argument naming the field
 };
@@ -46,7 +48,7 @@ struct SimulatedPlanRequest {
 // Its implicit move is noexcept (every member's is); clang-tidy reads a throw into nlohmann::json's.
 // NOLINTNEXTLINE(bugprone-exception-escape)
 struct TrajectoryComparison {
-  std::vector<std::string> names;  // planned, whole-sphere, then the random draws
+  std::vector<std::string> names;  // planned, whole-sphere, the random draws, then the given lists
   std::vector<TrajectoryQuality> quality;
   int views = 0;                        // each trajectory's
   nlohmann::json report;                // comparison.json (ctk-plan-comparison/1)

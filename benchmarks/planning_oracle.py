@@ -1,0 +1,236 @@
+#!/usr/bin/python3
+"""What a trajectory of a given size can gain on a sample, found by a search that knows the truth
+(an oracle), beside what the planner gains, on the random samples of planning_population.py.
+
+Per sample:
+1. A pool: the planner's 768 candidate directions (HEALPix nside 8, less those within 8 deg of the
+   holder axis, which no view calibrates), each simulated once with the comparison's physics
+   (90 kV through 2 mm Al, the holder and the sample, Poisson noise of 10^4 open-beam counts per
+   0.6 mm pixel) on a 360^2 detector of 1.2 mm (the comparison's 2 x 2 binning), then binned
+   again to 180^2 for the search.
+2. The oracle's search on that pool, scored by the true error: every trajectory of n views is
+   reconstructed alike (WLS-CG, 20 iterations, gradient penalty, 1 mm voxels over the holder) and
+   its RMSE over the sample region taken against the voxelised truth. It starts from the whole
+   sphere's first n cells and exchanges a random member for a random candidate, keeping the
+   exchange only if the true RMSE falls, until `--budget` reconstructions are spent. (Exchanges
+   proposed by the error the present image shows a candidate, or by the candidates' data
+   inconsistency against the truth, found less: the views that see most error are those along the
+   metal's streaks, and the data inconsistency varies by 10 % between directions.)
+3. The oracle's trajectory, written as ctk-directions/1 (its n directions, then the rest of the
+   pool as spares in whole-sphere order), is acquired and scored by `ctk plan --compare
+   --compare-directions` beside the planned trajectory, the whole sphere and the random draws,
+   each through the simulated lab (robot, calibration) and the comparison's own reconstruction.
+   The search's proxy is checked against the comparison: its RMSE for the whole sphere and for
+   the oracle's set against theirs.
+
+Gains over the whole sphere, positive where better: RMSE (whole - x) / whole, edge gradient
+(x - whole) / whole; means over the samples with a 95 % bootstrap interval, and over the halves
+of the seeds (even: where planner changes are chosen, odd: where they are reported).
+
+  PYTHONPATH=build/python /usr/bin/python3 benchmarks/planning_oracle.py --ctk build/tools/ctk \\
+      --work /tmp/plan-oracle --seeds 1 2 3 4 5 6 7 8
+"""
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from diagnosis_population import cpu_name, cpu_slug  # noqa: E402
+from planning_population import bootstrap_interval, random_sample  # noqa: E402
+
+import ctk  # noqa: E402
+
+POOL_SHAPE, POOL_PITCH_MM = (360, 360), 1.2  # the comparison's detector after its 2 x 2 binning
+POOL_FLAT_COUNTS = 4e4  # 10^4 per 0.6 mm pixel, four of them per 1.2 mm pixel
+SEARCH_BINNING = 2  # the search reconstructs from 180^2
+AXIS_EXCLUSION_COS = np.cos(np.radians(8.0))
+VOXEL_MM, VOLUME_SHAPE = 1.0, (120, 60, 60)  # (z, y, x): the holder's tube and its spheres
+REGION_RADIUS_MM, REGION_HALF_HEIGHT_MM = 23.5, 45.0  # the comparison's sample region
+PENALTY, ITERATIONS = 3.0, 20  # the comparison's reconstruction
+
+
+def run(command, log):
+    with open(log, "w") as f:
+        subprocess.run(command, check=True, stdout=f, stderr=subprocess.STDOUT)
+
+
+def pool_directions():
+    """The planner's candidates, in the whole sphere's order, less those along the holder axis."""
+    order = ctk.planning_directions(8, "whole-sphere")
+    return order[np.abs(order[:, 2]) < AXIS_EXCLUSION_COS]
+
+
+def simulate_pool(ctk_bin, work, sample_file, directions, seed):
+    """The pool's projections through `ctk simulate --poses` (matrices with the detector centred)."""
+    if (work / "pool" / "scan.json").exists():
+        return work / "pool" / "scan.json"
+    views = []
+    for i, d in enumerate(directions):
+        P = ctk.view_matrix(d, detector_shape=POOL_SHAPE, pitch_mm=POOL_PITCH_MM)
+        P = P / np.linalg.norm(P[2, :3])
+        views.append({"index": i, "status": "ok", "reason": "", "P": list(P.ravel())})
+    geometry = {"format": "ctk-geometry/1",
+                "detector": {"cols": POOL_SHAPE[1], "rows": POOL_SHAPE[0], "pixel_pitch_mm": [POOL_PITCH_MM] * 2},
+                "views": views}
+    (work / "pool-geometry.json").write_text(json.dumps(geometry))
+    run([ctk_bin, "simulate", "--out", str(work / "pool"), "--poses", str(work / "pool-geometry.json"), "--phantom",
+         "helix-holder", str(sample_file), "--cols", str(POOL_SHAPE[1]), "--rows", str(POOL_SHAPE[0]), "--pitch",
+         str(POOL_PITCH_MM), "--kvp", "90", "--filter-al-mm", "2", "--flat-counts", str(POOL_FLAT_COUNTS), "--seed",
+         str(seed)], work / "pool.log")
+    return work / "pool" / "scan.json"
+
+
+def binned(m, factor):
+    """Line integrals averaged and Poisson weights combined (inverse of the mean's variance) over
+    factor x factor pixels; the matrices address the binned pixels (pixel centres at integers)."""
+    views, rows, cols = m.line_integrals.shape
+    shape = (views, rows // factor, factor, cols // factor, factor)
+    b = m.line_integrals[:, :rows // factor * factor, :cols // factor * factor].reshape(shape).mean(axis=(2, 4))
+    w = m.weights[:, :rows // factor * factor, :cols // factor * factor].reshape(shape).astype(np.float64)
+    with np.errstate(divide="ignore"):
+        variance = np.where(w > 0, 1.0 / w, np.inf).sum(axis=(2, 4)) / factor**4
+    weights = np.where(np.isfinite(variance), 1.0 / variance, 0.0)
+    S = np.array([[1.0 / factor, 0, (1.0 / factor - 1) / 2], [0, 1.0 / factor, (1.0 / factor - 1) / 2], [0, 0, 1]])
+    return b.astype(np.float32), weights.astype(np.float32), np.einsum("ij,vjk->vik", S, m.matrices)
+
+
+class Proxy:
+    """The search's model of the comparison: a trajectory's reconstruction from the pool's views
+    and its RMSE over the sample region against the truth."""
+
+    def __init__(self, scan_file, sample_file):
+        m = ctk.load_measurements(scan_file)
+        self.b, self.w, self.P = binned(m, SEARCH_BINNING)
+        self.detector_shape = self.b.shape[1:]
+        nz, ny, nx = VOLUME_SHAPE
+        self.origin = (-(nx - 1) / 2 * VOXEL_MM, -(ny - 1) / 2 * VOXEL_MM, -(nz - 1) / 2 * VOXEL_MM)
+        self.truth = ctk.voxelise([str(sample_file)], VOLUME_SHAPE, (VOXEL_MM,) * 3, self.origin)
+        z, y, x = np.meshgrid(*[self.origin[2 - a] + VOXEL_MM * np.arange(VOLUME_SHAPE[a]) for a in range(3)],
+                              indexing="ij")
+        self.region = (np.hypot(x, y) <= REGION_RADIUS_MM) & (np.abs(z) <= REGION_HALF_HEIGHT_MM)
+        self.evaluations = 0
+
+    def projector(self, views):
+        return ctk.Projector(self.P[views], VOLUME_SHAPE, VOXEL_MM, self.origin, detector_shape=self.detector_shape)
+
+    def reconstruct(self, views):
+        views = np.sort(np.asarray(views))
+        self.evaluations += 1
+        r = ctk.wls_cg(self.projector(views), self.b[views], weights=self.w[views], iterations=ITERATIONS,
+                       tolerance=0.0, lambda_=PENALTY, regulariser="gradient")
+        return r.x
+
+    def rmse(self, x):
+        return float(np.sqrt(np.mean((x - self.truth)[self.region] ** 2)))
+
+
+def oracle_search(proxy, n, pool_size, budget, rng, log):
+    """Local search from the whole sphere's first n cells on the true RMSE: a random member
+    exchanged for a random candidate, kept only if the RMSE falls (see the module)."""
+    members = list(range(n))
+    start = best = proxy.rmse(proxy.reconstruct(members))
+    history = [{"evaluations": proxy.evaluations, "rmse_per_mm": best}]
+    while proxy.evaluations < budget:
+        outside = np.setdiff1d(np.arange(pool_size), members)
+        trial = list(members)
+        trial[int(rng.integers(n))] = int(rng.choice(outside))
+        r = proxy.rmse(proxy.reconstruct(trial))
+        if r < best:
+            members, best = trial, r
+            history.append({"evaluations": proxy.evaluations, "rmse_per_mm": best})
+            log(f"  exchange kept after {proxy.evaluations} reconstructions: {best:.6f} ({(start - best) / start:+.2%})")
+    return members, start, best, history
+
+
+def gains(comparison, name):
+    t = comparison["trajectories"]
+    whole = t["whole-sphere"]
+    return {"rmse": (whole["rmse_per_mm"] - t[name]["rmse_per_mm"]) / whole["rmse_per_mm"],
+            "edge_gradient": (t[name]["edge_gradient_per_mm2"] - whole["edge_gradient_per_mm2"])
+            / whole["edge_gradient_per_mm2"]}
+
+
+def one_sample(ctk_bin, work, seed, views, random_draws, budget, log):
+    work.mkdir(parents=True, exist_ok=True)
+    sample = random_sample(seed)
+    sample_file = work / "sample.json"
+    sample_file.write_text(json.dumps(sample, indent=1))
+    start = time.time()
+    directions = pool_directions()
+    proxy = Proxy(simulate_pool(ctk_bin, work, sample_file, directions, seed), sample_file)
+    log(f"seed {seed}: pool of {len(directions)} views simulated and read ({time.time() - start:.0f} s)")
+    members, whole_proxy, oracle_proxy, history = oracle_search(proxy, views, len(directions), budget,
+                                                                np.random.default_rng(seed), log)
+    spares = [i for i in range(len(directions)) if i not in members]
+    ctk.write_directions(work / "oracle.json", "oracle", directions[members + spares])
+    search_seconds = time.time() - start
+    out = work / "plan"
+    run([ctk_bin, "plan", "--out", str(out), "--phantom", str(sample_file), "--seed", str(seed), "--views", str(views),
+         "--compare", "--random-draws", str(random_draws), "--compare-directions", str(work / "oracle.json")],
+        work / "plan.log")
+    comparison = json.loads((out / "comparison.json").read_text())
+    names = ["planned", "oracle"] + ["random" if k == 0 else f"random-{k + 1}" for k in range(random_draws)]
+    g = {name: gains(comparison, name) for name in names}
+    return {"seed": seed, "half": "choice" if seed % 2 == 0 else "report", "sample": sample,
+            "gains": {"planned": g["planned"], "oracle": g["oracle"], "random": [g[k] for k in names[2:]]},
+            "whole_sphere": comparison["trajectories"]["whole-sphere"],
+            "search": {"evaluations": proxy.evaluations, "pool_views": len(directions),
+                       "proxy_rmse_whole_sphere_per_mm": whole_proxy, "proxy_rmse_oracle_per_mm": oracle_proxy,
+                       "proxy_gain": (whole_proxy - oracle_proxy) / whole_proxy, "history": history,
+                       "seconds": search_seconds},
+            "seconds": time.time() - start}
+
+
+def summary(cases, key):
+    rng = np.random.default_rng(0)
+
+    def mean_interval(values):
+        lo, hi = bootstrap_interval(values, rng)
+        return {"mean": float(np.mean(values)), "interval_95": [lo, hi], "samples": len(values)}
+    out = {}
+    for who in ("planned", "oracle"):
+        out[who] = {f: mean_interval([c["gains"][who][f] for c in cases]) for f in ("rmse", "edge_gradient")}
+    out["random"] = {f: mean_interval([np.mean([r[f] for r in c["gains"]["random"]]) for c in cases])
+                     for f in ("rmse", "edge_gradient")}
+    strong = [c for c in cases if c["gains"]["oracle"][key] >= 0.10]
+    out[f"planned_share_of_oracle_where_oracle_gains_10_percent_{key}"] = [
+        {"seed": c["seed"], "share": c["gains"]["planned"][key] / c["gains"]["oracle"][key]} for c in strong]
+    return out
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--ctk", required=True)
+    p.add_argument("--work", type=Path, default=Path("/tmp/plan-oracle"))
+    p.add_argument("--seeds", type=int, nargs="+", default=list(range(1, 9)))
+    p.add_argument("--views", type=int, default=100)
+    p.add_argument("--random-draws", type=int, default=3)
+    p.add_argument("--budget", type=int, default=41, help="reconstructions the oracle's search may spend per sample")
+    p.add_argument("--out", type=Path)
+    a = p.parse_args()
+    out = a.out or Path(__file__).resolve().parent / "results" / f"planning_oracle-{cpu_slug()}.json"
+    cases = []
+    for seed in a.seeds:
+        cases.append(one_sample(a.ctk, a.work / f"seed-{seed}", seed, a.views, a.random_draws, a.budget,
+                                lambda line: print(line, flush=True)))
+        g = cases[-1]["gains"]
+        print(f"seed {seed}: RMSE gain planned {g['planned']['rmse']:+.2%} oracle {g['oracle']['rmse']:+.2%} "
+              f"random {np.mean([r['rmse'] for r in g['random']]):+.2%}; edge planned "
+              f"{g['planned']['edge_gradient']:+.2%} oracle {g['oracle']['edge_gradient']:+.2%} "
+              f"({cases[-1]['seconds']:.0f} s)", flush=True)
+        result = {"cpu": cpu_name(), "command": " ".join(sys.argv), "views": a.views, "budget": a.budget,
+                  "cases": cases, "population": summary(cases, "rmse"),
+                  "report_half": summary([c for c in cases if c["half"] == "report"], "rmse"),
+                  "choice_half": summary([c for c in cases if c["half"] == "choice"], "rmse")}
+        out.write_text(json.dumps(result, indent=1) + "\n")
+    print(json.dumps(result["population"], indent=1))
+
+
+if __name__ == "__main__":
+    main()
