@@ -10,9 +10,12 @@ Per sample:
    again to 180^2 for the search.
 2. The oracle's search on that pool, scored by the true error: every trajectory of n views is
    reconstructed alike (WLS-CG, 20 iterations, gradient penalty, 1 mm voxels over the holder) and
-   its RMSE over the sample region taken against the voxelised truth. It starts from the whole
-   sphere's first n cells and exchanges a random member for a random candidate, keeping the
-   exchange only if the true RMSE falls, until `--budget` reconstructions are spent. (Exchanges
+   its RMSE over the sample region taken against the voxelised truth. It first takes the whole
+   sphere's order less the directions whose most attenuating ray through the true absorbers is
+   longest (none, or the worst 5, 10, 20, 30 or 40 %: the planner's damage, known instead of
+   estimated), keeps the best of those six, then exchanges a random member for a random
+   candidate, keeping the exchange only if the true RMSE falls, until `--budget`
+   reconstructions are spent. (Exchanges
    proposed by the error the present image shows a candidate, or by the candidates' data
    inconsistency against the truth, found less: the views that see most error are those along the
    metal's streaks, and the data inconsistency varies by 10 % between directions.)
@@ -42,7 +45,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnosis_population import cpu_name, cpu_slug  # noqa: E402
-from planning_population import bootstrap_interval, random_sample  # noqa: E402
+from planning_population import bootstrap_interval, gain_over_whole_sphere, random_sample  # noqa: E402
 
 import ctk  # noqa: E402
 
@@ -53,6 +56,8 @@ AXIS_EXCLUSION_COS = np.cos(np.radians(8.0))
 VOXEL_MM, VOLUME_SHAPE = 1.0, (120, 60, 60)  # (z, y, x): the holder's tube and its spheres
 REGION_RADIUS_MM, REGION_HALF_HEIGHT_MM = 23.5, 45.0  # the comparison's sample region
 PENALTY, ITERATIONS = 3.0, 20  # the comparison's reconstruction
+ABSORBER_ABOVE_PER_MM = 2 * 0.027  # the comparison's absorbers: twice the holder's POM wall
+STREAK_SHELL_MM = 5.0  # the shell around the absorbers where their streaks are scored
 
 
 def run(command, log):
@@ -130,14 +135,42 @@ class Proxy:
         return float(np.sqrt(np.mean((x - self.truth)[self.region] ** 2)))
 
 
-def oracle_search(proxy, n, pool_size, budget, rng, log):
-    """Local search from the whole sphere's first n cells on the true RMSE: a random member
-    exchanged for a random candidate, kept only if the RMSE falls (see the module)."""
-    members = list(range(n))
-    start = best = proxy.rmse(proxy.reconstruct(members))
-    history = [{"evaluations": proxy.evaluations, "rmse_per_mm": best}]
+def error_share_in_absorbers(proxy, members, absorber_above_per_mm):
+    """The share of the squared error (over the sample region) in the absorbers and the voxels
+    touching them: what the beam hardening of their level and their partial volume leave, which no
+    choice of directions changes much."""
+    from scipy import ndimage
+    error2 = (proxy.reconstruct(members) - proxy.truth) ** 2
+    near = ndimage.binary_dilation(proxy.truth > absorber_above_per_mm) & proxy.region
+    return float(error2[near].sum() / error2[proxy.region].sum())
+
+
+def optical_depth_through_absorbers(proxy, absorber_above_per_mm):
+    """Per pool view, the most attenuating ray's line integral through the truth's absorbers
+    (the planner's damage, known instead of estimated from a scout)."""
+    absorbers = np.where(proxy.truth > absorber_above_per_mm, proxy.truth, 0).astype(np.float32)
+    return proxy.projector(np.arange(len(proxy.b))).forward(absorbers).max(axis=(1, 2))
+
+
+def oracle_search(proxy, depth, n, budget, rng, log):
+    """The search that knows the truth (see the module): the whole sphere's order with the
+    directions of the longest absorber paths left out (none, or the worst 5 to 40 %), the best of
+    those, then random exchanges kept only where the true RMSE falls."""
+    def first_n(kept):
+        return [int(v) for v in np.flatnonzero(kept)[:n]]
+
+    trials = []
+    for share in (0.0, 0.05, 0.1, 0.2, 0.3, 0.4):
+        kept = depth <= np.quantile(depth, 1 - share) if share > 0 else np.ones(len(depth), bool)
+        members = first_n(kept)
+        trials.append((proxy.rmse(proxy.reconstruct(members)), share, members))
+    start = trials[0][0]  # the whole sphere
+    best, share, members = min(trials)
+    history = [{"evaluations": proxy.evaluations, "rmse_per_mm": r, "left_out_share": s} for r, s, _ in trials]
+    log(f"  whole sphere {start:.6f}; longest absorber paths left out: best share {share} {best:.6f} "
+        f"({(start - best) / start:+.2%})")
     while proxy.evaluations < budget:
-        outside = np.setdiff1d(np.arange(pool_size), members)
+        outside = np.setdiff1d(np.arange(len(depth)), members)
         trial = list(members)
         trial[int(rng.integers(n))] = int(rng.choice(outside))
         r = proxy.rmse(proxy.reconstruct(trial))
@@ -145,15 +178,42 @@ def oracle_search(proxy, n, pool_size, budget, rng, log):
             members, best = trial, r
             history.append({"evaluations": proxy.evaluations, "rmse_per_mm": best})
             log(f"  exchange kept after {proxy.evaluations} reconstructions: {best:.6f} ({(start - best) / start:+.2%})")
-    return members, start, best, history
+    return members, start, best, share, history
 
 
-def gains(comparison, name):
-    t = comparison["trajectories"]
-    whole = t["whole-sphere"]
-    return {"rmse": (whole["rmse_per_mm"] - t[name]["rmse_per_mm"]) / whole["rmse_per_mm"],
-            "edge_gradient": (t[name]["edge_gradient_per_mm2"] - whole["edge_gradient_per_mm2"])
-            / whole["edge_gradient_per_mm2"]}
+def streaks_near_absorbers(plan_folder, names):
+    """The thesis' metal-streak figure, per trajectory: the RMSE against the truth in a shell of
+    STREAK_SHELL_MM around the absorbers, off the voxels touching them (where streaks from dense
+    parts are strongest), from the comparison's own volumes. None without absorbers."""
+    from scipy import ndimage
+    truth, meta = ctk.read_volume(plan_folder / "truth.nrrd")
+    absorbers = truth > ABSORBER_ABOVE_PER_MM
+    if not absorbers.any():
+        return {name: None for name in names}
+    z, y, x = (meta["origin_mm"][2 - a] + meta["voxel_mm"][2 - a] * np.arange(truth.shape[a]) for a in range(3))
+    region = ((np.hypot(*np.meshgrid(y, x, indexing="ij")) <= REGION_RADIUS_MM)[None, :, :]
+              & (np.abs(z) <= REGION_HALF_HEIGHT_MM)[:, None, None])
+    distance_mm = ndimage.distance_transform_edt(~absorbers, sampling=meta["voxel_mm"][::-1])
+    shell = region & ~ndimage.binary_dilation(absorbers) & (distance_mm <= STREAK_SHELL_MM)
+    out = {}
+    for name in names:
+        volume, _ = ctk.read_volume(plan_folder / name / "volume.nrrd")
+        out[name] = float(np.sqrt(np.mean((volume[shell] - truth[shell]) ** 2)))
+    return out
+
+
+def scored(plan_folder, random_draws):
+    """The gains over the whole sphere of the planned, the oracle's and the random trajectories
+    (RMSE, edge gradient, streaks near the absorbers), and the whole sphere's figures."""
+    comparison = json.loads((plan_folder / "comparison.json").read_text())
+    names = ["planned", "oracle"] + ["random" if k == 0 else f"random-{k + 1}" for k in range(random_draws)]
+    g = {name: gain_over_whole_sphere(comparison, name) for name in names}
+    streaks = streaks_near_absorbers(plan_folder, names + ["whole-sphere"])
+    whole = streaks["whole-sphere"]
+    for name in names:
+        g[name]["streaks_near_absorbers"] = None if whole is None else (whole - streaks[name]) / whole
+    return ({"planned": g["planned"], "oracle": g["oracle"], "random": [g[k] for k in names[2:]]},
+            {**comparison["trajectories"]["whole-sphere"], "streak_rmse_near_absorbers_per_mm": whole})
 
 
 def one_sample(ctk_bin, work, seed, views, random_draws, budget, log):
@@ -165,8 +225,10 @@ def one_sample(ctk_bin, work, seed, views, random_draws, budget, log):
     directions = pool_directions()
     proxy = Proxy(simulate_pool(ctk_bin, work, sample_file, directions, seed), sample_file)
     log(f"seed {seed}: pool of {len(directions)} views simulated and read ({time.time() - start:.0f} s)")
-    members, whole_proxy, oracle_proxy, history = oracle_search(proxy, views, len(directions), budget,
-                                                                np.random.default_rng(seed), log)
+    depth = optical_depth_through_absorbers(proxy, ABSORBER_ABOVE_PER_MM)
+    members, whole_proxy, oracle_proxy, share, history = oracle_search(proxy, depth, views, budget,
+                                                                       np.random.default_rng(seed), log)
+    share_in_absorbers = error_share_in_absorbers(proxy, list(range(views)), ABSORBER_ABOVE_PER_MM)
     spares = [i for i in range(len(directions)) if i not in members]
     ctk.write_directions(work / "oracle.json", "oracle", directions[members + spares])
     search_seconds = time.time() - start
@@ -174,15 +236,15 @@ def one_sample(ctk_bin, work, seed, views, random_draws, budget, log):
     run([ctk_bin, "plan", "--out", str(out), "--phantom", str(sample_file), "--seed", str(seed), "--views", str(views),
          "--compare", "--random-draws", str(random_draws), "--compare-directions", str(work / "oracle.json")],
         work / "plan.log")
-    comparison = json.loads((out / "comparison.json").read_text())
-    names = ["planned", "oracle"] + ["random" if k == 0 else f"random-{k + 1}" for k in range(random_draws)]
-    g = {name: gains(comparison, name) for name in names}
+    gains, whole_sphere = scored(out, random_draws)
     return {"seed": seed, "half": "choice" if seed % 2 == 0 else "report", "sample": sample,
-            "gains": {"planned": g["planned"], "oracle": g["oracle"], "random": [g[k] for k in names[2:]]},
-            "whole_sphere": comparison["trajectories"]["whole-sphere"],
+            "gains": gains, "whole_sphere": whole_sphere,
             "search": {"evaluations": proxy.evaluations, "pool_views": len(directions),
                        "proxy_rmse_whole_sphere_per_mm": whole_proxy, "proxy_rmse_oracle_per_mm": oracle_proxy,
-                       "proxy_gain": (whole_proxy - oracle_proxy) / whole_proxy, "history": history,
+                       "proxy_gain": (whole_proxy - oracle_proxy) / whole_proxy, "left_out_share": share,
+                       "whole_sphere_error_share_in_absorbers": share_in_absorbers,
+                       "optical_depth_quantiles": [float(q) for q in np.quantile(depth, [0, 0.5, 0.9, 1])],
+                       "history": history,
                        "seconds": search_seconds},
             "seconds": time.time() - start}
 
@@ -191,17 +253,44 @@ def summary(cases, key):
     rng = np.random.default_rng(0)
 
     def mean_interval(values):
+        if not values:
+            return None
         lo, hi = bootstrap_interval(values, rng)
         return {"mean": float(np.mean(values)), "interval_95": [lo, hi], "samples": len(values)}
     out = {}
+    figures = ("rmse", "edge_gradient", "streaks_near_absorbers")
     for who in ("planned", "oracle"):
-        out[who] = {f: mean_interval([c["gains"][who][f] for c in cases]) for f in ("rmse", "edge_gradient")}
-    out["random"] = {f: mean_interval([np.mean([r[f] for r in c["gains"]["random"]]) for c in cases])
-                     for f in ("rmse", "edge_gradient")}
+        out[who] = {f: mean_interval([c["gains"][who][f] for c in cases if c["gains"][who].get(f) is not None])
+                    for f in figures}
+    out["random"] = {f: mean_interval([np.mean([r[f] for r in c["gains"]["random"]]) for c in cases
+                                       if c["gains"]["random"][0].get(f) is not None]) for f in figures}
     strong = [c for c in cases if c["gains"]["oracle"][key] >= 0.10]
     out[f"planned_share_of_oracle_where_oracle_gains_10_percent_{key}"] = [
         {"seed": c["seed"], "share": c["gains"]["planned"][key] / c["gains"]["oracle"][key]} for c in strong]
     return out
+
+
+def picture(cases, file):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    x = np.arange(len(cases))
+    for ax, metric, title in zip(axes, ("rmse", "edge_gradient"), ("RMSE gain over the whole sphere", "edge-gradient gain")):
+        ax.axhline(0, color="black", lw=0.8)
+        ax.bar(x - 0.2, [100 * c["gains"]["oracle"][metric] for c in cases], 0.4, label="oracle (searched on RMSE)",
+               color="tab:green")
+        ax.bar(x + 0.2, [100 * c["gains"]["planned"][metric] for c in cases], 0.4, label="planned", color="tab:blue")
+        for i, c in enumerate(cases):
+            draws = [100 * d[metric] for d in c["gains"]["random"]]
+            ax.plot([i] * len(draws), draws, "o", color="tab:orange", ms=4, label="random draws" if i == 0 else None)
+        ax.set_xticks(x, [str(c["seed"]) for c in cases])
+        ax.set_xlabel("sample seed")
+        ax.set_ylabel("%")
+        ax.set_title(title)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(file, dpi=110)
 
 
 def main():
@@ -211,10 +300,18 @@ def main():
     p.add_argument("--seeds", type=int, nargs="+", default=list(range(1, 9)))
     p.add_argument("--views", type=int, default=100)
     p.add_argument("--random-draws", type=int, default=3)
-    p.add_argument("--budget", type=int, default=41, help="reconstructions the oracle's search may spend per sample")
+    p.add_argument("--budget", type=int, default=60, help="reconstructions the oracle's search may spend per sample")
     p.add_argument("--out", type=Path)
+    p.add_argument("--rescore", action="store_true",
+                   help="score the runs already in --work again (the figures of this script), rewriting --out")
     a = p.parse_args()
     out = a.out or Path(__file__).resolve().parent / "results" / f"planning_oracle-{cpu_slug()}.json"
+    if a.rescore:
+        result = json.loads(out.read_text())
+        for c in result["cases"]:
+            c["gains"], c["whole_sphere"] = scored(a.work / f"seed-{c['seed']}" / "plan", len(c["gains"]["random"]))
+        write_result(result, result["cases"], out)
+        return
     cases = []
     for seed in a.seeds:
         cases.append(one_sample(a.ctk, a.work / f"seed-{seed}", seed, a.views, a.random_draws, a.budget,
@@ -224,11 +321,17 @@ def main():
               f"random {np.mean([r['rmse'] for r in g['random']]):+.2%}; edge planned "
               f"{g['planned']['edge_gradient']:+.2%} oracle {g['oracle']['edge_gradient']:+.2%} "
               f"({cases[-1]['seconds']:.0f} s)", flush=True)
-        result = {"cpu": cpu_name(), "command": " ".join(sys.argv), "views": a.views, "budget": a.budget,
-                  "cases": cases, "population": summary(cases, "rmse"),
-                  "report_half": summary([c for c in cases if c["half"] == "report"], "rmse"),
-                  "choice_half": summary([c for c in cases if c["half"] == "choice"], "rmse")}
-        out.write_text(json.dumps(result, indent=1) + "\n")
+        result = {"cpu": cpu_name(), "command": " ".join(sys.argv), "views": a.views, "budget": a.budget}
+        write_result(result, cases, out)
+
+
+def write_result(result, cases, out):
+    """The cases with the population's and each half's summary, and the picture beside them."""
+    result.update({"cases": cases, "population": summary(cases, "rmse"),
+                   "report_half": summary([c for c in cases if c["half"] == "report"], "rmse"),
+                   "choice_half": summary([c for c in cases if c["half"] == "choice"], "rmse")})
+    out.write_text(json.dumps(result, indent=1) + "\n")
+    picture(cases, out.with_suffix(".png"))
     print(json.dumps(result["population"], indent=1))
 
 

@@ -102,17 +102,24 @@ def random_sample(seed):
     return {"format": "ctk-phantom/1", "name": f"random-sample-{seed}", "primitives": parts}
 
 
+def gain_over_whole_sphere(comparison, name):
+    """The gains of one compared trajectory over the whole sphere, positive where it is better."""
+    t = comparison["trajectories"]
+    whole, x = t["whole-sphere"], t[name]
+    return {"rmse": (whole["rmse_per_mm"] - x["rmse_per_mm"]) / whole["rmse_per_mm"],
+            "edge_gradient": (x["edge_gradient_per_mm2"] - whole["edge_gradient_per_mm2"]) / whole["edge_gradient_per_mm2"]}
+
+
 def gains(comparison):
     """Gains over the whole sphere of the planned trajectory and of each random draw."""
     t = comparison["trajectories"]
     whole = t["whole-sphere"]
 
-    def gain(x):
-        return {"rmse": (whole["rmse_per_mm"] - x["rmse_per_mm"]) / whole["rmse_per_mm"],
-                "edge_gradient": (x["edge_gradient_per_mm2"] - whole["edge_gradient_per_mm2"]) / whole["edge_gradient_per_mm2"]}
+    def gain(name):
+        return gain_over_whole_sphere(comparison, name)
 
-    draws = [gain(x) for name, x in sorted(t.items()) if name.startswith("random")]
-    return {"planned": gain(t["planned"]), "random": draws,
+    draws = [gain(name) for name in sorted(t) if name.startswith("random")]
+    return {"planned": gain("planned"), "random": draws,
             "best_random": {k: max(d[k] for d in draws) for k in ("rmse", "edge_gradient")},
             "whole_sphere": {"rmse_per_mm": whole["rmse_per_mm"], "edge_gradient_per_mm2": whole["edge_gradient_per_mm2"]}}
 
