@@ -154,6 +154,48 @@ TEST(HeldOutFit, EndsTheRunAtTheFirstIterationThatDidNotImproveAndReturnsTheLast
   EXPECT_NEAR(r["fit"][3].get<double>(), 4 * r["fit"][1].get<double>(), 1e-6 * r["fit"][3].get<double>());
 }
 
+TEST(HeldOutFit, AnOsSqsResultIsTheMeanOfTheLastTwoImprovingIteratesPastTheFirst) {
+  const NoisyScan& s = noisy_scan();
+  const std::vector<ProjectionMatrix> two{s.views[0], s.views[40]};
+  const auto A = std::make_shared<JosephOperator>(two, s.layout, kDetector.rows, kDetector.cols);
+  ProjectionStack exact(2, kDetector.rows, kDetector.cols);
+  A->apply(s.truth, exact);
+  Volume quarter = s.truth, half = s.truth, twice = s.truth;
+  for (float& v : quarter.data) v *= 0.25f;
+  for (float& v : half.data) v *= 0.5f;
+  for (float& v : twice.data) v *= 2.0f;
+  {  // improving at 1, 2 and 3, not at 4: the mean of 2 and 3
+    HeldOutFit judge(A, exact, ProjectionStack());
+    judge.return_mean_of_last_two();
+    judge.observe(0, Volume(s.layout));
+    judge.observe(1, quarter);
+    judge.observe(2, half);
+    judge.observe(3, s.truth);
+    judge.observe(4, twice);
+    const auto reason = judge.rule()();
+    ASSERT_TRUE(reason);
+    EXPECT_NE(reason->find("after iteration 3 (the mean of its iterate and the one before is the result)"), std::string::npos)
+        << *reason;
+    Volume x = twice;
+    EXPECT_EQ(judge.restore_best(x), 3);
+    for (std::size_t i = 0; i < x.data.size(); ++i) ASSERT_FLOAT_EQ(x.data[i], 0.75f * s.truth.data[i]) << i;
+    EXPECT_EQ(judge.report()["result_iterations"], nlohmann::json({2, 3}));
+  }
+  {  // improving at 1 and 2: the first is too far from the data to average, so iterate 2 alone
+    HeldOutFit judge(A, exact, ProjectionStack());
+    judge.return_mean_of_last_two();
+    judge.observe(0, Volume(s.layout));
+    judge.observe(1, half);
+    judge.observe(2, s.truth);
+    judge.observe(3, twice);
+    ASSERT_TRUE(judge.rule()());
+    Volume x = twice;
+    EXPECT_EQ(judge.restore_best(x), 2);
+    EXPECT_EQ(x.data, s.truth.data);
+    EXPECT_EQ(judge.report()["result_iterations"], nlohmann::json({2}));
+  }
+}
+
 // On the noisy scan, each solver on the views not held out, with the rule and without it (to
 // the same epoch or iteration count), against the truth.
 struct Stopped {
@@ -173,6 +215,7 @@ Stopped run_with_and_without_the_rule(bool os_sqs) {
   std::vector<double> rmse;
   for (const bool ruled : {false, true}) {
     HeldOutFit judge(A_held, held.line_integrals, held.weights);
+    if (os_sqs) judge.return_mean_of_last_two();  // as reconstruction_run asks
     Volume x(s.layout);
     const IterationCallback follow = [&](const IterationLog& log) {
       judge.observe(log.iteration, x);
