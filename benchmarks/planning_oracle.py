@@ -45,7 +45,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnosis_population import cpu_name, cpu_slug  # noqa: E402
-from planning_population import bootstrap_interval, gain_over_whole_sphere, random_sample  # noqa: E402
+from planning_population import bootstrap_interval, gain_over_whole_sphere, picture, random_sample  # noqa: E402
 
 import ctk  # noqa: E402
 
@@ -270,29 +270,6 @@ def summary(cases, key):
     return out
 
 
-def picture(cases, file):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
-    x = np.arange(len(cases))
-    for ax, metric, title in zip(axes, ("rmse", "edge_gradient"), ("RMSE gain over the whole sphere", "edge-gradient gain")):
-        ax.axhline(0, color="black", lw=0.8)
-        ax.bar(x - 0.2, [100 * c["gains"]["oracle"][metric] for c in cases], 0.4, label="oracle (searched on RMSE)",
-               color="tab:green")
-        ax.bar(x + 0.2, [100 * c["gains"]["planned"][metric] for c in cases], 0.4, label="planned", color="tab:blue")
-        for i, c in enumerate(cases):
-            draws = [100 * d[metric] for d in c["gains"]["random"]]
-            ax.plot([i] * len(draws), draws, "o", color="tab:orange", ms=4, label="random draws" if i == 0 else None)
-        ax.set_xticks(x, [str(c["seed"]) for c in cases])
-        ax.set_xlabel("sample seed")
-        ax.set_ylabel("%")
-        ax.set_title(title)
-        ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(file, dpi=110)
-
-
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--ctk", required=True)
@@ -331,7 +308,8 @@ def write_result(result, cases, out):
                    "report_half": summary([c for c in cases if c["half"] == "report"], "rmse"),
                    "choice_half": summary([c for c in cases if c["half"] == "choice"], "rmse")})
     out.write_text(json.dumps(result, indent=1) + "\n")
-    picture(cases, out.with_suffix(".png"))
+    picture(cases, out.with_suffix(".png"),
+            bars=(("oracle", "oracle (searched on RMSE)", "tab:green"), ("planned", "planned", "tab:blue")))
     print(json.dumps(result["population"], indent=1))
 
 

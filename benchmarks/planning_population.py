@@ -146,23 +146,29 @@ def summary(cases, rng):
     return out
 
 
-def picture(cases, file):
+def picture(cases, file, bars=(("planned", "planned", "tab:blue"),)):
+    """Per sample, the gains of each (key, label, colour) in `bars` as bars and the random draws as
+    dots, RMSE and edge gradient side by side."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
     x = np.arange(len(cases))
+    width = 0.8 / (len(bars) + 1)
     for ax, metric, title in zip(axes, ("rmse", "edge_gradient"), ("RMSE gain over the whole sphere", "edge-gradient gain")):
         ax.axhline(0, color="black", lw=0.8)
-        ax.bar(x - 0.2, [100 * c["gains"]["planned"][metric] for c in cases], 0.4, label="planned")
+        for k, (key, label, colour) in enumerate(bars):
+            ax.bar(x - 0.4 + width * (k + 0.5), [100 * c["gains"][key][metric] for c in cases], width, label=label,
+                   color=colour)
         for i, c in enumerate(cases):
             draws = [100 * d[metric] for d in c["gains"]["random"]]
-            ax.plot([i + 0.2] * len(draws), draws, "o", color="tab:orange", ms=4, label="random draws" if i == 0 else None)
+            ax.plot([i + 0.4 - width / 2] * len(draws), draws, "o", color="tab:orange", ms=4,
+                    label="random draws" if i == 0 else None)
         ax.set_xticks(x, [str(c["seed"]) for c in cases])
         ax.set_xlabel("sample seed")
         ax.set_ylabel("%")
         ax.set_title(title)
-        ax.legend()
+        ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(file, dpi=110)
 

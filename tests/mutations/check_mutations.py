@@ -12,6 +12,7 @@ mutations touch. Sources are restored after each mutation, whatever happens.
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import time
@@ -50,7 +51,9 @@ def ctest(build, name, log):
 
 def gtest(build, name, log):
     """A gtest case (Suite.Case) run from its suite's binary: CTest knows the binary, not the case."""
-    for binary in sorted((build / "tests").glob("test_*")):
+    binaries = [b for b in sorted((build / "tests").glob("test_*"))
+                if b.is_file() and "." not in b.name and os.access(b, os.X_OK)]
+    for binary in binaries:
         listed = subprocess.run([str(binary), "--gtest_list_tests", f"--gtest_filter={name}"], capture_output=True, text=True)
         if name.split(".")[1] in listed.stdout:
             return sh([str(binary), f"--gtest_filter={name}"], build / "test-tmp", log)

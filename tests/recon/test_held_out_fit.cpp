@@ -121,17 +121,30 @@ TEST(HeldOutViews, AreOneOrderedSubsetSpreadOverTheCircle) {
   EXPECT_TRUE(held_out_positions(s.views, 0).empty());
 }
 
-TEST(HeldOutFit, EndsTheRunAtTheFirstIterationThatDidNotImproveAndReturnsTheLastThatDid) {
+// Two held-out views of the noisy scan's truth, projected exactly, and the truth scaled by `f`.
+struct ExactHeldOut {
   const NoisyScan& s = noisy_scan();
-  const std::vector<ProjectionMatrix> two{s.views[0], s.views[40]};
-  const auto A = std::make_shared<JosephOperator>(two, s.layout, kDetector.rows, kDetector.cols);
-  ProjectionStack exact(2, kDetector.rows, kDetector.cols);
-  A->apply(s.truth, exact);
-  HeldOutFit judge(A, exact, ProjectionStack());
+  std::shared_ptr<JosephOperator> A;
+  ProjectionStack exact;
+  ExactHeldOut()
+      : A(std::make_shared<JosephOperator>(std::vector<ProjectionMatrix>{s.views[0], s.views[40]}, s.layout, kDetector.rows,
+                                           kDetector.cols)),
+        exact(2, kDetector.rows, kDetector.cols) {
+    A->apply(s.truth, exact);
+  }
+  Volume truth_times(float f) const {
+    Volume v = s.truth;
+    for (float& x : v.data) x *= f;
+    return v;
+  }
+};
+
+TEST(HeldOutFit, EndsTheRunAtTheFirstIterationThatDidNotImproveAndReturnsTheLastThatDid) {
+  const ExactHeldOut h;
+  const NoisyScan& s = h.s;
+  HeldOutFit judge(h.A, h.exact, ProjectionStack());
   const StoppingRule rule = judge.rule();
-  Volume half = s.truth, twice = s.truth;
-  for (float& v : half.data) v *= 0.5f;
-  for (float& v : twice.data) v *= 2.0f;
+  const Volume half = h.truth_times(0.5f), twice = h.truth_times(2.0f);
   judge.observe(0, Volume(s.layout));
   EXPECT_FALSE(rule());
   judge.observe(1, half);
@@ -155,17 +168,11 @@ TEST(HeldOutFit, EndsTheRunAtTheFirstIterationThatDidNotImproveAndReturnsTheLast
 }
 
 TEST(HeldOutFit, AnOsSqsResultIsTheMeanOfTheLastTwoImprovingIteratesPastTheFirst) {
-  const NoisyScan& s = noisy_scan();
-  const std::vector<ProjectionMatrix> two{s.views[0], s.views[40]};
-  const auto A = std::make_shared<JosephOperator>(two, s.layout, kDetector.rows, kDetector.cols);
-  ProjectionStack exact(2, kDetector.rows, kDetector.cols);
-  A->apply(s.truth, exact);
-  Volume quarter = s.truth, half = s.truth, twice = s.truth;
-  for (float& v : quarter.data) v *= 0.25f;
-  for (float& v : half.data) v *= 0.5f;
-  for (float& v : twice.data) v *= 2.0f;
+  const ExactHeldOut h;
+  const NoisyScan& s = h.s;
+  const Volume quarter = h.truth_times(0.25f), half = h.truth_times(0.5f), twice = h.truth_times(2.0f);
   {  // improving at 1, 2 and 3, not at 4: the mean of 2 and 3
-    HeldOutFit judge(A, exact, ProjectionStack());
+    HeldOutFit judge(h.A, h.exact, ProjectionStack());
     judge.return_mean_of_last_two();
     judge.observe(0, Volume(s.layout));
     judge.observe(1, quarter);
@@ -182,7 +189,7 @@ TEST(HeldOutFit, AnOsSqsResultIsTheMeanOfTheLastTwoImprovingIteratesPastTheFirst
     EXPECT_EQ(judge.report()["result_iterations"], nlohmann::json({2, 3}));
   }
   {  // improving at 1 and 2: the first is too far from the data to average, so iterate 2 alone
-    HeldOutFit judge(A, exact, ProjectionStack());
+    HeldOutFit judge(h.A, h.exact, ProjectionStack());
     judge.return_mean_of_last_two();
     judge.observe(0, Volume(s.layout));
     judge.observe(1, half);
