@@ -58,6 +58,11 @@ def main():
             failures.append(f"{which}: uncertainty {sigma}")
         if abs(cross["difference_px"]) > 0.3:
             failures.append(f"{which}: the loop and conjugate rays differ by {cross['difference_px']:.3f} px")
+        # What a user reads: the reported column against the conjugate rays' (the steps alone would not
+        # see a reporting error common to the three scans, whose recorded centres already step by 3.26 px).
+        if abs(loop_u0 - cross["u0_px"]) > 0.3:
+            failures.append(f"{which}: the reported u0 {loop_u0:.3f} px is {loop_u0 - cross['u0_px']:+.3f} px from the "
+                            f"conjugate rays' {cross['u0_px']:.3f}")
         halves = effect.get("halves_in_time", {}).get("u0_px")
         if not halves:
             failures.append(f"{which}: no estimate from the halves of the scan in time")
