@@ -36,7 +36,7 @@ struct Curve {
   bool held_out = false;  // trained without the held-out views
   std::vector<double> rmse, held_out_fit, relative_change, seconds;
   int rule_stops = -1, rule_result = -1;  // held out: where HeldOutFit's rule ends the run, and the iterate it returns
-  double rule_result_rmse = -1;  // the product's result there: OS-SQS the mean of that iterate and the one before (HeldOutFit)
+  double rule_result_rmse = -1;           // the volume the product returns there (HeldOutFit::restore_best)
   nlohmann::json to_json() const {
     return {{"method", method},
             {"held_out", held_out},
@@ -126,11 +126,16 @@ int main(int argc, char** argv) try {
       Curve c{method, hold, {}, {}, {}, {}, -1, -1};
       Volume x(p.layout), previous(p.layout);
       HeldOutFit judge(A_held, views_of(data.b, held), views_of(data.w, held));
+      if (method == "os-sqs") judge.return_mean_of_last_two();  // as reconstruction_run asks
       const StoppingRule rule = judge.rule();
+      // The volume the product would return where the rule ends the run (or at the limit).
+      const auto score_result = [&] {
+        Volume result = x;
+        judge.restore_best(result);
+        c.rule_result_rmse = bench::rmse(result, truth);
+      };
       double clock = 0;
-      std::vector<Volume> iterates;  // held out: every iterate, for the result the product returns
       const IterationCallback follow = [&](const IterationLog& log) {
-        if (hold) iterates.push_back(x);
         clock += log.seconds;
         c.seconds.push_back(clock);
         c.rmse.push_back(bench::rmse(x, truth));
@@ -139,6 +144,7 @@ int main(int argc, char** argv) try {
         if (hold && c.rule_stops < 0 && rule()) {  // the run would end here with the best iterate
           c.rule_stops = log.iteration;
           c.rule_result = judge.report()["best_iteration"];
+          score_result();
         }
         c.relative_change.push_back(log.iteration == 0 ? 1.0 : distance(x, previous) / std::max(norm(x), 1e-30));
         previous = x;
@@ -158,15 +164,7 @@ int main(int argc, char** argv) try {
         o.gradient_after_last = false;
         solve_wls_cg(A, b, &w, x, o, follow);
       }
-      // The rule's iterate, or for OS-SQS its mean with the one before when both are past the first
-      // (HeldOutFit::return_mean_of_last_two, as reconstruction_run asks).
-      if (hold) {
-        const auto r = static_cast<std::size_t>(c.rule_result >= 0 ? c.rule_result : static_cast<int>(iterates.size()) - 1);
-        Volume result = iterates[r];
-        if (method == "os-sqs" && r >= 3)
-          for (std::size_t i = 0; i < result.data.size(); ++i) result.data[i] = 0.5f * (result.data[i] + iterates[r - 1].data[i]);
-        c.rule_result_rmse = bench::rmse(result, truth);
-      }
+      if (hold && c.rule_stops < 0) score_result();
       curves.push_back(c);
     }
   }

@@ -135,12 +135,12 @@ class Proxy:
         return float(np.sqrt(np.mean((x - self.truth)[self.region] ** 2)))
 
 
-def error_share_in_absorbers(proxy, members, absorber_above_per_mm):
-    """The share of the squared error (over the sample region) in the absorbers and the voxels
-    touching them: what the beam hardening of their level and their partial volume leave, which no
-    choice of directions changes much."""
+def error_share_in_absorbers(proxy, x, absorber_above_per_mm):
+    """The share of the squared error of `x` (over the sample region) in the absorbers and the
+    voxels touching them: what the beam hardening of their level and their partial volume leave,
+    which no choice of directions changes much."""
     from scipy import ndimage
-    error2 = (proxy.reconstruct(members) - proxy.truth) ** 2
+    error2 = (x - proxy.truth) ** 2
     near = ndimage.binary_dilation(proxy.truth > absorber_above_per_mm) & proxy.region
     return float(error2[near].sum() / error2[proxy.region].sum())
 
@@ -155,16 +155,20 @@ def optical_depth_through_absorbers(proxy, absorber_above_per_mm):
 def oracle_search(proxy, depth, n, budget, rng, log):
     """The search that knows the truth (see the module): the whole sphere's order with the
     directions of the longest absorber paths left out (none, or the worst 5 to 40 %), the best of
-    those, then random exchanges kept only where the true RMSE falls."""
+    those, then random exchanges kept only where the true RMSE falls. Returns the members, the
+    whole sphere's and the best RMSE, the share left out, the history and the whole sphere's
+    reconstruction."""
     def first_n(kept):
         return [int(v) for v in np.flatnonzero(kept)[:n]]
 
-    trials = []
+    trials, whole_sphere = [], None
     for share in (0.0, 0.05, 0.1, 0.2, 0.3, 0.4):
         kept = depth <= np.quantile(depth, 1 - share) if share > 0 else np.ones(len(depth), bool)
         members = first_n(kept)
-        trials.append((proxy.rmse(proxy.reconstruct(members)), share, members))
-    start = trials[0][0]  # the whole sphere
+        x = proxy.reconstruct(members)
+        whole_sphere = x if whole_sphere is None else whole_sphere
+        trials.append((proxy.rmse(x), share, members))
+    start = trials[0][0]
     best, share, members = min(trials)
     history = [{"evaluations": proxy.evaluations, "rmse_per_mm": r, "left_out_share": s} for r, s, _ in trials]
     log(f"  whole sphere {start:.6f}; longest absorber paths left out: best share {share} {best:.6f} "
@@ -178,7 +182,7 @@ def oracle_search(proxy, depth, n, budget, rng, log):
             members, best = trial, r
             history.append({"evaluations": proxy.evaluations, "rmse_per_mm": best})
             log(f"  exchange kept after {proxy.evaluations} reconstructions: {best:.6f} ({(start - best) / start:+.2%})")
-    return members, start, best, share, history
+    return members, start, best, share, history, whole_sphere
 
 
 def streaks_near_absorbers(plan_folder, names):
@@ -202,11 +206,11 @@ def streaks_near_absorbers(plan_folder, names):
     return out
 
 
-def scored(plan_folder, random_draws):
+def scored(plan_folder):
     """The gains over the whole sphere of the planned, the oracle's and the random trajectories
     (RMSE, edge gradient, streaks near the absorbers), and the whole sphere's figures."""
     comparison = json.loads((plan_folder / "comparison.json").read_text())
-    names = ["planned", "oracle"] + ["random" if k == 0 else f"random-{k + 1}" for k in range(random_draws)]
+    names = ["planned", "oracle"] + sorted(k for k in comparison["trajectories"] if k.startswith("random"))
     g = {name: gain_over_whole_sphere(comparison, name) for name in names}
     streaks = streaks_near_absorbers(plan_folder, names + ["whole-sphere"])
     whole = streaks["whole-sphere"]
@@ -226,9 +230,9 @@ def one_sample(ctk_bin, work, seed, views, random_draws, budget, log):
     proxy = Proxy(simulate_pool(ctk_bin, work, sample_file, directions, seed), sample_file)
     log(f"seed {seed}: pool of {len(directions)} views simulated and read ({time.time() - start:.0f} s)")
     depth = optical_depth_through_absorbers(proxy, ABSORBER_ABOVE_PER_MM)
-    members, whole_proxy, oracle_proxy, share, history = oracle_search(proxy, depth, views, budget,
-                                                                       np.random.default_rng(seed), log)
-    share_in_absorbers = error_share_in_absorbers(proxy, list(range(views)), ABSORBER_ABOVE_PER_MM)
+    members, whole_proxy, oracle_proxy, share, history, whole_sphere = oracle_search(
+        proxy, depth, views, budget, np.random.default_rng(seed), log)
+    share_in_absorbers = error_share_in_absorbers(proxy, whole_sphere, ABSORBER_ABOVE_PER_MM)
     spares = [i for i in range(len(directions)) if i not in members]
     ctk.write_directions(work / "oracle.json", "oracle", directions[members + spares])
     search_seconds = time.time() - start
@@ -236,9 +240,9 @@ def one_sample(ctk_bin, work, seed, views, random_draws, budget, log):
     run([ctk_bin, "plan", "--out", str(out), "--phantom", str(sample_file), "--seed", str(seed), "--views", str(views),
          "--compare", "--random-draws", str(random_draws), "--compare-directions", str(work / "oracle.json")],
         work / "plan.log")
-    gains, whole_sphere = scored(out, random_draws)
+    gains, whole_sphere_figures = scored(out)
     return {"seed": seed, "half": "choice" if seed % 2 == 0 else "report", "sample": sample,
-            "gains": gains, "whole_sphere": whole_sphere,
+            "gains": gains, "whole_sphere": whole_sphere_figures,
             "search": {"evaluations": proxy.evaluations, "pool_views": len(directions),
                        "proxy_rmse_whole_sphere_per_mm": whole_proxy, "proxy_rmse_oracle_per_mm": oracle_proxy,
                        "proxy_gain": (whole_proxy - oracle_proxy) / whole_proxy, "left_out_share": share,
@@ -286,7 +290,7 @@ def main():
     if a.rescore:
         result = json.loads(out.read_text())
         for c in result["cases"]:
-            c["gains"], c["whole_sphere"] = scored(a.work / f"seed-{c['seed']}" / "plan", len(c["gains"]["random"]))
+            c["gains"], c["whole_sphere"] = scored(a.work / f"seed-{c['seed']}" / "plan")
         write_result(result, result["cases"], out)
         return
     cases = []

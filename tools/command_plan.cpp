@@ -177,7 +177,7 @@ void register_plan(CLI::App& app) {
                 "Simulation mode: also acquire and reconstruct the whole-sphere and random trajectories of the same size");
   cmd->add_option("--random-draws", o->simulated.random_draws,
                   "With --compare: random trajectories to compare with (random/, random-2/ ...), summarised by mean and range")
-      ->check(CLI::Range(1, 100))
+      ->check(CLI::Range(1, SimulatedPlanRequest::kMostRandomDraws))
       ->capture_default_str();
   cmd->add_option("--compare-directions", o->simulated.compare_directions,
                   "With --compare or --compare-only: ctk-directions/1 files, trajectories of one's own scored beside the others")

@@ -8,14 +8,6 @@
 
 namespace ctk {
 
-bool is_reserved_trajectory_name(const std::string& name) {
-  if (name == "planned" || name == "whole-sphere" || name == "random") return true;
-  const std::string draw = "random-";
-  return name.rfind(draw, 0) == 0 && name.size() > draw.size() &&
-         std::all_of(name.begin() + static_cast<std::ptrdiff_t>(draw.size()), name.end(),
-                     [](unsigned char c) { return std::isdigit(c) != 0; });
-}
-
 DirectionList read_direction_list(const std::filesystem::path& file) {
   const nlohmann::json doc = read_json_file(file);
   const JsonNode root(doc, file.string(), "");
@@ -27,8 +19,6 @@ DirectionList read_direction_list(const std::filesystem::path& file) {
     return std::islower(c) != 0 || std::isdigit(c) != 0 || c == '-';
   });
   if (!folder_name) name.fail("expected a folder name of lower-case letters, digits and '-'");
-  if (is_reserved_trajectory_name(list.name))
-    name.fail("'" + list.name + "' is a trajectory the comparison makes itself; choose another name");
   const JsonNode directions = root.at("directions");
   if (directions.size() == 0) directions.fail("expected at least one direction");
   for (std::size_t i = 0; i < directions.size(); ++i) {

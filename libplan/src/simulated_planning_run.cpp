@@ -32,6 +32,15 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 // The folder of the k-th random trajectory (k from 0): random/, random-2/, random-3/ ...
 std::string random_name(int k) { return k == 0 ? "random" : "random-" + std::to_string(k + 1); }
 
+// The names the comparison gives its own trajectories, whatever the number of random draws (a
+// folder of an earlier run with more draws must not be taken for a given trajectory).
+bool is_comparison_name(const std::string& name) {
+  if (name == "planned" || name == "whole-sphere") return true;
+  for (int k = 0; k < SimulatedPlanRequest::kMostRandomDraws; ++k)
+    if (name == random_name(k)) return true;
+  return false;
+}
+
 std::vector<std::string> compared_names(int random_draws, const std::vector<DirectionList>& given) {
   std::vector<std::string> names = {"planned", "whole-sphere"};
   for (int k = 0; k < random_draws; ++k) names.push_back(random_name(k));
@@ -44,6 +53,9 @@ std::vector<DirectionList> given_trajectories(const SimulatedPlanRequest& o) {
   std::vector<DirectionList> given;
   for (const fs::path& file : o.compare_directions) {
     DirectionList list = read_direction_list(file);
+    if (is_comparison_name(list.name))
+      throw InputError(file.string(), "name",
+                       "'" + list.name + "' is a trajectory the comparison makes itself; choose another name");
     for (const DirectionList& earlier : given)
       if (earlier.name == list.name)
         throw InputError(file.string(), "name", "'" + list.name + "' names another given trajectory too; each needs its own");
@@ -249,7 +261,8 @@ void SimulatedPlanRequest::validate() const {
   require_option(kvp >= 16 && kvp <= 150, "SimulatedPlanRequest.kvp", "16 to 150 kV", kvp);
   require_option(filter_al_mm >= 0, "SimulatedPlanRequest.filter_al_mm", "0 or more", filter_al_mm);
   require_option(flat_counts >= 1, "SimulatedPlanRequest.flat_counts", "at least 1", flat_counts);
-  require_option(random_draws >= 1, "SimulatedPlanRequest.random_draws", "at least 1", random_draws);
+  require_option(random_draws >= 1 && random_draws <= kMostRandomDraws, "SimulatedPlanRequest.random_draws", "1 to 100",
+                 random_draws);
   require_choice(compare_directions.empty() || compare || compare_only, "SimulatedPlanRequest.compare_directions",
                  "direction lists only with compare or compare_only", "lists without a comparison");
 }

@@ -16,13 +16,10 @@ struct DirectionList {
 };
 
 /// InputError naming the file and the key for a list that is not ctk-directions/1, a name that is
-/// not a folder name of lower-case letters, digits and '-' or is one the comparison uses itself
-/// (planned, whole-sphere, random, random-N), or a direction of zero length.
+/// not a folder name of lower-case letters, digits and '-', or a direction of zero length. (The
+/// comparison refuses the names it gives its own trajectories.)
 DirectionList read_direction_list(const std::filesystem::path& file);
 
 void write_direction_list(const std::filesystem::path& file, const DirectionList& list);
-
-/// True for the names the comparison gives its own trajectories.
-bool is_reserved_trajectory_name(const std::string& name);
 
 }  // namespace ctk

@@ -39,6 +39,7 @@ struct SimulatedPlanRequest {
   bool compare = false;                                    // also acquire and score the whole-sphere and random trajectories
   bool compare_only = false;                               // score the trajectories already in `out` (no acquisition)
   int random_draws = 1;                                    // random trajectories, each a draw of its own
+  static constexpr int kMostRandomDraws = 100;
   /// ctk-directions/1 files: trajectories of one's own, acquired and scored beside the others.
   std::vector<std::filesystem::path> compare_directions;
   ComparisonOptions comparison;
