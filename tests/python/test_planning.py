@@ -25,6 +25,12 @@ def test_plan_compares_trajectories_and_writes_what_the_command_line_writes(tmp_
     ctk.write_directions(mine, "mine", ctk.planning_directions(8, "whole-sphere"))
     name, directions = ctk.read_directions(mine)
     assert name == "mine" and directions.shape == (768, 3)
+    # A list written by Python's own json module, not by ctk: read alike, directions made unit length.
+    other = tmp_path / "other.json"
+    other.write_text(json.dumps({"format": "ctk-directions/1", "name": "by-hand", "directions": [[0, 0, 2], [3, 4, 0]]}))
+    name, directions = ctk.read_directions(other)
+    assert name == "by-hand"
+    np.testing.assert_allclose(directions, [[0, 0, 1], [0.6, 0.8, 0]], rtol=0, atol=1e-15)
     result = ctk.plan(tmp_path / "py", phantoms=["sample-2"], compare=True, random_draws=2, eval_voxel_mm=2.4,
                       eval_iterations=3, compare_directions=[mine], **SMALL)
     assert not result.stopped
