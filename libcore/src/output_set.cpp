@@ -16,6 +16,8 @@
 #include <random>
 #include <stdexcept>
 
+#include "ctk/core/cancellation.hpp"
+
 namespace ctk {
 
 namespace fs = std::filesystem;
@@ -103,6 +105,7 @@ OutputSet::~OutputSet() {
   active_set = nullptr;
   std::error_code ignored;
   for (const auto& [temporary, target] : waiting_) fs::remove(temporary, ignored);
+  folders_.clear();  // each unpublished folder's hidden folder removed
 }
 
 OutputSet* OutputSet::active() { return active_set.load(); }
@@ -129,8 +132,23 @@ fs::path OutputSet::current(const fs::path& target) {
   return target;
 }
 
-void OutputSet::publish() {
+void OutputSet::add(std::unique_ptr<StagedFolder> folder) {
   const std::lock_guard lock(mutex_);
+  folders_.push_back(std::move(folder));
+}
+
+void commit_with_outputs(std::unique_ptr<StagedFolder> folder) {
+  if (OutputSet* outputs = OutputSet::active())
+    outputs->add(std::move(folder));
+  else
+    folder->commit();
+}
+
+void OutputSet::publish() {
+  throw_if_stop_requested_before_publishing();
+  const std::lock_guard lock(mutex_);
+  for (const std::unique_ptr<StagedFolder>& folder : folders_) folder->swap_in();
+  folders_.clear();
   for (auto it = waiting_.begin(); it != waiting_.end(); it = waiting_.erase(it)) {
     fs::rename(it->first, it->second);
     remove_stale_temporaries(it->second);
@@ -156,6 +174,11 @@ StagedFolder::~StagedFolder() {
 }
 
 void StagedFolder::commit() {
+  throw_if_stop_requested_before_publishing();
+  swap_in();
+}
+
+void StagedFolder::swap_in() {
   const fs::path& target = place_;
   if (!fs::exists(target)) {
     fs::rename(staging_, target);

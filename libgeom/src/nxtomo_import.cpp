@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <sstream>
 
 #include "ctk/core/cancellation.hpp"
@@ -96,21 +97,21 @@ ImportedScan import_nxtomo(const NxTomo& scan, const NxTomoPlan& plan, const fs:
   int written = 0;
   const NxTomoFrames frames(scan);
   // The frames are written into a hidden folder beside their folder and put in its place in one
-  // step once all are there: a kill leaves the earlier import's frames whole (the next import
-  // removes what it left), never two imports' frames mixed under one scan.json. Everything in the
-  // folder is the import's: an earlier import's frames go as a whole. The frames name this run,
-  // as the scan does, so that frames and a scan of different runs are refused by the readers.
+  // step when the run publishes its scan (a stop before then leaves nothing): a kill leaves the earlier import's frames whole
+  // (the next import removes what it left), never two imports' frames mixed under one scan.json. Everything in the folder is the
+  // import's: an earlier import's frames go as a whole. The frames name this run, as the scan does, so that frames and a scan of
+  // different runs are refused by the readers.
   std::vector<std::string> earlier;
   std::error_code absent;
   for (fs::directory_iterator it(folder, absent), end; !absent && it != end; it.increment(absent))
     earlier.push_back(it->path().filename().string());
-  StagedFolder staged(folder, earlier);
-  const OutputSet::Outside at_once;  // written into the hidden folder now, not held for the run's outputs
+  auto staged = std::make_unique<StagedFolder>(folder, earlier);
   auto write = [&](const Image& image, const std::string& name, bool counts) {
+    const OutputSet::Outside at_once;  // written into the hidden folder now, not held for the run's outputs
     if (counts)
-      write_image_uint16(image, staged.path() / name);
+      write_image_uint16(image, staged->path() / name);
     else
-      write_image_float(image, staged.path() / name);
+      write_image_float(image, staged->path() / name);
     return (folder / name).string();
   };
   auto copy = [&](int frame, const std::string& name) {
@@ -139,7 +140,7 @@ ImportedScan import_nxtomo(const NxTomo& scan, const NxTomoPlan& plan, const fs:
       set.dark.push_back(write(zero, "dark_zero.tif", true));
     }
   }
-  staged.commit();
+  commit_with_outputs(std::move(staged));  // with the matrices and the scan that name the frames
   ImportedScan imported = import_matrices(plan.orbit.detector, matrices, set, scan_file);
   imported.scan.written_by_run = this_run_id();
   return imported;

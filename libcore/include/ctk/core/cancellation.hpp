@@ -5,7 +5,9 @@
 // stops within a fraction of one. Nothing asks for it unless a caller does; the command line's own
 // Ctrl-C keeps its meaning (finish the iteration, keep the state).
 #include <atomic>
+#include <functional>
 #include <stdexcept>
+#include <utility>
 
 namespace ctk {
 
@@ -28,6 +30,31 @@ inline void request_stop() noexcept { detail::stop_flag().store(true); }
 inline void clear_stop_request() noexcept { detail::stop_flag().store(false); }
 inline void throw_if_stop_requested() {
   if (stop_requested()) throw Cancelled();
+}
+
+namespace detail {
+inline std::function<void()>& publish_check() {
+  thread_local std::function<void()> check;
+  return check;
+}
+}  // namespace detail
+
+/// While one lives, `look` runs on this thread just before its outputs are published: a front end
+/// whose stop requests arrive late (Python sees Ctrl-C only in its main thread, up to a poll's
+/// period after the signal) looks for one there, the last moment a stop can still leave nothing.
+class PublishCheck {
+ public:
+  explicit PublishCheck(std::function<void()> look) { detail::publish_check() = std::move(look); }
+  ~PublishCheck() { detail::publish_check() = nullptr; }
+  PublishCheck(const PublishCheck&) = delete;
+  PublishCheck& operator=(const PublishCheck&) = delete;
+};
+
+/// Called by whatever makes a run's outputs visible (output_set.hpp): a run stopped before this
+/// point publishes nothing.
+inline void throw_if_stop_requested_before_publishing() {
+  if (const std::function<void()>& look = detail::publish_check()) look();
+  throw_if_stop_requested();
 }
 
 }  // namespace ctk

@@ -3,13 +3,15 @@
 // process writes under a temporary name and waits; publish() renames them all into place in the
 // order they were written, so the file written last (the one a reader opens first) arrives last.
 // A run that fails or is interrupted before publish() leaves nothing: not one new file beside
-// older ones. A StagedFolder does the same for a folder written whole (a simulated scan): the run
+// older ones; publish() itself throws Cancelled, publishing nothing, when a stop was requested
+// (cancellation.hpp). A StagedFolder does the same for a folder written whole (a simulated scan): the run
 // writes into a hidden folder beside the target, which is swapped in at once.
 //
 // Temporary names carry the run's identity (host, process, start time, random), so two runs on
 // two hosts writing into one shared folder never write into each other's temporaries; those a
 // killed run of this host left are removed by the next run that writes the same target.
 #include <filesystem>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <utility>
@@ -24,6 +26,8 @@ const std::string& this_run_id();
 /// extension (format-by-extension writers pick the right format).
 std::filesystem::path temporary_beside(const std::filesystem::path& path);
 
+class StagedFolder;
+
 class OutputSet {
  public:
   OutputSet();   // becomes the process' active set; one at a time
@@ -31,13 +35,16 @@ class OutputSet {
   OutputSet(const OutputSet&) = delete;
   OutputSet& operator=(const OutputSet&) = delete;
 
-  /// Renames every waiting file into place, in the order written; a file written twice is published
-  /// once, at its last version.
+  /// Swaps every waiting folder in, then renames every waiting file into place, in the order
+  /// written; a file written twice is published once, at its last version.
   void publish();
   /// The set the atomic writers wait in, or nullptr.
   static OutputSet* active();
   /// Called by the atomic writers: `temporary` is complete and waits to become `target`.
   void add(std::filesystem::path temporary, std::filesystem::path target);
+  /// A folder written whole that waits for publish(), which swaps it in before the files (a scan
+  /// naming its frames arrives after them); removed with the set when it is not published.
+  void add(std::unique_ptr<StagedFolder> folder);
   /// Where `target`'s content is now: its temporary while it waits in this set, else `target`.
   std::filesystem::path current(const std::filesystem::path& target);
 
@@ -56,6 +63,7 @@ class OutputSet {
 
  private:
   std::mutex mutex_;
+  std::vector<std::unique_ptr<StagedFolder>> folders_;
   std::vector<std::pair<std::filesystem::path, std::filesystem::path>> waiting_;  // temporary, target
 };
 
@@ -75,9 +83,16 @@ class StagedFolder {
   void commit();
 
  private:
+  friend class OutputSet;
+  void swap_in();  // commit() past the last look for a stop
+
   std::filesystem::path target_, place_, staging_;  // as given; resolved; the hidden folder
   std::vector<std::string> owned_;
   bool committed_ = false;
 };
+
+/// `folder` committed with the run's outputs by the active set's publish(), or now when no set is
+/// active.
+void commit_with_outputs(std::unique_ptr<StagedFolder> folder);
 
 }  // namespace ctk
