@@ -122,10 +122,15 @@ def test_a_printed_holder_simulated_and_measured_from_python_as_the_command_line
     run([ctk_command, "holder", "measure", "--scan", s.scan_file, "--geometry", str(tmp_path / "g.json"), "--min-views", "40",
          "--out", str(tmp_path / "holder.json")])
     cli = json.loads((tmp_path / "holder.json").read_text())
-    # The same measurement; two runs of the bundle differ in the micrometres (its threads sum in
-    # another order), a tenth of what each centre states.
+    # The same measurement, to what rounding alone changes: matrices scaled by 1 + 1e-13 N(0, 1)
+    # moved the centres by 0.13-0.17 of their stated sigma RMS, one coordinate by up to 1.1
+    # (benchmarks/holder_reproducibility.py; touching spheres fitted together in a few views), and
+    # two processes may sum in other orders (0.16 at most seen between these two).
     sigma = np.array(holder["measurement"]["spheres_sigma_mm"])
-    assert np.all(np.abs(np.array(holder["spheres_mm"]) - np.array(cli["spheres_mm"])) < 0.1 * sigma)
+    apart = (np.array(holder["spheres_mm"]) - np.array(cli["spheres_mm"])) / sigma
+    assert np.sqrt(np.mean(apart ** 2)) < 0.35
+    for key in ("fitted_with", "views", "views_per_sphere"):
+        assert holder["measurement"][key] == cli["measurement"][key], key
     assert holder["format"] == "ctk-holder/1" and len(holder["measurement"]["spheres_sigma_mm"]) == 50
     with pytest.raises(ValueError, match="min_views"):
         ctk.measure_holder(s.scan_file, tmp_path / "g.json", min_views=3)
