@@ -8,7 +8,7 @@
 // iterations) on every view. Prints one line per solver; the curves go to the JSON.
 //   bench_stopping_rule [--trajectory circular|spherical] [--scale 2] [--views 360]
 //                       [--phantom shepp-logan] [--counts 1e4] [--epochs 16] [--cg-iterations 40]
-//                       [--held-out-every 32] [--lambda 0] [--methods os-sqs wls-cg] [--out F.json]
+//                       [--held-out-every 32] [--lambda 0] [--methods os-sqs wls-cg] [--result product] [--out F.json]
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -69,6 +69,14 @@ double distance(const Volume& a, const Volume& b) {
   return std::sqrt(sum);
 }
 
+// The held-out rule's result as `--result` names it; "product": as reconstruction_run asks.
+HeldOutResult result_choice(const std::string& name, const std::string& method) {
+  if (name == "last-improving") return HeldOutResult::last_improving;
+  if (name == "mean-of-last-two") return HeldOutResult::mean_of_last_two;
+  if (name == "one-before" || method == "os-sqs") return HeldOutResult::one_before;
+  return HeldOutResult::last_improving;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
@@ -92,6 +100,10 @@ int main(int argc, char** argv) try {
       ->capture_default_str();
   app.add_option("--lambda", lambda, "Identity penalty")->capture_default_str();
   app.add_option("--methods", methods, "Solvers to follow")->check(CLI::IsMember({"os-sqs", "wls-cg"}))->capture_default_str();
+  std::string result_name = "product";
+  app.add_option("--result", result_name, "The stopped run's result: as the product returns it, or another choice")
+      ->check(CLI::IsMember({"product", "last-improving", "one-before", "mean-of-last-two"}))
+      ->capture_default_str();
   app.add_option("--out", out, "JSON to write");
   CLI11_PARSE(app, argc, argv);
 
@@ -126,7 +138,7 @@ int main(int argc, char** argv) try {
       Curve c{method, hold, {}, {}, {}, {}, -1, -1};
       Volume x(p.layout), previous(p.layout);
       HeldOutFit judge(A_held, views_of(data.b, held), views_of(data.w, held));
-      if (method == "os-sqs") judge.return_mean_of_last_two();  // as reconstruction_run asks
+      judge.return_result(result_choice(result_name, method));
       const StoppingRule rule = judge.rule();
       // The volume the product would return where the rule ends the run (or at the limit).
       const auto score_result = [&] {
@@ -178,7 +190,8 @@ int main(int argc, char** argv) try {
                              {"detector", {p.cols, p.rows}},
                              {"phantom", phantom_name},
                              {"counts", counts},
-                             {"lambda", lambda}}}};
+                             {"lambda", lambda},
+                             {"result", result_name}}}};
   const auto best = [](const std::vector<double>& r) { return *std::min_element(r.begin(), r.end()); };
   for (const Curve& c : curves) {
     nlohmann::json j = c.to_json();

@@ -11,10 +11,10 @@ namespace ctk {
 
 namespace {
 
-// A mean only of iterates past the first: the start is no image of the data, and the first epoch
-// from it a blurred one still far from them (on the standard cases 1.3 to 1.6 times the second's
-// RMSE), whose mean with the second is a step back.
-bool averaged(bool mean_of_last_two, int before_best_iteration) { return mean_of_last_two && before_best_iteration >= 2; }
+// Only iterates past the first go back or into a mean: the start is no image of the data, and the
+// first epoch from it a blurred one still far from them (on the standard cases 1.3 to 1.6 times
+// the second's RMSE).
+constexpr int kFirstUsableBefore = 2;
 
 }  // namespace
 
@@ -64,7 +64,7 @@ void HeldOutFit::observe(int iteration, const Volume& x) {
   iterations_.push_back(iteration);
   fits_.push_back(fit);
   if (significant_) {
-    if (mean_of_last_two_ && best_iteration_ >= 0) {
+    if (result_ != HeldOutResult::last_improving && best_iteration_ >= 0) {
       before_best_iteration_ = best_iteration_;
       std::swap(before_best_, best_);
     }
@@ -74,26 +74,38 @@ void HeldOutFit::observe(int iteration, const Volume& x) {
   }
 }
 
-void HeldOutFit::return_mean_of_last_two() { mean_of_last_two_ = true; }
+void HeldOutFit::return_result(HeldOutResult which) { result_ = which; }
+
+std::vector<int> HeldOutFit::result_iterations() const {
+  if (result_ == HeldOutResult::last_improving || before_best_iteration_ < kFirstUsableBefore) return {best_iteration_};
+  if (result_ == HeldOutResult::one_before) return {before_best_iteration_};
+  return {before_best_iteration_, best_iteration_};
+}
 
 StoppingRule HeldOutFit::rule() const {
   return [this]() -> std::optional<std::string> {
     if (significant_) return std::nullopt;
+    const std::vector<int> result = result_iterations();
     return "the fit of " + std::to_string(views_) + " held-out views stopped improving beyond their noise after iteration " +
            std::to_string(best_iteration_) +
-           (averaged(mean_of_last_two_, before_best_iteration_) ? " (the mean of its iterate and the one before is the result)"
-                                                                : " (its iterate is the result)");
+           (result.size() == 2 ? " (the mean of its iterate and the one before is the result)"
+            : result.front() != best_iteration_
+                ? " (the iterate of " + std::to_string(result.front()) + ", the improving one before it, is the result)"
+                : " (its iterate is the result)");
   };
 }
 
 int HeldOutFit::restore_best(Volume& x) {
-  if (averaged(mean_of_last_two_, before_best_iteration_)) {
+  const std::vector<int> result = result_iterations();
+  if (result.size() == 2) {
     const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(x.data.size());
 #pragma omp parallel for schedule(static)
     for (std::ptrdiff_t i = 0; i < n; ++i) {
       const auto k = static_cast<std::size_t>(i);
       x.data[k] = 0.5f * (best_.data[k] + before_best_.data[k]);
     }
+  } else if (result.front() != best_iteration_) {  // the improving iterate before the last
+    std::swap(x, before_best_);
   } else if (best_iteration_ >= 0 && best_iteration_ != iterations_.back()) {
     std::swap(x, best_);
   }
@@ -104,9 +116,7 @@ int HeldOutFit::restore_best(Volume& x) {
 
 nlohmann::json HeldOutFit::report() const {
   nlohmann::json r = {{"views", views_}, {"iterations", iterations_}, {"fit", fits_}, {"best_iteration", best_iteration_}};
-  r["result_iterations"] = averaged(mean_of_last_two_, before_best_iteration_)
-                               ? std::vector<int>{before_best_iteration_, best_iteration_}
-                               : std::vector<int>{best_iteration_};
+  r["result_iterations"] = result_iterations();
   if (!view_indices_.empty()) r["view_indices"] = view_indices_;
   return r;
 }

@@ -327,8 +327,8 @@ std::string ReconstructionRun::brief() const {
   s << to_string(plan.method) << " on " << views_used.size() << " views, " << plan.layout.size[0] << " x " << plan.layout.size[1]
     << " x " << plan.layout.size[2] << " voxels: " << solver.stop_reason;
   if (plan.method != ReconstructionMethod::fdk && !solver.iterations.empty()) {
-    // Stopped by held-out views, the volume is the iterate they judged best: its cost, not the last's.
-    const int kept = held_out.is_null() ? solver.iterations.back().iteration : held_out["best_iteration"].get<int>();
+    // Stopped by held-out views, the volume is the iterate the rule returns: its cost, not the last's.
+    const int kept = held_out.is_null() ? solver.iterations.back().iteration : held_out["result_iterations"].back().get<int>();
     const auto at = std::find_if(solver.iterations.begin(), solver.iterations.end(),
                                  [kept](const IterationLog& l) { return l.iteration == kept; });
     s << "; cost " << solver.iterations.front().cost << " -> "
@@ -371,6 +371,7 @@ ReconstructionPlan plan_reconstruction(const ScanDescription& scan, const Geomet
   return plan;
 }
 
+// NOLINTNEXTLINE(readability-function-size): the workflow's steps in their order (plan, read, hold out, solve, report)
 ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry& geometry, const ReconstructionOptions& o,
                                      const ReconstructionHooks& hooks, const Communicator& ranks) {
   const auto start = std::chrono::steady_clock::now();
@@ -414,7 +415,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   if (o.stops_on_held_out_views()) {
     judge = hold_out_views(plan, geometry, scan.detector, o.held_out_every, views, views_split, volume_centre, ranks, m);
     if (judge) views = spread_views();
-    if (judge && plan.method == ReconstructionMethod::os_sqs) judge->return_mean_of_last_two();
+    if (judge && plan.method == ReconstructionMethod::os_sqs) judge->return_result(HeldOutResult::one_before);
   }
   run.views_used = views.indices;
 

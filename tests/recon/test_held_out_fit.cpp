@@ -167,13 +167,13 @@ TEST(HeldOutFit, EndsTheRunAtTheFirstIterationThatDidNotImproveAndReturnsTheLast
   EXPECT_NEAR(r["fit"][3].get<double>(), 4 * r["fit"][1].get<double>(), 1e-6 * r["fit"][3].get<double>());
 }
 
-TEST(HeldOutFit, AnOsSqsResultIsTheMeanOfTheLastTwoImprovingIteratesPastTheFirst) {
+TEST(HeldOutFit, ReturnsTheMeanOfTheLastTwoImprovingIteratesPastTheFirstWhenAsked) {
   const ExactHeldOut h;
   const NoisyScan& s = h.s;
   const Volume quarter = h.truth_times(0.25f), half = h.truth_times(0.5f), twice = h.truth_times(2.0f);
   {  // improving at 1, 2 and 3, not at 4: the mean of 2 and 3
     HeldOutFit judge(h.A, h.exact, ProjectionStack());
-    judge.return_mean_of_last_two();
+    judge.return_result(HeldOutResult::mean_of_last_two);
     judge.observe(0, Volume(s.layout));
     judge.observe(1, quarter);
     judge.observe(2, half);
@@ -190,7 +190,43 @@ TEST(HeldOutFit, AnOsSqsResultIsTheMeanOfTheLastTwoImprovingIteratesPastTheFirst
   }
   {  // improving at 1 and 2: the first is too far from the data to average, so iterate 2 alone
     HeldOutFit judge(h.A, h.exact, ProjectionStack());
-    judge.return_mean_of_last_two();
+    judge.return_result(HeldOutResult::mean_of_last_two);
+    judge.observe(0, Volume(s.layout));
+    judge.observe(1, half);
+    judge.observe(2, s.truth);
+    judge.observe(3, twice);
+    ASSERT_TRUE(judge.rule()());
+    Volume x = twice;
+    EXPECT_EQ(judge.restore_best(x), 2);
+    EXPECT_EQ(x.data, s.truth.data);
+    EXPECT_EQ(judge.report()["result_iterations"], nlohmann::json({2}));
+  }
+}
+
+TEST(HeldOutFit, ReturnsTheImprovingIterateBeforeTheLastWhenItIsPastTheFirst) {
+  const ExactHeldOut h;
+  const NoisyScan& s = h.s;
+  const Volume quarter = h.truth_times(0.25f), half = h.truth_times(0.5f), twice = h.truth_times(2.0f);
+  {  // improving at 1, 2 and 3, not at 4: iterate 2
+    HeldOutFit judge(h.A, h.exact, ProjectionStack());
+    judge.return_result(HeldOutResult::one_before);
+    judge.observe(0, Volume(s.layout));
+    judge.observe(1, quarter);
+    judge.observe(2, half);
+    judge.observe(3, s.truth);
+    judge.observe(4, twice);
+    const auto reason = judge.rule()();
+    ASSERT_TRUE(reason);
+    EXPECT_NE(reason->find("after iteration 3 (the iterate of 2, the improving one before it, is the result)"), std::string::npos)
+        << *reason;
+    Volume x = twice;
+    EXPECT_EQ(judge.restore_best(x), 3);
+    EXPECT_EQ(x.data, half.data);
+    EXPECT_EQ(judge.report()["result_iterations"], nlohmann::json({2}));
+  }
+  {  // improving at 1 and 2: the first is no result, so iterate 2
+    HeldOutFit judge(h.A, h.exact, ProjectionStack());
+    judge.return_result(HeldOutResult::one_before);
     judge.observe(0, Volume(s.layout));
     judge.observe(1, half);
     judge.observe(2, s.truth);
@@ -222,7 +258,7 @@ Stopped run_with_and_without_the_rule(bool os_sqs) {
   std::vector<double> rmse;
   for (const bool ruled : {false, true}) {
     HeldOutFit judge(A_held, held.line_integrals, held.weights);
-    if (os_sqs) judge.return_mean_of_last_two();  // as reconstruction_run asks
+    if (os_sqs) judge.return_result(HeldOutResult::one_before);  // as reconstruction_run asks
     Volume x(s.layout);
     const IterationCallback follow = [&](const IterationLog& log) {
       judge.observe(log.iteration, x);
