@@ -4,7 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/measure/measurements.hpp"
@@ -111,6 +114,7 @@ TEST(HeldOutViews, AreOneOrderedSubsetSpreadOverTheCircle) {
   // Four views of a full circle, as lines (a view and its opposite see the same line integrals),
   // 45 deg apart give or take the views' spacing of 2.8125 deg.
   std::vector<double> lines;
+  lines.reserve(held.size());
   for (int v : held) lines.push_back(std::fmod(v * 2.8125, 180.0));
   std::sort(lines.begin(), lines.end());
   for (std::size_t k = 0; k < lines.size(); ++k) {
@@ -167,76 +171,69 @@ TEST(HeldOutFit, EndsTheRunAtTheFirstIterationThatDidNotImproveAndReturnsTheLast
   EXPECT_NEAR(r["fit"][3].get<double>(), 4 * r["fit"][1].get<double>(), 1e-6 * r["fit"][3].get<double>());
 }
 
+// A judge returning `result`, shown the start, the `improving` iterates (each closer to the
+// truth) and then one that is worse: why it stopped, the last improving iteration, the volume it
+// returns and what the report says it is.
+struct Judged {
+  std::optional<std::string> reason;
+  int last_improving = -1;
+  Volume x;
+  nlohmann::json result_iterations;
+};
+
+Judged judged(const ExactHeldOut& h, HeldOutResult result, const std::vector<Volume>& improving) {
+  HeldOutFit judge(h.A, h.exact, ProjectionStack());
+  judge.return_result(result);
+  judge.observe(0, Volume(h.s.layout));
+  int iteration = 1;
+  for (const Volume& v : improving) judge.observe(iteration++, v);
+  Judged out;
+  out.x = h.truth_times(2.0f);
+  judge.observe(iteration, out.x);
+  out.reason = judge.rule()();
+  out.last_improving = judge.restore_best(out.x);
+  out.result_iterations = judge.report()["result_iterations"];
+  return out;
+}
+
 TEST(HeldOutFit, ReturnsTheMeanOfTheLastTwoImprovingIteratesPastTheFirstWhenAsked) {
   const ExactHeldOut h;
   const NoisyScan& s = h.s;
-  const Volume quarter = h.truth_times(0.25f), half = h.truth_times(0.5f), twice = h.truth_times(2.0f);
-  {  // improving at 1, 2 and 3, not at 4: the mean of 2 and 3
-    HeldOutFit judge(h.A, h.exact, ProjectionStack());
-    judge.return_result(HeldOutResult::mean_of_last_two);
-    judge.observe(0, Volume(s.layout));
-    judge.observe(1, quarter);
-    judge.observe(2, half);
-    judge.observe(3, s.truth);
-    judge.observe(4, twice);
-    const auto reason = judge.rule()();
-    ASSERT_TRUE(reason);
-    EXPECT_NE(reason->find("after iteration 3 (the mean of its iterate and the one before is the result)"), std::string::npos)
-        << *reason;
-    Volume x = twice;
-    EXPECT_EQ(judge.restore_best(x), 3);
-    for (std::size_t i = 0; i < x.data.size(); ++i) ASSERT_FLOAT_EQ(x.data[i], 0.75f * s.truth.data[i]) << i;
-    EXPECT_EQ(judge.report()["result_iterations"], nlohmann::json({2, 3}));
-  }
-  {  // improving at 1 and 2: the first is too far from the data to average, so iterate 2 alone
-    HeldOutFit judge(h.A, h.exact, ProjectionStack());
-    judge.return_result(HeldOutResult::mean_of_last_two);
-    judge.observe(0, Volume(s.layout));
-    judge.observe(1, half);
-    judge.observe(2, s.truth);
-    judge.observe(3, twice);
-    ASSERT_TRUE(judge.rule()());
-    Volume x = twice;
-    EXPECT_EQ(judge.restore_best(x), 2);
-    EXPECT_EQ(x.data, s.truth.data);
-    EXPECT_EQ(judge.report()["result_iterations"], nlohmann::json({2}));
-  }
+  // Improving at 1, 2 and 3, not at 4: the mean of 2 and 3.
+  const Judged three = judged(h, HeldOutResult::mean_of_last_two, {h.truth_times(0.25f), h.truth_times(0.5f), s.truth});
+  ASSERT_TRUE(three.reason);
+  EXPECT_NE(three.reason->find("after iteration 3 (the mean of its iterate and the one before is the result)"), std::string::npos)
+      << *three.reason;
+  EXPECT_EQ(three.last_improving, 3);
+  for (std::size_t i = 0; i < three.x.data.size(); ++i) ASSERT_FLOAT_EQ(three.x.data[i], 0.75f * s.truth.data[i]) << i;
+  EXPECT_EQ(three.result_iterations, nlohmann::json({2, 3}));
+  // Improving at 1 and 2: the first is too far from the data to average, so iterate 2 alone.
+  const Judged two = judged(h, HeldOutResult::mean_of_last_two, {h.truth_times(0.5f), s.truth});
+  ASSERT_TRUE(two.reason);
+  EXPECT_EQ(two.last_improving, 2);
+  EXPECT_EQ(two.x.data, s.truth.data);
+  EXPECT_EQ(two.result_iterations, nlohmann::json({2}));
 }
 
 TEST(HeldOutFit, ReturnsTheImprovingIterateBeforeTheLastWhenItIsPastTheFirst) {
   const ExactHeldOut h;
   const NoisyScan& s = h.s;
-  const Volume quarter = h.truth_times(0.25f), half = h.truth_times(0.5f), twice = h.truth_times(2.0f);
-  {  // improving at 1, 2 and 3, not at 4: iterate 2
-    HeldOutFit judge(h.A, h.exact, ProjectionStack());
-    judge.return_result(HeldOutResult::one_before);
-    judge.observe(0, Volume(s.layout));
-    judge.observe(1, quarter);
-    judge.observe(2, half);
-    judge.observe(3, s.truth);
-    judge.observe(4, twice);
-    const auto reason = judge.rule()();
-    ASSERT_TRUE(reason);
-    EXPECT_NE(reason->find("after iteration 3 (the iterate of 2, the improving one before it, is the result)"), std::string::npos)
-        << *reason;
-    Volume x = twice;
-    EXPECT_EQ(judge.restore_best(x), 3);
-    EXPECT_EQ(x.data, half.data);
-    EXPECT_EQ(judge.report()["result_iterations"], nlohmann::json({2}));
-  }
-  {  // improving at 1 and 2: the first is no result, so iterate 2
-    HeldOutFit judge(h.A, h.exact, ProjectionStack());
-    judge.return_result(HeldOutResult::one_before);
-    judge.observe(0, Volume(s.layout));
-    judge.observe(1, half);
-    judge.observe(2, s.truth);
-    judge.observe(3, twice);
-    ASSERT_TRUE(judge.rule()());
-    Volume x = twice;
-    EXPECT_EQ(judge.restore_best(x), 2);
-    EXPECT_EQ(x.data, s.truth.data);
-    EXPECT_EQ(judge.report()["result_iterations"], nlohmann::json({2}));
-  }
+  // Improving at 1, 2 and 3, not at 4: iterate 2.
+  const Volume half = h.truth_times(0.5f);
+  const Judged three = judged(h, HeldOutResult::one_before, {h.truth_times(0.25f), half, s.truth});
+  ASSERT_TRUE(three.reason);
+  EXPECT_NE(three.reason->find("after iteration 3 (the iterate of 2, the improving one before it, is the result)"),
+            std::string::npos)
+      << *three.reason;
+  EXPECT_EQ(three.last_improving, 3);
+  EXPECT_EQ(three.x.data, half.data);
+  EXPECT_EQ(three.result_iterations, nlohmann::json({2}));
+  // Improving at 1 and 2: the first is no result, so iterate 2.
+  const Judged two = judged(h, HeldOutResult::one_before, {half, s.truth});
+  ASSERT_TRUE(two.reason);
+  EXPECT_EQ(two.last_improving, 2);
+  EXPECT_EQ(two.x.data, s.truth.data);
+  EXPECT_EQ(two.result_iterations, nlohmann::json({2}));
 }
 
 // On the noisy scan, each solver on the views not held out, with the rule and without it (to
