@@ -73,8 +73,8 @@ double distance(const Volume& a, const Volume& b) {
 HeldOutResult result_choice(const std::string& name, const std::string& method) {
   if (name == "last-improving") return HeldOutResult::last_improving;
   if (name == "mean-of-last-two") return HeldOutResult::mean_of_last_two;
-  if (name == "one-before" || method == "os-sqs") return HeldOutResult::one_before;
-  return HeldOutResult::last_improving;
+  if (name == "one-before") return HeldOutResult::one_before;
+  return held_out_result(reconstruction_method(method));
 }
 
 }  // namespace

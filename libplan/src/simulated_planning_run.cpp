@@ -261,8 +261,8 @@ void SimulatedPlanRequest::validate() const {
   require_option(kvp >= 16 && kvp <= 150, "SimulatedPlanRequest.kvp", "16 to 150 kV", kvp);
   require_option(filter_al_mm >= 0, "SimulatedPlanRequest.filter_al_mm", "0 or more", filter_al_mm);
   require_option(flat_counts >= 1, "SimulatedPlanRequest.flat_counts", "at least 1", flat_counts);
-  require_option(random_draws >= 1 && random_draws <= kMostRandomDraws, "SimulatedPlanRequest.random_draws", "1 to 100",
-                 random_draws);
+  require_option(random_draws >= 1 && random_draws <= kMostRandomDraws, "SimulatedPlanRequest.random_draws",
+                 ("1 to " + std::to_string(kMostRandomDraws)).c_str(), random_draws);
   require_choice(compare_directions.empty() || compare || compare_only, "SimulatedPlanRequest.compare_directions",
                  "direction lists only with compare or compare_only", "lists without a comparison");
 }

@@ -74,6 +74,12 @@ void HeldOutFit::observe(int iteration, const Volume& x) {
   }
 }
 
+HeldOutResult held_out_result(ReconstructionMethod method) {
+  return method == ReconstructionMethod::os_sqs ? HeldOutResult::one_before : HeldOutResult::last_improving;
+}
+
+int held_out_volumes(HeldOutResult which) { return which == HeldOutResult::last_improving ? 1 : 2; }
+
 void HeldOutFit::return_result(HeldOutResult which) { result_ = which; }
 
 std::vector<int> HeldOutFit::result_iterations() const {

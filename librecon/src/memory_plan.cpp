@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "ctk/recon/held_out_fit.hpp"
+
 namespace ctk {
 
 const char* to_string(ReconstructionMethod m) {
@@ -73,8 +75,7 @@ MemoryPlan plan_memory(const SolverShape& solver, const VolumeLayout& layout, in
   // Ray tables and images being read: small; keep 100 MB of margin for the process itself.
   plan.other_bytes = 100'000'000;
   if (solver.held_out_every > 0) {
-    // The last improving iterate; OS-SQS also the one before it (its result).
-    plan.volumes += solver.method == ReconstructionMethod::os_sqs ? 2 : 1;
+    plan.volumes += held_out_volumes(held_out_result(solver.method));
     plan.other_bytes += 3 * (plan.stack_bytes / static_cast<std::size_t>(solver.held_out_every) +
                              static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols) * sizeof(float));
   }

@@ -415,7 +415,7 @@ ReconstructionRun run_reconstruction(const ScanDescription& scan, const Geometry
   if (o.stops_on_held_out_views()) {
     judge = hold_out_views(plan, geometry, scan.detector, o.held_out_every, views, views_split, volume_centre, ranks, m);
     if (judge) views = spread_views();
-    if (judge && plan.method == ReconstructionMethod::os_sqs) judge->return_result(HeldOutResult::one_before);
+    if (judge) judge->return_result(held_out_result(plan.method));
   }
   run.views_used = views.indices;
 

@@ -255,7 +255,7 @@ Stopped run_with_and_without_the_rule(bool os_sqs) {
   std::vector<double> rmse;
   for (const bool ruled : {false, true}) {
     HeldOutFit judge(A_held, held.line_integrals, held.weights);
-    if (os_sqs) judge.return_result(HeldOutResult::one_before);  // as reconstruction_run asks
+    judge.return_result(held_out_result(os_sqs ? ReconstructionMethod::os_sqs : ReconstructionMethod::wls_cg));
     Volume x(s.layout);
     const IterationCallback follow = [&](const IterationLog& log) {
       judge.observe(log.iteration, x);

@@ -32,6 +32,7 @@
 #include "ctk/geom/projection_matrix.hpp"
 #include "ctk/proj/projection_operator.hpp"
 #include "ctk/recon/iteration_log.hpp"
+#include "ctk/recon/memory_plan.hpp"
 
 namespace ctk {
 
@@ -51,6 +52,12 @@ enum class HeldOutResult {
   one_before,        // the improving iterate before that one, when it is past the first iteration
   mean_of_last_two,  // the mean of those two, when both are past the first iteration
 };
+
+/// What a default run of `method` returns (above): OS-SQS the improving epoch before the last, the
+/// others their last improving iterate.
+HeldOutResult held_out_result(ReconstructionMethod method);
+/// The volumes a HeldOutFit returning `which` keeps beside the solver's own.
+int held_out_volumes(HeldOutResult which);
 
 class HeldOutFit {
  public:
