@@ -170,3 +170,34 @@ def test_an_import_killed_half_way_leaves_the_earlier_one_whole(tmp_path, ctk_co
     assert ctk_import(ctk_command, nexus, out).returncode == 0
     assert not hidden(), [p.name for p in hidden()]
 
+
+
+def test_ctrl_c_after_the_last_frame_of_an_h5py_file_leaves_nothing(tmp_path):
+    """Ctrl-C in Python just after the last frame is copied, when only the publishing step can
+    still see it (Python notices a signal up to a poll later): five such imports of a file h5py
+    wrote leave nothing, and an import left alone then publishes the scan, its matrices and frames."""
+    nexus = tmp_path / "scan.nx"
+    write_nxtomo(nexus)
+    probe = """
+import os, signal, sys, pathlib
+import ctk
+nexus, folder = sys.argv[1], pathlib.Path(sys.argv[2])
+def ctrl_c(done, total):
+    if done == total:
+        os.kill(os.getpid(), signal.SIGINT)
+for k in range(5):
+    try:
+        ctk.import_nxtomo(nexus, folder / "interrupted.json", progress=ctrl_c)
+        sys.exit(f"no KeyboardInterrupt in run {k}")
+    except KeyboardInterrupt:
+        pass
+    left = sorted(p.name for p in folder.iterdir() if p.name != "scan.nx")
+    assert left == [], (k, left)
+scan = ctk.import_nxtomo(nexus, folder / "whole.json")
+assert scan["projections"]["count"] == PROJECTIONS and "h5py" not in sys.modules
+print(sorted(p.name for p in folder.iterdir()))
+""".replace("PROJECTIONS", str(FRAMES - 2))
+    done = subprocess.run([sys.executable, "-c", probe, str(nexus), str(tmp_path)], capture_output=True, text=True,
+                          env=os.environ, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["['scan.nx',", "'whole.frames',", "'whole.json',", "'whole.matrices.json']"]
