@@ -36,6 +36,10 @@ from diagnosis_population import cpu_name, cpu_slug  # noqa: E402
 
 MU_60KEV = {"pom": 0.027, "abs": 0.020, "pvc": 0.046, "aluminium": 0.075, "iron": 0.95, "copper": 1.43}
 METALS = {"aluminium", "iron", "copper"}
+# The gains scored: the RMSE over the sample region, the edge gradient, and the RMSE outside the
+# absorbers and off their neighbours (what the trajectory controls where beam hardening sets the
+# metal's own level; the thesis' streaks).
+METRICS = ("rmse", "edge_gradient", "rmse_outside_absorbers")
 BORE_MM, HALF_HEIGHT_MM = 24.0, 40.0  # inside the reference holder's wall (25 mm) and spheres' band
 
 
@@ -107,7 +111,9 @@ def gain_over_whole_sphere(comparison, name):
     t = comparison["trajectories"]
     whole, x = t["whole-sphere"], t[name]
     return {"rmse": (whole["rmse_per_mm"] - x["rmse_per_mm"]) / whole["rmse_per_mm"],
-            "edge_gradient": (x["edge_gradient_per_mm2"] - whole["edge_gradient_per_mm2"]) / whole["edge_gradient_per_mm2"]}
+            "edge_gradient": (x["edge_gradient_per_mm2"] - whole["edge_gradient_per_mm2"]) / whole["edge_gradient_per_mm2"],
+            "rmse_outside_absorbers": (whole["rmse_outside_absorbers_per_mm"] - x["rmse_outside_absorbers_per_mm"])
+            / whole["rmse_outside_absorbers_per_mm"]}
 
 
 def gains(comparison):
@@ -120,7 +126,7 @@ def gains(comparison):
 
     draws = [gain(name) for name in sorted(t) if name.startswith("random")]
     return {"planned": gain("planned"), "random": draws,
-            "best_random": {k: max(d[k] for d in draws) for k in ("rmse", "edge_gradient")},
+            "best_random": {k: max(d[k] for d in draws) for k in METRICS},
             "whole_sphere": {"rmse_per_mm": whole["rmse_per_mm"], "edge_gradient_per_mm2": whole["edge_gradient_per_mm2"]}}
 
 
@@ -137,12 +143,25 @@ def summary(cases, rng):
     if not cases:
         return out
     for what in ("planned", "best_random"):
-        for metric in ("rmse", "edge_gradient"):
+        for metric in METRICS:
             values = [c["gains"][what][metric] for c in cases]
             out[f"{what}_{metric}"] = {"mean": float(np.mean(values)), "interval_95": bootstrap_interval(values, rng)}
-    for metric in ("rmse", "edge_gradient"):
+    for metric in METRICS:
         values = [np.mean([d[metric] for d in c["gains"]["random"]]) for c in cases]
         out[f"random_{metric}"] = {"mean": float(np.mean(values)), "interval_95": bootstrap_interval(values, rng)}
+    return out
+
+
+def paired_against(cases, earlier, rng):
+    """The planned gains of this run less those of an earlier run (another planner setting) on the
+    samples both scored, per metric: mean, 95 % interval and on how many samples this run did better."""
+    before = {c["seed"]: c["gains"]["planned"] for c in earlier["cases"]}
+    common = [c for c in cases if c["seed"] in before]
+    out = {"samples": len(common), "against": earlier.get("plan_options", ""), "command": earlier.get("command", "")}
+    for metric in METRICS:
+        d = [c["gains"]["planned"][metric] - before[c["seed"]][metric] for c in common]
+        out[metric] = {"mean": float(np.mean(d)), "interval_95": bootstrap_interval(d, rng),
+                       "better_on": int(sum(x > 0 for x in d))}
     return out
 
 
@@ -181,6 +200,9 @@ def main():
     p.add_argument("--random-draws", type=int, default=3)
     p.add_argument("--plan-options", default="", help="more `ctk plan` options, e.g. '--views 60 --cols 360 --rows 360 --pitch 1.2'")
     p.add_argument("--json", help="results file (default: benchmarks/results/planning_population-<cpu>.json)")
+    p.add_argument("--rescore", action="store_true",
+                   help="score the samples already compared in --work (their comparison.json) without planning again")
+    p.add_argument("--against", help="an earlier results file on the same seeds: the planned gains compared sample by sample")
     a = p.parse_args()
     work = Path(a.work)
     work.mkdir(parents=True, exist_ok=True)
@@ -192,21 +214,25 @@ def main():
         start = time.time()
         command = [a.ctk, "plan", "--out", str(out), "--phantom", str(sample), "--compare", "--random-draws",
                    str(a.random_draws), "--seed", str(seed), *a.plan_options.split()]
-        subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        rescored = a.rescore and (out / "comparison.json").exists()
+        if not rescored:
+            subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         comparison = json.loads((out / "comparison.json").read_text())
         case = {"seed": seed, "half": "choice" if seed % 2 == 0 else "report", "sample": json.loads(sample.read_text()),
-                "gains": gains(comparison), "seconds": time.time() - start}
+                "gains": gains(comparison), "seconds": None if rescored else time.time() - start}
         cases.append(case)
         g = case["gains"]
         draws = ", ".join(f"{100 * d['rmse']:+.1f}" for d in g["random"])
         print(f"sample {seed}: planned RMSE {100 * g['planned']['rmse']:+.1f} %, edge {100 * g['planned']['edge_gradient']:+.1f} %;"
-              f" random RMSE {draws} %; {case['seconds']:.0f} s", flush=True)
+              f" random RMSE {draws} %; " + ("rescored" if rescored else f"{case['seconds']:.0f} s"), flush=True)
     rng = np.random.default_rng(0)
     result = {"cpu": cpu_name(), "command": " ".join(sys.argv), "plan_options": a.plan_options,
               "random_draws": a.random_draws, "cases": cases,
               "population": summary(cases, rng),
               "report_half": summary([c for c in cases if c["half"] == "report"], rng),
               "choice_half": summary([c for c in cases if c["half"] == "choice"], rng)}
+    if a.against:
+        result["paired"] = paired_against(cases, json.loads(Path(a.against).read_text()), rng)
     results = Path(__file__).resolve().parent / "results"
     file = Path(a.json) if a.json else results / f"planning_population-{cpu_slug()}.json"
     file.write_text(json.dumps(result, indent=1) + "\n")
@@ -216,6 +242,11 @@ def main():
         parts = [f"{k} {100 * v['mean']:+.1f} % [{100 * v['interval_95'][0]:+.1f}, {100 * v['interval_95'][1]:+.1f}]"
                  for k, v in s.items() if k != "samples"]
         print(name + ": " + "; ".join(parts))
+    if a.against:
+        d = result["paired"]
+        print(f"against {d['against'] or 'the defaults'} ({d['samples']} samples): " + "; ".join(
+            f"{m} {100 * d[m]['mean']:+.2f} points [{100 * d[m]['interval_95'][0]:+.2f}, {100 * d[m]['interval_95'][1]:+.2f}],"
+            f" better on {d[m]['better_on']}" for m in METRICS))
     print(f"wrote {file}")
 
 
