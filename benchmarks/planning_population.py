@@ -157,7 +157,8 @@ def paired_against(cases, earlier, rng):
     samples both scored, per metric: mean, 95 % interval and on how many samples this run did better."""
     before = {c["seed"]: c["gains"]["planned"] for c in earlier["cases"]}
     common = [c for c in cases if c["seed"] in before]
-    out = {"samples": len(common), "against": earlier.get("plan_options", ""), "command": earlier.get("command", "")}
+    out = {"samples": len(common), "against": earlier.get("plan_options") or "no plan options",
+           "command": earlier.get("command", "")}
     for metric in METRICS:
         d = [c["gains"]["planned"][metric] - before[c["seed"]][metric] for c in common]
         out[metric] = {"mean": float(np.mean(d)), "interval_95": bootstrap_interval(d, rng),
@@ -244,7 +245,7 @@ def main():
         print(name + ": " + "; ".join(parts))
     if a.against:
         d = result["paired"]
-        print(f"against {d['against'] or 'the defaults'} ({d['samples']} samples): " + "; ".join(
+        print(f"against the run with {d['against']} ({d['samples']} samples): " + "; ".join(
             f"{m} {100 * d[m]['mean']:+.2f} points [{100 * d[m]['interval_95'][0]:+.2f}, {100 * d[m]['interval_95'][1]:+.2f}],"
             f" better on {d[m]['better_on']}" for m in METRICS))
     print(f"wrote {file}")

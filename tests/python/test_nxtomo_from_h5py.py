@@ -171,7 +171,6 @@ def test_an_import_killed_half_way_leaves_the_earlier_one_whole(tmp_path, ctk_co
     assert not hidden(), [p.name for p in hidden()]
 
 
-
 def test_ctrl_c_after_the_last_frame_of_an_h5py_file_leaves_nothing(tmp_path):
     """Ctrl-C in Python just after the last frame is copied, when only the publishing step can
     still see it (Python notices a signal up to a poll later): five such imports of a file h5py
