@@ -36,10 +36,16 @@ from diagnosis_population import cpu_name, cpu_slug  # noqa: E402
 
 MU_60KEV = {"pom": 0.027, "abs": 0.020, "pvc": 0.046, "aluminium": 0.075, "iron": 0.95, "copper": 1.43}
 METALS = {"aluminium", "iron", "copper"}
-# The gains scored: the RMSE over the sample region, the edge gradient, and the RMSE outside the
+# The gains scored: the RMSE over the sample region, the edge gradient, the RMSE outside the
 # absorbers and off their neighbours (what the trajectory controls where beam hardening sets the
-# metal's own level; the thesis' streaks).
-METRICS = ("rmse", "edge_gradient", "rmse_outside_absorbers")
+# metal's own level; the thesis' streaks), and the RMSE with each material at the level the
+# reconstruction gives it (what is left of blur, streaks and noise once the spectrum's levels,
+# which every material's hardening sets, are taken out; libplan's trajectory_quality.hpp).
+# Each: the comparison's key, and whether lower is better.
+METRIC_KEYS = {"rmse": ("rmse_per_mm", True), "edge_gradient": ("edge_gradient_per_mm2", False),
+               "rmse_outside_absorbers": ("rmse_outside_absorbers_per_mm", True),
+               "rmse_level_matched": ("rmse_level_matched_per_mm", True)}
+METRICS = tuple(METRIC_KEYS)
 BORE_MM, HALF_HEIGHT_MM = 24.0, 40.0  # inside the reference holder's wall (25 mm) and spheres' band
 
 
@@ -110,10 +116,11 @@ def gain_over_whole_sphere(comparison, name):
     """The gains of one compared trajectory over the whole sphere, positive where it is better."""
     t = comparison["trajectories"]
     whole, x = t["whole-sphere"], t[name]
-    return {"rmse": (whole["rmse_per_mm"] - x["rmse_per_mm"]) / whole["rmse_per_mm"],
-            "edge_gradient": (x["edge_gradient_per_mm2"] - whole["edge_gradient_per_mm2"]) / whole["edge_gradient_per_mm2"],
-            "rmse_outside_absorbers": (whole["rmse_outside_absorbers_per_mm"] - x["rmse_outside_absorbers_per_mm"])
-            / whole["rmse_outside_absorbers_per_mm"]}
+    out = {}
+    for metric, (key, lower_is_better) in METRIC_KEYS.items():
+        if whole.get(key):  # a comparison written before the figure existed lacks it
+            out[metric] = (whole[key] - x[key] if lower_is_better else x[key] - whole[key]) / whole[key]
+    return out
 
 
 def gains(comparison):
@@ -126,7 +133,7 @@ def gains(comparison):
 
     draws = [gain(name) for name in sorted(t) if name.startswith("random")]
     return {"planned": gain("planned"), "random": draws,
-            "best_random": {k: max(d[k] for d in draws) for k in METRICS},
+            "best_random": {k: max(d[k] for d in draws) for k in draws[0]},
             "whole_sphere": {"rmse_per_mm": whole["rmse_per_mm"], "edge_gradient_per_mm2": whole["edge_gradient_per_mm2"]}}
 
 
@@ -138,15 +145,21 @@ def bootstrap_interval(values, rng, rounds=4000):
     return [float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))]
 
 
+def scored_by_all(cases):
+    """The metrics every case has (results compared before a figure existed lack it)."""
+    return [m for m in METRICS if all(m in c["gains"]["planned"] for c in cases)]
+
+
 def summary(cases, rng):
     out = {"samples": len(cases)}
     if not cases:
         return out
+    metrics = scored_by_all(cases)
     for what in ("planned", "best_random"):
-        for metric in METRICS:
+        for metric in metrics:
             values = [c["gains"][what][metric] for c in cases]
             out[f"{what}_{metric}"] = {"mean": float(np.mean(values)), "interval_95": bootstrap_interval(values, rng)}
-    for metric in METRICS:
+    for metric in metrics:
         values = [np.mean([d[metric] for d in c["gains"]["random"]]) for c in cases]
         out[f"random_{metric}"] = {"mean": float(np.mean(values)), "interval_95": bootstrap_interval(values, rng)}
     return out
@@ -159,7 +172,7 @@ def paired_against(cases, earlier, rng):
     common = [c for c in cases if c["seed"] in before]
     out = {"samples": len(common), "against": earlier.get("plan_options") or "no plan options",
            "command": earlier.get("command", "")}
-    for metric in METRICS:
+    for metric in [m for m in scored_by_all(common) if all(m in before[c["seed"]] for c in common)]:
         d = [c["gains"]["planned"][metric] - before[c["seed"]][metric] for c in common]
         out[metric] = {"mean": float(np.mean(d)), "interval_95": bootstrap_interval(d, rng),
                        "better_on": int(sum(x > 0 for x in d))}
@@ -168,14 +181,17 @@ def paired_against(cases, earlier, rng):
 
 def picture(cases, file, bars=(("planned", "planned", "tab:blue"),)):
     """Per sample, the gains of each (key, label, colour) in `bars` as bars and the random draws as
-    dots, RMSE and edge gradient side by side."""
+    dots: RMSE, edge gradient and (where scored) the level-matched RMSE side by side."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    panels = [(m, t) for m, t in (("rmse", "RMSE gain over the whole sphere"), ("edge_gradient", "edge-gradient gain"),
+                                  ("rmse_level_matched", "gain in RMSE, levels matched"))
+              if all(m in c["gains"][key] for c in cases for key, _, _ in bars)]
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.5 * len(panels), 4))
     x = np.arange(len(cases))
     width = 0.8 / (len(bars) + 1)
-    for ax, metric, title in zip(axes, ("rmse", "edge_gradient"), ("RMSE gain over the whole sphere", "edge-gradient gain")):
+    for ax, (metric, title) in zip(axes, panels):
         ax.axhline(0, color="black", lw=0.8)
         for k, (key, label, colour) in enumerate(bars):
             ax.bar(x - 0.4 + width * (k + 0.5), [100 * c["gains"][key][metric] for c in cases], width, label=label,
@@ -202,40 +218,46 @@ def main():
     p.add_argument("--plan-options", default="", help="more `ctk plan` options, e.g. '--views 60 --cols 360 --rows 360 --pitch 1.2'")
     p.add_argument("--json", help="results file (default: benchmarks/results/planning_population-<cpu>.json)")
     p.add_argument("--rescore", action="store_true",
-                   help="score the samples already compared in --work (their comparison.json) without planning again")
+                   help="score the samples already compared in --work again with this build (`ctk plan --compare-only`:"
+                        " their trajectories reconstructed and scored anew) without planning or acquiring again")
     p.add_argument("--against", help="an earlier results file on the same seeds: the planned gains compared sample by sample")
     a = p.parse_args()
     work = Path(a.work)
     work.mkdir(parents=True, exist_ok=True)
+    results = Path(__file__).resolve().parent / "results"
+    file = Path(a.json) if a.json else results / f"planning_population-{cpu_slug()}.json"
+    # A rescore keeps the command and the planning times the results file already holds.
+    earlier = json.loads(file.read_text()) if a.rescore and file.exists() else {"cases": []}
+    earlier_seconds = {c["seed"]: c["seconds"] for c in earlier["cases"]}
     cases = []
     for seed in a.seeds:
         sample = work / f"sample-{seed}.json"
         sample.write_text(json.dumps(random_sample(seed), indent=2))
         out = work / f"sample-{seed}"
         start = time.time()
-        command = [a.ctk, "plan", "--out", str(out), "--phantom", str(sample), "--compare", "--random-draws",
-                   str(a.random_draws), "--seed", str(seed), *a.plan_options.split()]
         rescored = a.rescore and (out / "comparison.json").exists()
-        if not rescored:
-            subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        command = [a.ctk, "plan", "--out", str(out), "--phantom", str(sample), "--compare-only" if rescored else "--compare",
+                   "--random-draws", str(a.random_draws), "--seed", str(seed), *a.plan_options.split()]
+        subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         comparison = json.loads((out / "comparison.json").read_text())
         case = {"seed": seed, "half": "choice" if seed % 2 == 0 else "report", "sample": json.loads(sample.read_text()),
-                "gains": gains(comparison), "seconds": None if rescored else time.time() - start}
+                "gains": gains(comparison),
+                "seconds": earlier_seconds.get(seed) if rescored else time.time() - start}
         cases.append(case)
         g = case["gains"]
         draws = ", ".join(f"{100 * d['rmse']:+.1f}" for d in g["random"])
         print(f"sample {seed}: planned RMSE {100 * g['planned']['rmse']:+.1f} %, edge {100 * g['planned']['edge_gradient']:+.1f} %;"
               f" random RMSE {draws} %; " + ("rescored" if rescored else f"{case['seconds']:.0f} s"), flush=True)
     rng = np.random.default_rng(0)
-    result = {"cpu": cpu_name(), "command": " ".join(sys.argv), "plan_options": a.plan_options,
+    result = {"cpu": cpu_name(), "command": earlier.get("command", " ".join(sys.argv)), "plan_options": a.plan_options,
               "random_draws": a.random_draws, "cases": cases,
               "population": summary(cases, rng),
               "report_half": summary([c for c in cases if c["half"] == "report"], rng),
               "choice_half": summary([c for c in cases if c["half"] == "choice"], rng)}
+    if "command" in earlier:
+        result["rescored_with"] = " ".join(sys.argv)
     if a.against:
         result["paired"] = paired_against(cases, json.loads(Path(a.against).read_text()), rng)
-    results = Path(__file__).resolve().parent / "results"
-    file = Path(a.json) if a.json else results / f"planning_population-{cpu_slug()}.json"
     file.write_text(json.dumps(result, indent=1) + "\n")
     picture(cases, file.with_suffix(".png"))
     for name in ("population", "report_half"):
@@ -247,7 +269,7 @@ def main():
         d = result["paired"]
         print(f"against the run with {d['against']} ({d['samples']} samples): " + "; ".join(
             f"{m} {100 * d[m]['mean']:+.2f} points [{100 * d[m]['interval_95'][0]:+.2f}, {100 * d[m]['interval_95'][1]:+.2f}],"
-            f" better on {d[m]['better_on']}" for m in METRICS))
+            f" better on {d[m]['better_on']}" for m in METRICS if m in d))
     print(f"wrote {file}")
 
 

@@ -45,11 +45,13 @@ void report_trajectory(const PlanningRun& r) {
 }
 
 void report_comparison(const TrajectoryComparison& c) {
-  std::cout << "trajectory      views  RMSE (1/mm)  RMSE outside absorbers  edge gradient (1/mm^2)  profile gradient (1/mm^2)\n";
+  std::cout << "trajectory      views  RMSE (1/mm)  RMSE outside absorbers  RMSE levels matched  edge gradient (1/mm^2)"
+               "  profile gradient (1/mm^2)\n";
   for (std::size_t i = 0; i < c.names.size(); ++i) {
     const TrajectoryQuality& q = c.quality[i];
-    std::printf("%-14s %6d  %11.5f  %22.5f  %22.5f  %25.5f\n", c.names[i].c_str(), c.views, q.rmse_per_mm,
-                q.rmse_outside_absorbers_per_mm, q.edge_gradient_per_mm2, q.profile_gradient_per_mm2);
+    std::printf("%-14s %6d  %11.5f  %22.5f  %19.5f  %22.5f  %25.5f\n", c.names[i].c_str(), c.views, q.rmse_per_mm,
+                q.rmse_outside_absorbers_per_mm, q.rmse_level_matched_per_mm, q.edge_gradient_per_mm2,
+                q.profile_gradient_per_mm2);
   }
   std::printf("truth's edge gradient: %.5f, profile gradient: %.5f\n", c.quality.front().truth_edge_gradient_per_mm2,
               c.quality.front().truth_profile_gradient_per_mm2);

@@ -154,6 +154,7 @@ nlohmann::json random_draw_summary(const std::vector<TrajectoryQuality>& quality
   };
   figure("rmse_per_mm", &TrajectoryQuality::rmse_per_mm, true);
   figure("rmse_outside_absorbers_per_mm", &TrajectoryQuality::rmse_outside_absorbers_per_mm, true);
+  figure("rmse_level_matched_per_mm", &TrajectoryQuality::rmse_level_matched_per_mm, true);
   figure("edge_gradient_per_mm2", &TrajectoryQuality::edge_gradient_per_mm2, false);
   figure("profile_gradient_per_mm2", &TrajectoryQuality::profile_gradient_per_mm2, false);
   return summary;
@@ -171,6 +172,7 @@ TrajectoryComparison compare(const SimulatedPlanRequest& o, const std::vector<Di
   c.views = read_scan(o.out / "planned" / "scan.json").projections.count;
   const VolumeLayout layout = evaluation_layout(o.comparison, simulation);
   const Volume truth = voxelised(sample, layout);
+  const std::vector<MaterialVolume> materials = voxelised_per_material(sample, layout);
   write_volume(truth, o.out / "truth.nrrd");
   const SampleRegion region;
   const std::array<int, 3> through = centre_of_mass_voxel(truth, region);
@@ -189,11 +191,15 @@ TrajectoryComparison compare(const SimulatedPlanRequest& o, const std::vector<Di
   nlohmann::json table = nlohmann::json::object();
   std::vector<ComparedTrajectory> pictured;
   for (std::size_t i = 0; i < c.names.size(); ++i) {
-    const TrajectoryQuality q = trajectory_quality(volumes[i], truth, region, through, absorber_above);
+    const TrajectoryQuality q = trajectory_quality(volumes[i], truth, region, through, absorber_above, materials);
     c.quality.push_back(q);
+    nlohmann::json levels = nlohmann::json::object();
+    for (const MaterialLevel& m : q.material_levels) levels[m.material.empty() ? "(no material)" : m.material] = m.level;
     table[c.names[i]] = {{"views", c.views},
                          {"rmse_per_mm", q.rmse_per_mm},
                          {"rmse_outside_absorbers_per_mm", q.rmse_outside_absorbers_per_mm},
+                         {"rmse_level_matched_per_mm", q.rmse_level_matched_per_mm},
+                         {"material_levels", levels},
                          {"edge_gradient_per_mm2", q.edge_gradient_per_mm2},
                          {"profile_gradient_per_mm2", q.profile_gradient_per_mm2}};
     if (i < 3) pictured.push_back({c.names[i], &volumes[i], q});  // planned, whole sphere, the first random draw

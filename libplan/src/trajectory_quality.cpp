@@ -1,5 +1,6 @@
 #include "ctk/plan/trajectory_quality.hpp"
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <stdexcept>
 
@@ -117,16 +118,56 @@ void add_line_profiles(const Volume& x, const Volume& truth, const SampleRegion&
   }
 }
 
+// x ~ sum_m a_m t_m by least squares over the region (normal equations: a handful of materials),
+// then the RMSE of what is left.
+void add_level_matched(const Volume& x, const SampleRegion& region, const std::vector<MaterialVolume>& materials,
+                       TrajectoryQuality& q) {
+  const auto m_count = static_cast<Eigen::Index>(materials.size());
+  for (const MaterialVolume& m : materials)
+    if (!(m.volume.layout == x.layout))
+      throw std::invalid_argument("trajectory_quality: the material '" + m.material + "' must have the reconstruction's layout");
+  std::vector<std::size_t> inside;
+  const auto& n = x.layout.size;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i)
+        if (region.contains(x.layout.centre_of(i, j, k))) inside.push_back(x.index(i, j, k));
+  if (inside.empty()) return;
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m_count, m_count);
+  Eigen::VectorXd right = Eigen::VectorXd::Zero(m_count);
+  for (const std::size_t v : inside)
+    for (Eigen::Index a = 0; a < m_count; ++a) {
+      const double ta = materials[static_cast<std::size_t>(a)].volume.data[v];
+      if (ta == 0) continue;
+      right(a) += ta * x.data[v];
+      for (Eigen::Index b = 0; b < m_count; ++b) normal(a, b) += ta * materials[static_cast<std::size_t>(b)].volume.data[v];
+    }
+  // A material absent from the region has a zero row: the pseudo-inverse leaves its level at 0.
+  const Eigen::VectorXd level = normal.completeOrthogonalDecomposition().solve(right);
+  double sum2 = 0;
+  for (const std::size_t v : inside) {
+    double fitted = 0;
+    for (Eigen::Index a = 0; a < m_count; ++a) fitted += level(a) * materials[static_cast<std::size_t>(a)].volume.data[v];
+    const double d = x.data[v] - fitted;
+    sum2 += d * d;
+  }
+  q.rmse_level_matched_per_mm = std::sqrt(sum2 / static_cast<double>(inside.size()));
+  for (Eigen::Index a = 0; a < m_count; ++a)
+    if (normal(a, a) > 0) q.material_levels.push_back({materials[static_cast<std::size_t>(a)].material, level(a)});
+}
+
 }  // namespace
 
 TrajectoryQuality trajectory_quality(const Volume& x, const Volume& truth, const SampleRegion& region,
-                                     const std::array<int, 3>& through, float absorber_above_per_mm) {
+                                     const std::array<int, 3>& through, float absorber_above_per_mm,
+                                     const std::vector<MaterialVolume>& materials) {
   if (!(x.layout == truth.layout))
     throw std::invalid_argument("trajectory_quality: the truth must have the reconstruction's layout");
   TrajectoryQuality q;
   add_rmse(x, truth, region, absorber_above_per_mm, q);
   add_edge_gradients(x, truth, region, q);
   add_line_profiles(x, truth, region, through, q);
+  if (!materials.empty()) add_level_matched(x, region, materials, q);
   return q;
 }
 

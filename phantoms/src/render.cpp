@@ -163,4 +163,21 @@ Volume voxelised(const Phantom& phantom, const VolumeLayout& layout) {
   return v;
 }
 
+std::vector<MaterialVolume> voxelised_per_material(const Phantom& phantom, const VolumeLayout& layout) {
+  std::vector<Phantom> parts;
+  std::vector<std::string> materials;
+  for (const Primitive& p : phantom.primitives) {
+    const auto at = std::find(materials.begin(), materials.end(), p.material);
+    if (at == materials.end()) {
+      materials.push_back(p.material);
+      parts.push_back({phantom.name + " (" + p.material + ")", {p}});
+    } else {
+      parts[static_cast<std::size_t>(at - materials.begin())].primitives.push_back(p);
+    }
+  }
+  std::vector<MaterialVolume> out;
+  for (std::size_t m = 0; m < parts.size(); ++m) out.push_back({materials[m], voxelised(parts[m], layout)});
+  return out;
+}
+
 }  // namespace ctk

@@ -43,6 +43,7 @@ from ._ctk import (  # noqa: F401  (re-exported)
     read_scan,
     read_volume,
     voxelise,
+    voxelise_per_material,
     write_geometry,
     write_rtk_geometry,
     write_scan,
@@ -56,7 +57,7 @@ from ._reports import read_report
 _log = logging.getLogger("ctk")
 
 __all__ = [
-    "BinnedProjection", "CalibrationResult", "DiagnosisResult", "InputError", "ReconstructionResult", "RefineResult", "SimulationResult", "calibrate", "diagnose", "measure_holder", "reconstruct", "simulate", "circular_matrices", "import_nikon", "import_nxtomo", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection", "read_volume", "voxelise", "write_volume",
+    "BinnedProjection", "CalibrationResult", "DiagnosisResult", "InputError", "ReconstructionResult", "RefineResult", "SimulationResult", "calibrate", "diagnose", "measure_holder", "reconstruct", "simulate", "circular_matrices", "import_nikon", "import_nxtomo", "import_scan", "refine", "Operator", "Projector", "SolveResult", "WeightedProjection", "read_volume", "voxelise", "voxelise_per_material", "write_volume",
     "Measurements", "__build__", "__version__", "as_linear_operator", "load_measurements", "read_image", "cone_vec_from_matrices", "fdk", "geometry_matrices",
     "matrices_from_cone_vec", "read_cone_vec", "read_diagnosis", "read_geometry", "read_nxtomo", "read_rtk_geometry", "read_scan", "read_xtekct",
     "os_sqs", "sirt", "wls_cg", "write_geometry", "write_rtk_geometry", "write_scan",

@@ -142,7 +142,8 @@ def read_plan(file: str | os.PathLike) -> dict:
 
 def read_plan_comparison(file: str | os.PathLike) -> dict:
     """comparison.json (ctk-plan-comparison/1) as a dict: per trajectory the RMSE, the RMSE outside
-    the absorbers and the edge and profile gradients, and the random draws' spread."""
+    the absorbers, the RMSE with each material at its reconstructed level (and those levels), the
+    edge and profile gradients, and the random draws' spread."""
     return read_report(file, "ctk-plan-comparison/1", {"trajectories": dict, "random_draws": dict})
 
 

@@ -181,6 +181,27 @@ TEST(Phantoms, NoBuiltinSampleHasNegativeAttenuationAnywhere) {
   }
 }
 
+TEST(Phantoms, TheTruthSplitByMaterialAddsUpToTheTruth) {
+  // Sample 1: ABS parts with holes cut in them, an aluminium plate; 1 mm voxels over its extent.
+  const Phantom p = builtin_phantom("sample-1");
+  const VolumeLayout layout = VolumeLayout::centred({48, 48, 64}, Eigen::Vector3d::Constant(1.0));
+  const Volume whole = voxelised(p, layout);
+  const std::vector<MaterialVolume> parts = voxelised_per_material(p, layout);
+  ASSERT_EQ(parts.size(), 2u);
+  EXPECT_EQ(parts[0].material, "abs");
+  EXPECT_EQ(parts[1].material, "aluminium");
+  double largest_gap = 0, abs_peak = 0, aluminium_peak = 0;
+  for (std::size_t v = 0; v < whole.data.size(); ++v) {
+    largest_gap =
+        std::max(largest_gap, std::abs(static_cast<double>(parts[0].volume.data[v] + parts[1].volume.data[v] - whole.data[v])));
+    abs_peak = std::max(abs_peak, static_cast<double>(parts[0].volume.data[v]));
+    aluminium_peak = std::max(aluminium_peak, static_cast<double>(parts[1].volume.data[v]));
+  }
+  EXPECT_LT(largest_gap, 1e-7);
+  EXPECT_NEAR(abs_peak, 0.015, 1e-7);  // each share holds its own material alone
+  EXPECT_NEAR(aluminium_peak, 0.070, 1e-7);
+}
+
 TEST(Phantoms, BadFilesNameTheKey) {
   const auto dir = testing::scratch_dir();
   testing::write_text(dir / "bad.json",

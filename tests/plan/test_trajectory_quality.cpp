@@ -2,7 +2,8 @@
 // scores no error and the truth's own edge gradient, a brighter copy a proportionally steeper
 // one, a blurred copy a shallower one (along the blurred axis only), and the three-profile figure agrees with the all-lines one
 // on a cube (every line through it crosses the same edges). The RMSE outside the absorbers
-// leaves out the absorbers' own level and their face neighbours, and only those.
+// leaves out the absorbers' own level and their face neighbours, and only those. The level-matched
+// RMSE forgives each material a level of its own and nothing else.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -82,6 +83,56 @@ TEST(TrajectoryQuality, RmseOutsideAbsorbersLeavesOutTheirLevelAndTheirNeighbour
   // 32768 voxels less the cube's 512 and the 6 x 64 face neighbours.
   EXPECT_NEAR(q.rmse_outside_absorbers_per_mm, std::sqrt((0.02 * 0.02 + 0.01 * 0.01) / (32768.0 - 512 - 384)), 1e-9);
   EXPECT_NEAR(q.rmse_per_mm, std::sqrt((512 * 0.02 * 0.02 + 2 * 0.02 * 0.02 + 0.01 * 0.01) / 32768.0), 1e-9);
+}
+
+TEST(TrajectoryQuality, LevelMatchedRmseForgivesEachMaterialItsLevelAndNothingElse) {
+  // Two materials: the cube (PVC) and a slab beside it (aluminium); the truth is their sum.
+  const VolumeLayout layout = cube().layout;
+  MaterialVolume pvc{"pvc", cube()}, aluminium{"aluminium", Volume(layout)}, absent{"copper", Volume(layout)};
+  for (int k = 4; k < 8; ++k)
+    for (int j = 10; j < 22; ++j)
+      for (int i = 10; i < 22; ++i) aluminium.volume.at(i, j, k) = 0.08f;
+  Volume truth(layout), x(layout);
+  for (std::size_t v = 0; v < truth.data.size(); ++v) {
+    truth.data[v] = pvc.volume.data[v] + aluminium.volume.data[v];
+    x.data[v] = 1.6f * pvc.volume.data[v] + 1.3f * aluminium.volume.data[v];  // each hardened to its own level
+  }
+  const SampleRegion region;
+  const std::array<int, 3> through = centre_of_mass_voxel(truth, region);
+  const std::vector<MaterialVolume> materials{pvc, aluminium, absent};
+
+  // Levels alone: nothing left once matched, and the levels are those put in.
+  const TrajectoryQuality levels = trajectory_quality(x, truth, region, through, kNoAbsorber, materials);
+  // Against the truth: 0.6 x 0.05 off on the cube's 512 voxels, 0.3 x 0.08 on the slab's 576.
+  EXPECT_NEAR(levels.rmse_per_mm, std::sqrt((512 * 0.03 * 0.03 + 576 * 0.024 * 0.024) / 32768.0), 1e-7);
+  EXPECT_NEAR(levels.rmse_level_matched_per_mm, 0.0, 1e-7);
+  ASSERT_EQ(levels.material_levels.size(), 2u);  // copper has no voxel: left out
+  EXPECT_EQ(levels.material_levels[0].material, "pvc");
+  EXPECT_NEAR(levels.material_levels[0].level, 1.6, 1e-5);
+  EXPECT_EQ(levels.material_levels[1].material, "aluminium");
+  EXPECT_NEAR(levels.material_levels[1].level, 1.3, 1e-5);
+
+  // An error in the air is not a level: it counts in full and leaves the levels alone.
+  Volume streaked = x;
+  streaked.at(3, 4, 5) = 0.02f;
+  const TrajectoryQuality s = trajectory_quality(streaked, truth, region, through, kNoAbsorber, materials);
+  EXPECT_NEAR(s.rmse_level_matched_per_mm, 0.02 / std::sqrt(32768.0), 1e-8);
+  EXPECT_NEAR(s.material_levels[0].level, 1.6, 1e-5);
+
+  // Blur is not a level either: it is still counted, and on the hardened copy it grows with the
+  // levels (by a factor between the two materials' 1.3 and 1.6).
+  const TrajectoryQuality blurred = trajectory_quality(blurred_along_x(truth), truth, region, through, kNoAbsorber, materials);
+  const TrajectoryQuality blurred_hardened =
+      trajectory_quality(blurred_along_x(x), truth, region, through, kNoAbsorber, materials);
+  EXPECT_GT(blurred.rmse_level_matched_per_mm, 0.001);
+  const double growth = blurred_hardened.rmse_level_matched_per_mm / blurred.rmse_level_matched_per_mm;
+  EXPECT_GT(growth, 1.3);
+  EXPECT_LT(growth, 1.6);
+
+  // Without the split nothing is matched; a split on another grid is refused.
+  EXPECT_EQ(trajectory_quality(x, truth, region, through, kNoAbsorber).rmse_level_matched_per_mm, 0.0);
+  const std::vector<MaterialVolume> elsewhere{{"pvc", Volume(VolumeLayout::centred({8, 8, 8}, Eigen::Vector3d::Constant(0.5)))}};
+  EXPECT_THROW(trajectory_quality(x, truth, region, through, kNoAbsorber, elsewhere), std::invalid_argument);
 }
 
 }  // namespace

@@ -273,3 +273,20 @@ def test_voxelise_puts_a_phantom_where_read_volume_says_its_voxels_are(tmp_path)
         ctk.voxelise([str(phantom)], (0, 2, 2), (1.0, 1.0, 1.0), (0.0, 0.0, 0.0))
     with pytest.raises(ctk.InputError, match="not a built-in phantom"):
         ctk.voxelise(["no-such-phantom"], (2, 2, 2), (1.0, 1.0, 1.0), (0.0, 0.0, 0.0))
+
+
+def test_voxelise_per_material_splits_the_truth_by_material(tmp_path):
+    # A PVC block with a hole cut in it (the hole is PVC too) and a copper bead beside it: two
+    # materials, each its primitives alone, adding up to the whole.
+    phantom = tmp_path / "two.json"
+    phantom.write_text(json.dumps({"format": "ctk-phantom/1", "primitives": [
+        {"type": "box", "center_mm": [0, 0, 5], "size_mm": [6, 6, 6], "attenuation_per_mm": 0.046, "material": "pvc"},
+        {"type": "cylinder", "center_mm": [0, 0, 5], "radius_mm": 1, "height_mm": 6, "attenuation_per_mm": -0.046,
+         "material": "pvc"},
+        {"type": "sphere", "center_mm": [6, 0, 5], "radius_mm": 1.5, "attenuation_per_mm": 1.43, "material": "copper"}]}))
+    grid = ((12, 12, 20), (1.0, 1.0, 1.0), (-6.0, -6.0, 0.0))
+    parts = ctk.voxelise_per_material([str(phantom)], *grid)
+    assert list(parts) == ["pvc", "copper"]
+    np.testing.assert_allclose(parts["pvc"] + parts["copper"], ctk.voxelise([str(phantom)], *grid), atol=1e-7)
+    assert parts["pvc"].max() == pytest.approx(0.046) and parts["pvc"].min() >= 0  # the hole inside its block
+    assert parts["copper"].max() == pytest.approx(1.43) and parts["copper"][5, 6, 6] == 0  # the block's centre

@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>
+#include <string>
 
 #include "ctk/core/float_buffer.hpp"
 
@@ -48,6 +49,13 @@ struct Volume {
            static_cast<std::size_t>(layout.size[0]) *
                (static_cast<std::size_t>(j) + static_cast<std::size_t>(layout.size[1]) * static_cast<std::size_t>(k));
   }
+};
+
+/// One material's share of a volume made of several (the truth split by material: the shares add
+/// up to the whole).
+struct MaterialVolume {
+  std::string material;  // empty for a share whose material is not named
+  Volume volume;
 };
 
 }  // namespace ctk

@@ -9,6 +9,7 @@
 // materials at that energy, and the pixel reports -log of the signal-weighted transmission, so
 // thick or dense parts harden the beam (their line integral grows less than their path).
 #include <optional>
+#include <vector>
 
 #include "ctk/core/image_io.hpp"
 #include "ctk/core/volume.hpp"
@@ -33,5 +34,10 @@ Image render_line_integrals(const Phantom& phantom, const ProjectionMatrix& P, c
 /// The truth on a voxel grid: each voxel the mean attenuation at 2 x 2 x 2 points inside it (a
 /// face through the voxel counts by the share of points on each side).
 Volume voxelised(const Phantom& phantom, const VolumeLayout& layout);
+
+/// The truth split by the primitives' `material` (those without one share the empty name), in the
+/// order each first appears: each share is its primitives alone, holes included (a hole is made of
+/// the material it is cut from), and the shares add up to `voxelised(phantom, layout)`.
+std::vector<MaterialVolume> voxelised_per_material(const Phantom& phantom, const VolumeLayout& layout);
 
 }  // namespace ctk
