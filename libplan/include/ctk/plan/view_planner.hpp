@@ -30,7 +30,8 @@
 // +0.8 %, better on 7 and 8 of 12 samples; neither difference is beyond the samples' spread
 // (docs/planning/README.md, "On samples nobody tuned it on"). With each material's level
 // matched (trajectory_quality.hpp) f = 0.5 also gains most on the even seeds (+3.0 %, f = 0
-// +2.1 %), and on the odd seeds the planner's gain over the whole sphere is +1.3 % [+0.2, +2.9].
+// +2.1 %), and on the odd seeds the planner's gain over the whole sphere is +1.3 % (bootstrap
+// [+0.2, +2.9], t interval [-0.3, +2.9]).
 // Why m is 4: with no absorber the draw should spread views as evenly as the whole-sphere order
 // does. At m = 1 (weights rising only as g^2 near a view) the draws left gaps and clusters, and
 // an evenly spread whole sphere beat the planned walnut (README, "Planning").
