@@ -60,6 +60,8 @@ VOXEL_MM, VOLUME_SHAPE = 1.0, (120, 60, 60)  # (z, y, x): the holder's tube and 
 REGION_RADIUS_MM, REGION_HALF_HEIGHT_MM = 23.5, 45.0  # the comparison's sample region
 PENALTY, ITERATIONS = 3.0, 20  # the comparison's reconstruction
 ABSORBER_ABOVE_PER_MM = 2 * 0.027  # the comparison's absorbers: twice the holder's POM wall
+# Per --score: the gain the summary judges the planner on, and how the picture names the search.
+SCORES = {"level-matched": ("rmse_level_matched", "RMSE, levels matched"), "rmse": ("rmse", "RMSE")}
 STREAK_SHELL_MM = 5.0  # the shell around the absorbers where their streaks are scored
 
 
@@ -123,9 +125,11 @@ class Proxy:
                               indexing="ij")
         self.region = (np.hypot(x, y) <= REGION_RADIUS_MM) & (np.abs(z) <= REGION_HALF_HEIGHT_MM)
         self.evaluations = 0
-        # The truth per material over the region (columns), for the level-matched score.
+        # The truth per material over the region (columns) and its pseudo-inverse, once: the levels
+        # of a reconstruction are then one product per evaluation.
         parts = ctk.voxelise_per_material([str(sample_file)], VOLUME_SHAPE, (VOXEL_MM,) * 3, self.origin)
         self.materials = np.stack([t[self.region] for t in parts.values()], axis=1).astype(np.float64)
+        self.levels_of = np.linalg.pinv(self.materials)
         self.score = {"level-matched": self.level_matched_rmse, "rmse": self.rmse}[score]
 
     def projector(self, views):
@@ -145,8 +149,7 @@ class Proxy:
         """The RMSE against the truth with each material at its least-squares level (libplan's
         trajectory_quality.hpp)."""
         inside = x[self.region].astype(np.float64)
-        levels = np.linalg.lstsq(self.materials, inside, rcond=None)[0]
-        return float(np.sqrt(np.mean((inside - self.materials @ levels) ** 2)))
+        return float(np.sqrt(np.mean((inside - self.materials @ (self.levels_of @ inside)) ** 2)))
 
 
 def error_share_in_absorbers(proxy, x, absorber_above_per_mm):
@@ -296,7 +299,7 @@ def main():
     p.add_argument("--views", type=int, default=100)
     p.add_argument("--random-draws", type=int, default=3)
     p.add_argument("--budget", type=int, default=60, help="reconstructions the oracle's search may spend per sample")
-    p.add_argument("--score", choices=("level-matched", "rmse"), default="level-matched",
+    p.add_argument("--score", choices=tuple(SCORES), default="level-matched",
                    help="what the search lowers: the RMSE with each material at its reconstructed level, or the plain RMSE")
     p.add_argument("--out", type=Path)
     p.add_argument("--rescore", action="store_true",
@@ -326,12 +329,11 @@ def main():
 
 def write_result(result, cases, out):
     """The cases with the population's and each half's summary, and the picture beside them."""
-    key = {"level-matched": "rmse_level_matched", "rmse": "rmse"}[result.get("score", "rmse")]
+    key, searched_on = SCORES[result.get("score", "rmse")]
     result.update({"cases": cases, "population": summary(cases, key),
                    "report_half": summary([c for c in cases if c["half"] == "report"], key),
                    "choice_half": summary([c for c in cases if c["half"] == "choice"], key)})
     out.write_text(json.dumps(result, indent=1) + "\n")
-    searched_on = {"level-matched": "RMSE, levels matched", "rmse": "RMSE"}[result.get("score", "rmse")]
     picture(cases, out.with_suffix(".png"),
             bars=(("oracle", f"oracle (searched on {searched_on})", "tab:green"), ("planned", "planned", "tab:blue")))
     print(json.dumps(result["population"], indent=1))
