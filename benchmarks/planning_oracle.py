@@ -63,6 +63,8 @@ ABSORBER_ABOVE_PER_MM = 2 * 0.027  # the comparison's absorbers: twice the holde
 # Per --score: the gain the summary judges the planner on, and how the picture names the search.
 SCORES = {"level-matched": ("rmse_level_matched", "RMSE, levels matched"), "rmse": ("rmse", "RMSE")}
 STREAK_SHELL_MM = 5.0  # the shell around the absorbers where their streaks are scored
+COARSE_SIZE, COARSE_VOXEL_MM = 128, 0.75  # the planner's picture (`ctk plan` defaults)
+RULE_DRAWS = 4  # seeds of the planner's rule drawn per picture in the rule check
 
 
 def run(command, log):
@@ -202,6 +204,50 @@ def oracle_search(proxy, depth, n, budget, rng, log):
     return members, start, best, share, history, whole_sphere
 
 
+def nearest_pool_views(directions, pool):
+    """The pool's views nearest each direction (the scout's nside-2 centres lie up to 4 deg from
+    a pool cell; the draws are pool cells), each once."""
+    return list(dict.fromkeys(int(np.argmax(pool @ d)) for d in directions))
+
+
+def truth_picture(sample_file):
+    """The truth on the planner's coarse grid, the holder with it (its wall is the planner's
+    yardstick for absorbers): what `ctk.plan_on_picture` reads when the rule is checked apart from
+    its estimate."""
+    origin = (-(COARSE_SIZE - 1) / 2 * COARSE_VOXEL_MM,) * 3
+    return ctk.voxelise(["helix-holder", str(sample_file)], (COARSE_SIZE,) * 3, (COARSE_VOXEL_MM,) * 3, origin)
+
+
+def rule_gains(proxy, picture_of_sample, pool, views, whole, draws=RULE_DRAWS, **settings):
+    """The planner's rule (`ctk.plan_on_picture` at `settings`, seeds 1 to `draws`) drawing from a
+    picture of the sample, each trajectory mapped to the pool's nearest views and scored by the
+    proxy: gains over the whole sphere's score `whole`, one per draw."""
+    reachable = lambda d: abs(d[2]) < AXIS_EXCLUSION_COS  # noqa: E731  the pool's own rule
+    gains = []
+    for seed in range(1, draws + 1):
+        members = nearest_pool_views(ctk.plan_on_picture(picture_of_sample, reachable=reachable, views=views,
+                                                         seed=seed, **settings), pool)
+        gains.append((whole - proxy.score(proxy.reconstruct(members))) / whole)
+    return gains
+
+
+def rule_check(proxy, work, sample_file, pool, views):
+    """Where the planner's gap to the oracle lies, on the search's own score: the planner's rule at
+    its defaults drawing from the truth as its picture and from its own last coarse reconstruction
+    (the run's `coarse.nrrd`), and the planned trajectory itself, each mapped to the pool's nearest
+    views and scored like the oracle. Gains over the whole sphere's score, positive where better."""
+    whole = proxy.score(proxy.reconstruct(list(range(views))))
+    own, _ = ctk.read_volume(work / "plan" / "planned" / "coarse.nrrd")
+    out = {"proxy_score_whole_sphere_per_mm": whole}
+    for name, picture_of_sample in (("rule_on_truth", truth_picture(sample_file)), ("rule_on_own_picture", own)):
+        gains = rule_gains(proxy, picture_of_sample, pool, views, whole)
+        out[name] = {"mean": float(np.mean(gains)), "draws": gains}
+    planned = json.loads((work / "plan" / "planned" / "trajectory.json").read_text())
+    members = nearest_pool_views([v["direction_holder"] for v in planned["views"] if v.get("calibrated")], pool)
+    out["planned_on_pool"] = (whole - proxy.score(proxy.reconstruct(members))) / whole
+    return out
+
+
 def streaks_near_absorbers(plan_folder, names):
     """The thesis' metal-streak figure, per trajectory: the RMSE against the truth in a shell of
     STREAK_SHELL_MM around the absorbers, off the voxels touching them (where streaks from dense
@@ -258,6 +304,7 @@ def one_sample(ctk_bin, work, seed, views, random_draws, budget, score, log):
          "--compare", "--random-draws", str(random_draws), "--compare-directions", str(work / "oracle.json")],
         work / "plan.log")
     gains, whole_sphere_figures = scored(out)
+    rule = rule_check(proxy, work, sample_file, directions, views)
     return {"seed": seed, "half": "choice" if seed % 2 == 0 else "report", "sample": sample,
             "gains": gains, "whole_sphere": whole_sphere_figures,
             "search": {"evaluations": proxy.evaluations, "pool_views": len(directions), "score": score,
@@ -267,6 +314,7 @@ def one_sample(ctk_bin, work, seed, views, random_draws, budget, score, log):
                        "optical_depth_quantiles": [float(q) for q in np.quantile(depth, [0, 0.5, 0.9, 1])],
                        "history": history,
                        "seconds": search_seconds},
+            "rule_check": rule,
             "seconds": time.time() - start}
 
 
@@ -285,6 +333,12 @@ def summary(cases, key):
                     for f in figures}
     out["random"] = {f: mean_interval([np.mean([r[f] for r in c["gains"]["random"]]) for c in cases
                                        if c["gains"]["random"][0].get(f) is not None]) for f in figures}
+    if cases and all("rule_check" in c for c in cases):
+        out["search_score"] = {
+            "oracle": mean_interval([c["search"]["proxy_gain"] for c in cases]),
+            "rule_on_truth": mean_interval([c["rule_check"]["rule_on_truth"]["mean"] for c in cases]),
+            "rule_on_own_picture": mean_interval([c["rule_check"]["rule_on_own_picture"]["mean"] for c in cases]),
+            "planned_on_pool": mean_interval([c["rule_check"]["planned_on_pool"] for c in cases])}
     strong = [c for c in cases if c["gains"]["oracle"].get(key, 0) >= 0.10]
     out[f"planned_share_of_oracle_where_oracle_gains_10_percent_{key}"] = [
         {"seed": c["seed"], "share": c["gains"]["planned"][key] / c["gains"]["oracle"][key]} for c in strong]
@@ -304,12 +358,20 @@ def main():
     p.add_argument("--out", type=Path)
     p.add_argument("--rescore", action="store_true",
                    help="score the runs already in --work again (the figures of this script), rewriting --out")
+    p.add_argument("--rule-check", action="store_true",
+                   help="with --rescore: the planner's rule on the truth and on its own picture, scored on the pool "
+                        "(rule_check per case; about 20 s per sample)")
     a = p.parse_args()
     out = a.out or Path(__file__).resolve().parent / "results" / f"planning_oracle-{cpu_slug()}.json"
     if a.rescore:
         result = json.loads(out.read_text())
         for c in result["cases"]:
-            c["gains"], c["whole_sphere"] = scored(a.work / f"seed-{c['seed']}" / "plan")
+            work = a.work / f"seed-{c['seed']}"
+            c["gains"], c["whole_sphere"] = scored(work / "plan")
+            if a.rule_check:
+                proxy = Proxy(work / "pool" / "scan.json", work / "sample.json", result.get("score", "rmse"))
+                c["rule_check"] = rule_check(proxy, work, work / "sample.json", pool_directions(), result["views"])
+                print(f"seed {c['seed']}: {json.dumps(c['rule_check'])}", flush=True)
         write_result(result, result["cases"], out)
         return
     cases = []

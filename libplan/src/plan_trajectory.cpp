@@ -8,6 +8,7 @@
 #include "ctk/core/error.hpp"
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/measure/projection_reading.hpp"
+#include "ctk/plan/planner_picture.hpp"
 
 namespace ctk {
 
@@ -15,6 +16,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+DamageGeometry damage_geometry(const PandaSetup& setup) {
+  DamageGeometry g;
+  g.source_to_isocentre_mm = setup.source_to_isocentre_mm;
+  g.source_to_detector_mm = setup.source_to_detector_mm;
+  return g;
+}
 
 class Loop {
  public:
@@ -76,17 +84,9 @@ class Loop {
   double refresh() {
     const auto start = Clock::now();
     recon_.update();
-    segmentation_ = segment_absorbers(recon_.volume(), o_.segmentation);
-    DamageGeometry g;
-    g.source_to_isocentre_mm = s_.setup.source_to_isocentre_mm;
-    g.source_to_detector_mm = s_.setup.source_to_detector_mm;
-    damage_.clear();
-    for (const DirectionDamage& d : direction_damage(segmentation_, planner_.candidates(), g))
-      damage_.push_back(d.longest_path_mm);
-    planner_.set_damage(segmentation_.voxels > 0 ? damage_ : std::vector<double>{});
-    if (o_.planner.edge_tangency_weight > 0)
-      planner_.set_edge_demand(
-          tangent_edge_demand(recon_.volume(), o_.segmentation.region, planner_.candidates(), o_.edge_tangency));
+    picture_ = read_planner_picture(recon_.volume(), planner_.candidates(), o_.segmentation, o_.edge_tangency,
+                                    o_.planner.edge_tangency_weight > 0, damage_geometry(s_.setup));
+    picture_.give_to(planner_);
     return seconds_since(start);
   }
 
@@ -121,7 +121,7 @@ class Loop {
       if (!next) break;
       const auto cell = static_cast<std::size_t>(HealpixSphere(o_.planner.candidate_nside).cell_of(*next));
       const double chosen = seconds_since(start);
-      PlannedViewRecord rec = take(*next, false, damage_.empty() ? 0.0 : damage_[cell]);
+      PlannedViewRecord rec = take(*next, false, picture_.damage_mm.empty() ? 0.0 : picture_.damage_mm[cell]);
       rec.planning_seconds += chosen;
       if (rec.calibrated) rec.planning_seconds += refresh();
       result.step_seconds.push_back(rec.planning_seconds);
@@ -132,10 +132,10 @@ class Loop {
 
   PlanningResult finish(PlanningResult result) {
     result.coarse = recon_.volume();
-    result.segmentation = segmentation_;
+    result.segmentation = picture_.segmentation;
     result.candidates = planner_.candidates();
     result.weights = planner_.weights();
-    result.damage_mm = damage_;
+    result.damage_mm = picture_.damage_mm;
     result.planner = o_.planner;
     result.edge_tangency = o_.edge_tangency;
     return result;
@@ -148,8 +148,7 @@ class Loop {
   ViewPlanner planner_;
   IncrementalReconstruction recon_;
   Intrinsics K_;
-  AbsorberSegmentation segmentation_;
-  std::vector<double> damage_;
+  PlannerPicture picture_;
   int next_index_ = 0, calibrated_ = 0;
 };
 
@@ -170,6 +169,41 @@ double PlanningResult::max_step_seconds() const {
 
 int PlanningResult::calibrated() const {
   return static_cast<int>(std::count_if(views.begin(), views.end(), [](const PlannedViewRecord& v) { return v.calibrated; }));
+}
+
+std::vector<Eigen::Vector3d> plan_on_picture(const Volume& picture, const PlanningOptions& options,
+                                             const DamageGeometry& geometry,
+                                             const std::function<bool(const Eigen::Vector3d&)>& reachable) {
+  options.validate();
+  ViewPlanner planner(options.planner);
+  read_planner_picture(picture, planner.candidates(), options.segmentation, options.edge_tangency,
+                       options.planner.edge_tangency_weight > 0, geometry)
+      .give_to(planner);
+  std::vector<Eigen::Vector3d> taken;
+  int requests = 0;
+  const auto take = [&](const Eigen::Vector3d& d) {
+    ++requests;
+    const bool ok = !reachable || reachable(d);
+    if (ok) {
+      taken.push_back(d);
+      planner.record_acquired(d);
+    } else {
+      planner.record_unreachable(d);
+    }
+    return ok;
+  };
+  const auto wanted = static_cast<std::size_t>(options.views);
+  for (const Eigen::Vector3d& d : scout_directions(options.scout_nside)) {
+    if (taken.size() >= wanted) break;
+    if (!take(d) && taken.size() < wanted) take(-d);  // as the loop does: the opposite sees the same lines
+  }
+  const int max_attempts = options.max_attempts > 0 ? options.max_attempts : 3 * options.views;
+  while (taken.size() < wanted && requests < max_attempts) {
+    const std::optional<Eigen::Vector3d> next = planner.next();
+    if (!next) break;
+    take(*next);
+  }
+  return taken;
 }
 
 // HEALPix cells come in opposite pairs; the scout keeps the cell of each pair whose first non-zero

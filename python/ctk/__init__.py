@@ -50,7 +50,7 @@ from ._ctk import (  # noqa: F401  (re-exported)
     write_volume,
 )
 from . import _ctk
-from ._planning import (PlannedTrajectory, PlanResult, plan, plan_lab, planning_directions, read_directions, read_plan,
+from ._planning import (PlannedTrajectory, PlanResult, plan, plan_lab, plan_on_picture, planning_directions, read_directions, read_plan,
                         read_plan_comparison, view_matrix, write_directions)
 from ._reports import read_report
 
@@ -62,7 +62,7 @@ __all__ = [
     "matrices_from_cone_vec", "read_cone_vec", "read_diagnosis", "read_geometry", "read_nxtomo", "read_rtk_geometry", "read_scan", "read_xtekct",
     "os_sqs", "sirt", "wls_cg", "write_geometry", "write_rtk_geometry", "write_scan",
     "PlanResult", "PlannedTrajectory", "plan", "plan_lab", "read_plan", "read_plan_comparison", "bench",
-    "planning_directions", "view_matrix", "read_directions", "write_directions",
+    "planning_directions", "plan_on_picture", "view_matrix", "read_directions", "write_directions",
 ]
 
 

@@ -163,6 +163,21 @@ def view_matrix(direction, *, detector_shape: tuple[int, int] = (720, 720), pitc
                              sod_mm)[0]
 
 
+def plan_on_picture(picture: np.ndarray, *, reachable: Optional[Callable[[tuple[float, float, float]], bool]] = None,
+                    views: int = 100, scout_nside: int = 2, candidate_nside: int = 8, damage_exponent: float = 0.25,
+                    spread_exponent: float = 4.0, widest_gap_fraction: float = 0.5, edge_tangency_weight: float = 0.5,
+                    tangent_width_deg: float = 10.0, seed: int = 1, coarse_size: int = 128,
+                    coarse_voxel_mm: float = 0.75, sdd_mm: float = 2150.0, sod_mm: float = 1360.0) -> np.ndarray:
+    """The directions (views, 3) the planner's rule draws when its picture of the sample is
+    `picture` from the start (an array (z, y, x) on its coarse grid: coarse_size^3 voxels of
+    coarse_voxel_mm centred on the holder origin, e.g. the truth from voxelise) and every
+    direction `reachable(direction)` allows is taken exactly as requested. The scout comes first,
+    then the draws, with damage and edge demand read off `picture` once: the rule checked apart from
+    how well the scout's reconstruction shows the sample. The keywords are plan()'s."""
+    keywords = {k: v for k, v in locals().items() if k not in ("picture", "reachable")}
+    return _ctk._plan_on_picture(keywords, np.asarray(picture, dtype=np.float32), reachable)
+
+
 def read_directions(file: str | os.PathLike) -> tuple[str, np.ndarray]:
     """A ctk-directions/1 file: the trajectory's name and its directions (n, 3) in the order they
     are tried."""

@@ -243,6 +243,27 @@ py::array_t<double> view_matrix(const std::array<double, 3>& beam, const std::ar
   return matrices_to_numpy({virtual_view(direction, Intrinsics::from_setup(sdd_mm, detector, detector.centre_px()), sod_mm)});
 }
 
+// The rule's draws with a fixed picture of the sample (the truth, for a check of the rule apart
+// from the scout's reconstruction), on the planner's coarse grid as the keywords set it.
+py::array_t<double> plan_on_picture(const py::dict& keywords, const FloatArray& picture, const py::object& reachable) {
+  PlanRequest request;
+  DamageGeometry geometry;
+  Keywords k(keywords);
+  plan_keywords(request, [&](const char* key, auto& field) { k.take(key, field); });
+  k.take("sod_mm", geometry.source_to_isocentre_mm);
+  k.take("sdd_mm", geometry.source_to_detector_mm);
+  k.finish();
+  request.validate();  // std::invalid_argument, a ValueError in Python
+  const PlanningOptions options = request.planning_options();
+  Volume volume(options.coarse_volume);
+  const ConstVolumeSpan given = volume_span(picture, volume.layout);
+  std::copy(given.data, given.data + volume.data.size(), volume.data.begin());
+  std::function<bool(const Eigen::Vector3d&)> allowed;
+  if (!reachable.is_none())
+    allowed = [&reachable](const Eigen::Vector3d& d) { return reachable(py::make_tuple(d.x(), d.y(), d.z())).cast<bool>(); };
+  return directions_to_numpy(ctk::plan_on_picture(volume, options, geometry, allowed));
+}
+
 py::dict read_directions(const fs::path& file) {
   const DirectionList list = read_direction_list(file);
   py::dict d;
@@ -267,6 +288,7 @@ void bind_planning(py::module_& m) {
   m.def("_plan", &plan_simulated, py::arg("keywords"), py::arg("callback"), py::arg("log"));
   m.def("_plan_lab", &plan_lab, py::arg("keywords"), py::arg("callback"));
   m.def("_plan_defaults", &plan_defaults);
+  m.def("_plan_on_picture", &plan_on_picture, py::arg("keywords"), py::arg("picture"), py::arg("reachable"));
 }
 
 }  // namespace ctk::python

@@ -1,13 +1,15 @@
 // The edges' demand for view directions: a plate wants the directions in its plane and not its
 // normal, a ball (edges of every orientation) wants every direction alike, a uniform region
 // wants nothing in particular; and a planner given the plate's demand puts more of its views in
-// the plate's plane while staying spread.
+// the plate's plane while staying spread, also when it reads that demand off a picture of the
+// plate and some directions are out of reach.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "ctk/geom/trajectory.hpp"
 #include "ctk/plan/edge_tangency.hpp"
+#include "ctk/plan/plan_trajectory.hpp"
 #include "ctk/plan/view_planner.hpp"
 
 namespace ctk {
@@ -117,6 +119,41 @@ TEST(EdgeTangency, ThePlannerPutsMoreViewsInThePlatePlaneAndStaysSpread) {
   for (const Eigen::Vector3d& v : even) a.record_acquired(v), b.record_acquired(v);
   const auto wa = a.weights(), wb = b.weights();
   for (std::size_t c = 0; c < wa.size(); ++c) EXPECT_DOUBLE_EQ(wa[c].weight(), wb[c].weight());
+}
+
+TEST(EdgeTangency, PlanningOnAPictureOfThePlateReadsItsEdgesAndSkipsWhatIsOutOfReach) {
+  PlanningOptions o;
+  o.views = 60;
+  o.planner.planned_views = 60;
+  o.planner.seed = 3;
+  o.segmentation.region = kRegion;
+  o.coarse_volume = plate().layout;
+  const auto reachable = [](const Eigen::Vector3d& d) { return std::abs(d.z()) < 0.9; };
+  const auto in_band = [](const std::vector<Eigen::Vector3d>& views) {
+    int n = 0;
+    for (const Eigen::Vector3d& v : views) n += std::abs(v.x()) < std::sin(10 * M_PI / 180);
+    return n;
+  };
+  const std::vector<Eigen::Vector3d> planned = plan_on_picture(plate(), o, {}, reachable);
+  ASSERT_EQ(planned.size(), 60U);
+  for (const Eigen::Vector3d& d : planned) EXPECT_LT(std::abs(d.z()), 0.9);
+  // The scout comes first: the 20 of its 24 directions below the two polar rings (|z| = 0.92,
+  // whose opposites are out of reach too), in its order.
+  std::vector<Eigen::Vector3d> scout;
+  for (const Eigen::Vector3d& d : scout_directions(2))
+    if (reachable(d)) scout.push_back(d);
+  ASSERT_EQ(scout.size(), 20U);
+  for (std::size_t i = 0; i < scout.size(); ++i) EXPECT_TRUE(planned[i].isApprox(scout[i])) << i;
+  // The plate's edges pull the 40 draws into its plane: 19 of 60 views in the +-10 deg band at
+  // the default edge share against 8 with none (2 of them scout views).
+  o.planner.edge_tangency_weight = 0;
+  const std::vector<Eigen::Vector3d> even = plan_on_picture(plate(), o, {}, reachable);
+  EXPECT_GE(in_band(planned), in_band(even) + 6);
+  EXPECT_LE(in_band(even), 12);
+  // The same seed and picture draw the same trajectory.
+  const std::vector<Eigen::Vector3d> again = plan_on_picture(plate(), o, {}, reachable);
+  ASSERT_EQ(again.size(), even.size());
+  for (std::size_t i = 0; i < even.size(); ++i) EXPECT_TRUE(again[i].isApprox(even[i]));
 }
 
 }  // namespace

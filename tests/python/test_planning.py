@@ -1,6 +1,7 @@
 """View planning from Python: the simulated run and its comparison on the same entry point as
 `ctk plan` (same trajectory, same files), the files read back as objects, a run stopped by its
-callback, the keywords' defaults equal to the library's, and bad input refused by name."""
+callback, the keywords' defaults equal to the library's, the rule drawing from a given picture,
+and bad input refused by name."""
 import inspect
 import json
 import os
@@ -80,13 +81,35 @@ def test_a_callback_returning_false_stops_the_plan(tmp_path):
 
 def test_the_keywords_default_to_the_librarys_settings():
     defaults = _ctk._plan_defaults()
-    for function in (ctk.plan, ctk.plan_lab):
+    for function in (ctk.plan, ctk.plan_lab, ctk.plan_on_picture):
         checked = 0
         for name, parameter in inspect.signature(function).parameters.items():
             if name in defaults:
                 assert parameter.default == defaults[name], (function.__name__, name)
                 checked += 1
-        assert checked >= 13, function.__name__
+        assert checked >= 12, function.__name__
+
+
+def test_the_rule_draws_from_a_given_picture_where_it_may():
+    # An aluminium plate 4 mm thick in the x = 0 plane, on a small planner grid: its edges want
+    # the directions in its plane, and the rule never asks for a direction out of reach.
+    n, voxel = 48, 1.0
+    centres = (np.arange(n) - (n - 1) / 2) * voxel
+    z, y, x = np.meshgrid(centres, centres, centres, indexing="ij")
+    plate = ((np.abs(x) <= 2) & (np.abs(y) <= 15) & (np.abs(z) <= 15)).astype(np.float32) * 0.07
+    keywords = dict(views=40, coarse_size=n, coarse_voxel_mm=voxel, seed=2)
+    below = lambda d: abs(d[2]) < 0.9  # noqa: E731
+    planned = ctk.plan_on_picture(plate, reachable=below, **keywords)
+    assert planned.shape == (40, 3)
+    assert np.allclose(np.linalg.norm(planned, axis=1), 1) and np.all(np.abs(planned[:, 2]) < 0.9)
+    even = ctk.plan_on_picture(plate, reachable=below, edge_tangency_weight=0, **keywords)
+    in_plane = lambda d: int(np.sum(np.abs(d[:, 0]) < np.sin(np.radians(10))))  # noqa: E731
+    assert in_plane(planned) >= in_plane(even) + 4
+    assert np.array_equal(planned, ctk.plan_on_picture(plate, reachable=below, **keywords))
+    with pytest.raises(ValueError, match=r"shape \(47, 48, 48\)"):
+        ctk.plan_on_picture(plate[1:], **keywords)
+    with pytest.raises(ValueError, match="PlanRequest.views"):
+        ctk.plan_on_picture(plate, **{**keywords, "views": 1})
 
 
 def test_bad_plans_are_refused_by_name(tmp_path):

@@ -77,6 +77,15 @@ struct PlanningResult {
 PlanningResult plan_trajectory(Acquisition& acquisition, const PlanningSetup& setup, const PlanningOptions& options,
                                const std::function<void(const PlannedViewRecord&)>& on_view = {});
 
+/// The directions the planner's rule draws when its picture of the sample is `picture` from the
+/// start (damage and edge demand read off it once) and every direction `reachable` allows is taken
+/// exactly as requested: no acquisition, no noise, no calibration. A check of the rule apart from
+/// how well the coarse reconstruction shows the sample (feed it the truth); the scout comes first,
+/// as in plan_trajectory, and `options.coarse_volume` is not used. An empty `reachable` allows all.
+std::vector<Eigen::Vector3d> plan_on_picture(const Volume& picture, const PlanningOptions& options,
+                                             const DamageGeometry& geometry,
+                                             const std::function<bool(const Eigen::Vector3d&)>& reachable = {});
+
 /// The scout's directions: one of each opposite pair of a HEALPix sphere's cells at `nside`
 /// (6 nside^2 directions). Opposite views see nearly the same lines, so the pair would spend a
 /// view on what the first already measured.
