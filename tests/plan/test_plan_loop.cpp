@@ -67,6 +67,9 @@ TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
   o.planner.planned_views = 28;
   o.planner.damage_exponent = 2.0;  // strong enough to show over 22 draws (the default, 0.25, is milder)
   o.planner.spread_exponent = 1.0;  // and the spread term no stronger than it
+  // The edges pull views into the plate's plane, the damage away from it; at half the density
+  // following the edges the damage shows (with all of it, the default, the plate's faces win).
+  o.planner.edge_tangency_weight = 0.5;
 
   double scout_cos = 0, planned_cos = 0;
   int scouts = 0, planned = 0;
