@@ -96,7 +96,7 @@ class Loop {
       if (on_view) on_view(rec);
       result.views.push_back(std::move(rec));
     };
-    const int max_attempts = o_.max_attempts > 0 ? o_.max_attempts : 3 * o_.views;
+    const int max_attempts = o_.request_limit();
     if (!o_.fixed_directions.empty()) {
       for (const Eigen::Vector3d& d : o_.fixed_directions) {
         if (calibrated_ >= o_.views || next_index_ >= max_attempts) break;
@@ -197,8 +197,7 @@ std::vector<Eigen::Vector3d> plan_on_picture(const Volume& picture, const Planni
     if (taken.size() >= wanted) break;
     if (!take(d) && taken.size() < wanted) take(-d);  // as the loop does: the opposite sees the same lines
   }
-  const int max_attempts = options.max_attempts > 0 ? options.max_attempts : 3 * options.views;
-  while (taken.size() < wanted && requests < max_attempts) {
+  while (taken.size() < wanted && requests < options.request_limit()) {
     const std::optional<Eigen::Vector3d> next = planner.next();
     if (!next) break;
     take(*next);

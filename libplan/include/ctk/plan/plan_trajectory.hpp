@@ -31,6 +31,7 @@ struct PlanningOptions {
   int scout_nside = 2;   // 24 scout directions (one of each opposite pair of 48 cells)
   int views = 100;       // acquired views wanted in all (scout included)
   int max_attempts = 0;  // requests in all; 0: three times `views`
+  int request_limit() const { return max_attempts > 0 ? max_attempts : 3 * views; }
   /// Non-empty: no scout and no planning, these directions are requested in order until `views`
   /// are acquired (the trajectories a planned one is compared with).
   std::vector<Eigen::Vector3d> fixed_directions;
