@@ -65,6 +65,7 @@ SCORES = {"level-matched": ("rmse_level_matched", "RMSE, levels matched"), "rmse
 STREAK_SHELL_MM = 5.0  # the shell around the absorbers where their streaks are scored
 COARSE_SIZE, COARSE_VOXEL_MM = 128, 0.75  # the planner's picture (`ctk plan` defaults)
 RULE_DRAWS = 4  # seeds of the planner's rule drawn per picture in the rule check
+RULE_SETTINGS = ("damage_exponent", "spread_exponent", "widest_gap_fraction", "edge_tangency_weight", "tangent_width_deg")
 
 
 def run(command, log):
@@ -238,7 +239,8 @@ def rule_check(proxy, work, sample_file, pool, views):
     views and scored like the oracle. Gains over the whole sphere's score, positive where better."""
     whole = proxy.score(proxy.reconstruct(list(range(views))))
     own, _ = ctk.read_volume(work / "plan" / "planned" / "coarse.nrrd")
-    out = {"proxy_score_whole_sphere_per_mm": whole}
+    out = {"proxy_score_whole_sphere_per_mm": whole,
+           "planner": {k: v for k, v in ctk._ctk._plan_defaults().items() if k in RULE_SETTINGS}}
     for name, picture_of_sample in (("rule_on_truth", truth_picture(sample_file)), ("rule_on_own_picture", own)):
         gains = rule_gains(proxy, picture_of_sample, pool, views, whole)
         out[name] = {"mean": float(np.mean(gains)), "draws": gains}

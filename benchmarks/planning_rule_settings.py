@@ -31,7 +31,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnosis_population import cpu_name, cpu_slug  # noqa: E402
-from planning_oracle import Proxy, pool_directions, rule_gains, simulate_pool, truth_picture  # noqa: E402
+from planning_oracle import RULE_SETTINGS, Proxy, pool_directions, rule_gains, simulate_pool, truth_picture  # noqa: E402
 from planning_population import bootstrap_interval, random_sample  # noqa: E402
 
 import ctk  # noqa: E402
@@ -50,7 +50,6 @@ SETTINGS = {
     "widest-gap-0.9": ({"widest_gap_fraction": 0.9}, "--widest-gap-fraction 0.9"),
     "tangent-width-20": ({"tangent_width_deg": 20.0}, "--tangent-width 20"),
 }
-PLANNER_KEYS = ("damage_exponent", "spread_exponent", "widest_gap_fraction", "edge_tangency_weight", "tangent_width_deg")
 
 
 def one_sample(ctk_bin, work, seed, views, draws, names, log):
@@ -106,7 +105,7 @@ def main():
         cases.append(one_sample(a.ctk, a.work / f"seed-{seed}", seed, a.views, a.draws, names,
                                 lambda line: print(line, flush=True)))
         result = {"cpu": cpu_name(), "command": " ".join(sys.argv), "views": a.views, "draws": a.draws,
-                  "defaults": {k: v for k, v in ctk._ctk._plan_defaults().items() if k in PLANNER_KEYS},
+                  "defaults": {k: v for k, v in ctk._ctk._plan_defaults().items() if k in RULE_SETTINGS},
                   "cases": cases, "summary": summary(cases)}
         out.write_text(json.dumps(result, indent=1) + "\n")
     for name, s in result["summary"]["settings"].items():
