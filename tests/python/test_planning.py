@@ -87,7 +87,7 @@ def test_the_keywords_default_to_the_librarys_settings():
             if name in defaults:
                 assert parameter.default == defaults[name], (function.__name__, name)
                 checked += 1
-        assert checked >= 12, function.__name__
+        assert checked >= 13, function.__name__
 
 
 def test_the_rule_draws_from_a_given_picture_where_it_may():
