@@ -63,7 +63,6 @@ ABSORBER_ABOVE_PER_MM = 2 * 0.027  # the comparison's absorbers: twice the holde
 # Per --score: the gain the summary judges the planner on, and how the picture names the search.
 SCORES = {"level-matched": ("rmse_level_matched", "RMSE, levels matched"), "rmse": ("rmse", "RMSE")}
 STREAK_SHELL_MM = 5.0  # the shell around the absorbers where their streaks are scored
-COARSE_SIZE, COARSE_VOXEL_MM = 128, 0.75  # the planner's picture (`ctk plan` defaults)
 RULE_DRAWS = 4  # seeds of the planner's rule drawn per picture in the rule check
 RULE_SETTINGS = ("damage_exponent", "spread_exponent", "widest_gap_fraction", "edge_tangency_weight", "tangent_width_deg")
 
@@ -211,12 +210,19 @@ def nearest_pool_views(directions, pool):
     return list(dict.fromkeys(int(np.argmax(pool @ d)) for d in directions))
 
 
+def planner_settings():
+    """The library's defaults of the rule's settings (what `ctk.plan_on_picture` draws with unless
+    told otherwise), recorded beside every rule result."""
+    return {k: v for k, v in ctk._ctk._plan_defaults().items() if k in RULE_SETTINGS}
+
+
 def truth_picture(sample_file):
-    """The truth on the planner's coarse grid, the holder with it (its wall is the planner's
-    yardstick for absorbers): what `ctk.plan_on_picture` reads when the rule is checked apart from
-    its estimate."""
-    origin = (-(COARSE_SIZE - 1) / 2 * COARSE_VOXEL_MM,) * 3
-    return ctk.voxelise(["helix-holder", str(sample_file)], (COARSE_SIZE,) * 3, (COARSE_VOXEL_MM,) * 3, origin)
+    """The truth on the planner's coarse grid (its default size and voxel, centred), the holder
+    with it (its wall is the planner's yardstick for absorbers): what `ctk.plan_on_picture` reads
+    when the rule is checked apart from its estimate."""
+    defaults = ctk._ctk._plan_defaults()
+    n, voxel = defaults["coarse_size"], defaults["coarse_voxel_mm"]
+    return ctk.voxelise(["helix-holder", str(sample_file)], (n,) * 3, (voxel,) * 3, (-(n - 1) / 2 * voxel,) * 3)
 
 
 def rule_gains(proxy, picture_of_sample, pool, views, whole, draws=RULE_DRAWS, **settings):
@@ -232,15 +238,14 @@ def rule_gains(proxy, picture_of_sample, pool, views, whole, draws=RULE_DRAWS, *
     return gains
 
 
-def rule_check(proxy, work, sample_file, pool, views):
+def rule_check(proxy, work, sample_file, pool, views, whole):
     """Where the planner's gap to the oracle lies, on the search's own score: the planner's rule at
     its defaults drawing from the truth as its picture and from its own last coarse reconstruction
     (the run's `coarse.nrrd`), and the planned trajectory itself, each mapped to the pool's nearest
-    views and scored like the oracle. Gains over the whole sphere's score, positive where better."""
-    whole = proxy.score(proxy.reconstruct(list(range(views))))
+    views and scored like the oracle. Gains over the whole sphere's score `whole` (the search's
+    first trial), positive where better."""
     own, _ = ctk.read_volume(work / "plan" / "planned" / "coarse.nrrd")
-    out = {"proxy_score_whole_sphere_per_mm": whole,
-           "planner": {k: v for k, v in ctk._ctk._plan_defaults().items() if k in RULE_SETTINGS}}
+    out = {"proxy_score_whole_sphere_per_mm": whole, "planner": planner_settings()}
     for name, picture_of_sample in (("rule_on_truth", truth_picture(sample_file)), ("rule_on_own_picture", own)):
         gains = rule_gains(proxy, picture_of_sample, pool, views, whole)
         out[name] = {"mean": float(np.mean(gains)), "draws": gains}
@@ -306,7 +311,7 @@ def one_sample(ctk_bin, work, seed, views, random_draws, budget, score, log):
          "--compare", "--random-draws", str(random_draws), "--compare-directions", str(work / "oracle.json")],
         work / "plan.log")
     gains, whole_sphere_figures = scored(out)
-    rule = rule_check(proxy, work, sample_file, directions, views)
+    rule = rule_check(proxy, work, sample_file, directions, views, whole_proxy)
     return {"seed": seed, "half": "choice" if seed % 2 == 0 else "report", "sample": sample,
             "gains": gains, "whole_sphere": whole_sphere_figures,
             "search": {"evaluations": proxy.evaluations, "pool_views": len(directions), "score": score,
@@ -372,7 +377,8 @@ def main():
             c["gains"], c["whole_sphere"] = scored(work / "plan")
             if a.rule_check:
                 proxy = Proxy(work / "pool" / "scan.json", work / "sample.json", result.get("score", "rmse"))
-                c["rule_check"] = rule_check(proxy, work, work / "sample.json", pool_directions(), result["views"])
+                c["rule_check"] = rule_check(proxy, work, work / "sample.json", pool_directions(), result["views"],
+                                             c["search"]["proxy_score_whole_sphere_per_mm"])
                 print(f"seed {c['seed']}: {json.dumps(c['rule_check'])}", flush=True)
         write_result(result, result["cases"], out)
         return

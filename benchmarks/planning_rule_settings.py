@@ -31,10 +31,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnosis_population import cpu_name, cpu_slug  # noqa: E402
-from planning_oracle import RULE_SETTINGS, Proxy, pool_directions, rule_gains, simulate_pool, truth_picture  # noqa: E402
+from planning_oracle import Proxy, planner_settings, pool_directions, rule_gains, simulate_pool, truth_picture  # noqa: E402
 from planning_population import bootstrap_interval, random_sample  # noqa: E402
-
-import ctk  # noqa: E402
 
 # Each setting: its plan_on_picture keywords and the same as `ctk plan` options, one moved at a
 # time from the library's defaults (kept in the results as `defaults`; when the even seeds were
@@ -105,7 +103,7 @@ def main():
         cases.append(one_sample(a.ctk, a.work / f"seed-{seed}", seed, a.views, a.draws, names,
                                 lambda line: print(line, flush=True)))
         result = {"cpu": cpu_name(), "command": " ".join(sys.argv), "views": a.views, "draws": a.draws,
-                  "defaults": {k: v for k, v in ctk._ctk._plan_defaults().items() if k in RULE_SETTINGS},
+                  "defaults": planner_settings(),
                   "cases": cases, "summary": summary(cases)}
         out.write_text(json.dumps(result, indent=1) + "\n")
     for name, s in result["summary"]["settings"].items():
