@@ -24,6 +24,16 @@ DamageGeometry damage_geometry(const PandaSetup& setup) {
   return g;
 }
 
+// The scout's requests in order until `full()`. A direction that is refused is asked again from the
+// opposite side: it sees nearly the same lines, and the robot may reach it (or its spheres may fix
+// the pose). `take` requests one direction and says whether it was taken.
+void request_scout(int nside, const std::function<bool(const Eigen::Vector3d&)>& take, const std::function<bool()>& full) {
+  for (const Eigen::Vector3d& d : scout_directions(nside)) {
+    if (full()) return;
+    if (!take(d) && !full()) take(-d);
+  }
+}
+
 class Loop {
  public:
   Loop(Acquisition& acquisition, const PlanningSetup& setup, const PlanningOptions& options)
@@ -105,15 +115,15 @@ class Loop {
       refresh();
       return finish(std::move(result));
     }
-    for (const Eigen::Vector3d& d : scout_directions(o_.scout_nside)) {
-      if (calibrated_ >= o_.views) break;
-      PlannedViewRecord rec = take(d, true, 0);
-      const bool refused = !rec.calibrated;
-      report(std::move(rec));
-      // The opposite direction sees nearly the same lines, and the robot may reach it (or its
-      // spheres may fix the pose).
-      if (refused && calibrated_ < o_.views) report(take(-d, true, 0));
-    }
+    request_scout(
+        o_.scout_nside,
+        [&](const Eigen::Vector3d& d) {
+          PlannedViewRecord rec = take(d, true, 0);
+          const bool taken = rec.calibrated;
+          report(std::move(rec));
+          return taken;
+        },
+        [&] { return calibrated_ >= o_.views; });
     result.views.back().planning_seconds += refresh();
     while (calibrated_ < o_.views && next_index_ < max_attempts) {
       const auto start = Clock::now();
@@ -193,10 +203,7 @@ std::vector<Eigen::Vector3d> plan_on_picture(const Volume& picture, const Planni
     return ok;
   };
   const auto wanted = static_cast<std::size_t>(options.views);
-  for (const Eigen::Vector3d& d : scout_directions(options.scout_nside)) {
-    if (taken.size() >= wanted) break;
-    if (!take(d) && taken.size() < wanted) take(-d);  // as the loop does: the opposite sees the same lines
-  }
+  request_scout(options.scout_nside, take, [&] { return taken.size() >= wanted; });
   while (taken.size() < wanted && requests < options.request_limit()) {
     const std::optional<Eigen::Vector3d> next = planner.next();
     if (!next) break;
