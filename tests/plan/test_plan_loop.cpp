@@ -67,9 +67,10 @@ TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
   o.planner.planned_views = 28;
   o.planner.damage_exponent = 2.0;  // strong enough to show over 22 draws (the default, 0.25, is milder)
   o.planner.spread_exponent = 1.0;  // and the spread term no stronger than it
-  // The edges pull views into the plate's plane, the damage away from it; at half the density
-  // following the edges the damage shows (with all of it, the default, the plate's faces win).
-  o.planner.edge_tangency_weight = 0.5;
+  // The damage alone: the edges pull views into the plate's plane (test_edge_tangency.cpp), and
+  // read through the picture's median their pull outweighs the damage here even at half the
+  // density following them (measured: mean |cos| 0.54 with damage exponent 4, the scout 0.52).
+  o.planner.edge_tangency_weight = 0;
 
   double scout_cos = 0, planned_cos = 0;
   int scouts = 0, planned = 0;
@@ -114,8 +115,8 @@ TEST(PlanLoop, CalibratesEveryViewAndSteersAwayFromThePlate) {
     EXPECT_LE(left_out, 1);
     EXPECT_EQ(r.step_seconds.size(), r.views.size() - static_cast<std::size_t>(scout_requests));
   }
-  // Uniform draws would give a mean |cos| of 0.5; over planner seeds 1 to 8 this loop gives 0.56
-  // to 0.74 per seed (mean 0.65), so a margin of 0.05 over the scout's 0.52 for the 44 draws of
+  // Uniform draws would give a mean |cos| of 0.5; over planner seeds 1 to 8 this loop gives 0.55
+  // to 0.65 per seed (mean 0.60), so a margin of 0.05 over the scout's 0.52 for the 44 draws of
   // two seeds fails a planner that ignores the plate without failing on their spread.
   EXPECT_GT(planned_cos / planned, scout_cos / scouts + 0.05) << "planned views look along the plate's normal more often";
 

@@ -22,8 +22,9 @@ struct PlannerPicture {
   void give_to(ViewPlanner& planner) const;
 };
 
-/// Reads `picture` for `candidates`; the edges' demand only when `with_edge_demand` (an edge
-/// share b of 0 never uses it, and it is the costlier half).
+/// Reads `picture`, median-filtered first (picture_median.hpp), for `candidates`; the edges'
+/// demand only when `with_edge_demand` (an edge share b of 0 never uses it, and it is the costlier
+/// half).
 PlannerPicture read_planner_picture(const Volume& picture, const std::vector<Eigen::Vector3d>& candidates,
                                     const SegmentationOptions& segmentation, const EdgeTangencyOptions& edge_tangency,
                                     bool with_edge_demand, const DamageGeometry& geometry);

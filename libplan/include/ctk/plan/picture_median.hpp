@@ -1,0 +1,16 @@
+#pragma once
+// The planner's picture with its noise and thin streaks taken out: each voxel replaced by the
+// median of its 3 x 3 x 3 neighbourhood (at the border, the neighbourhood clamped to the volume).
+// The coarse reconstruction the planner reads is made of few CG iterations on binned views; its
+// noise and the streaks of few views have gradients in every direction, which flatten the edges'
+// demand (edge_tangency.hpp) towards the even spread and pull views to false edges. A median
+// keeps a step between two regions at least two voxels thick where it was and removes what is
+// thinner. Fed its own last coarse picture, the planner's rule gained as much as fed the truth once
+// the picture was filtered this way (even seeds 2-12: docs/planning/README.md, "A cleaner picture").
+#include "ctk/core/volume.hpp"
+
+namespace ctk {
+
+Volume median_3x3x3(const Volume& volume);
+
+}  // namespace ctk
