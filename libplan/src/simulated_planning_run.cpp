@@ -111,7 +111,15 @@ VolumeLayout evaluation_layout(const ComparisonOptions& o, const ScanSimulation&
 }
 
 // Every trajectory gets the same reconstruction: WLS-CG on a binned detector, gradient penalty.
-Volume evaluation_reconstruction(const fs::path& folder, const VolumeLayout& layout, const ComparisonOptions& o) {
+// Only its calibrated views go in (a projection whose view could not be calibrated is on disk
+// with the others but has no matrix).
+struct EvaluationReconstruction {
+  Volume volume;
+  int views = 0;
+};
+
+EvaluationReconstruction evaluation_reconstruction(const fs::path& folder, const VolumeLayout& layout,
+                                                   const ComparisonOptions& o) {
   const ScanDescription scan = read_scan(folder / "scan.json");
   const Geometry geometry = read_geometry(folder / "geometry.json");
   const Measurements m = load_measurements(scan, geometry);
@@ -129,7 +137,7 @@ Volume evaluation_reconstruction(const fs::path& folder, const VolumeLayout& lay
   }
   recon.update();
   write_volume(recon.volume(), folder / "volume.nrrd");
-  return recon.volume();
+  return {recon.volume(), m.line_integrals.views};
 }
 
 // One random trajectory is a lottery (on sample 2, six draws of 100 views ranged from 0.00199 to
@@ -169,7 +177,6 @@ TrajectoryComparison compare(const SimulatedPlanRequest& o, const std::vector<Di
     if (!fs::exists(o.out / name / "scan.json"))
       throw InputError((o.out / name / "scan.json").string(), "",
                        "no " + name + " trajectory to compare (run with compare first)");
-  c.views = read_scan(o.out / "planned" / "scan.json").projections.count;
   const VolumeLayout layout = evaluation_layout(o.comparison, simulation);
   const Volume truth = voxelised(sample, layout);
   const std::vector<MaterialVolume> materials = voxelised_per_material(sample, layout);
@@ -179,6 +186,7 @@ TrajectoryComparison compare(const SimulatedPlanRequest& o, const std::vector<Di
   // Absorbers in the truth by the planner's own rule: more than times_wall the holder's wall.
   const float absorber_above = static_cast<float>(SegmentationOptions{}.times_wall * material::pom);
   std::vector<Volume> volumes;
+  std::vector<int> views;
   for (const std::string& name : c.names) {
     if (hooks.log) {
       std::ostringstream line;
@@ -186,8 +194,11 @@ TrajectoryComparison compare(const SimulatedPlanRequest& o, const std::vector<Di
            << o.comparison.voxel_mm << " mm, " << o.comparison.iterations << " WLS-CG iterations)";
       hooks.log(line.str());
     }
-    volumes.push_back(evaluation_reconstruction(o.out / name, layout, o.comparison));
+    EvaluationReconstruction r = evaluation_reconstruction(o.out / name, layout, o.comparison);
+    volumes.push_back(std::move(r.volume));
+    views.push_back(r.views);
   }
+  c.views = views.front();
   nlohmann::json table = nlohmann::json::object();
   std::vector<ComparedTrajectory> pictured;
   for (std::size_t i = 0; i < c.names.size(); ++i) {
@@ -195,7 +206,7 @@ TrajectoryComparison compare(const SimulatedPlanRequest& o, const std::vector<Di
     c.quality.push_back(q);
     nlohmann::json levels = nlohmann::json::object();
     for (const MaterialLevel& m : q.material_levels) levels[m.material.empty() ? "(no material)" : m.material] = m.level;
-    table[c.names[i]] = {{"views", c.views},
+    table[c.names[i]] = {{"views", views[i]},
                          {"rmse_per_mm", q.rmse_per_mm},
                          {"rmse_outside_absorbers_per_mm", q.rmse_outside_absorbers_per_mm},
                          {"rmse_level_matched_per_mm", q.rmse_level_matched_per_mm},

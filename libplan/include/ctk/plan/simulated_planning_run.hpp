@@ -51,7 +51,7 @@ struct SimulatedPlanRequest {
 struct TrajectoryComparison {
   std::vector<std::string> names;  // planned, whole-sphere, the random draws, then the given lists
   std::vector<TrajectoryQuality> quality;
-  int views = 0;                        // each trajectory's
+  int views = 0;                        // the planned trajectory's calibrated views (each other gets as many)
   nlohmann::json report;                // comparison.json (ctk-plan-comparison/1)
   std::filesystem::path file, picture;  // comparison.json and comparison.png
   std::string brief() const;            // "trajectories compared on <sample> (N views each)"
