@@ -145,6 +145,10 @@ void register_plan(CLI::App& app) {
                   "How far from an edge's tangent plane a direction still counts as grazing it (deg)")
       ->check(CLI::Range(1.0, 45.0))
       ->capture_default_str();
+  cmd->add_option("--picture-median", o->simulated.plan.picture_median,
+                  "Read the planner's coarse picture through a 3x3x3 median (its noise and thin streaks out) before its "
+                  "absorbers and edges (true or false)")
+      ->capture_default_str();
   cmd->add_option("--damage-exponent", o->simulated.plan.damage_exponent, "s: how strongly long absorber paths are avoided")
       ->check(non_negative_number)
       ->capture_default_str();

@@ -94,8 +94,7 @@ class Loop {
   double refresh() {
     const auto start = Clock::now();
     recon_.update();
-    picture_ = read_planner_picture(recon_.volume(), planner_.candidates(), o_.segmentation, o_.edge_tangency,
-                                    o_.planner.edge_tangency_weight > 0, damage_geometry(s_.setup));
+    picture_ = read_planner_picture(recon_.volume(), planner_.candidates(), o_.picture_reading(), damage_geometry(s_.setup));
     picture_.give_to(planner_);
     return seconds_since(start);
   }
@@ -148,6 +147,7 @@ class Loop {
     result.damage_mm = picture_.damage_mm;
     result.planner = o_.planner;
     result.edge_tangency = o_.edge_tangency;
+    result.picture_median = o_.picture_median;
     return result;
   }
 
@@ -186,9 +186,7 @@ std::vector<Eigen::Vector3d> plan_on_picture(const Volume& picture, const Planni
                                              const std::function<bool(const Eigen::Vector3d&)>& reachable) {
   options.validate();
   ViewPlanner planner(options.planner);
-  read_planner_picture(picture, planner.candidates(), options.segmentation, options.edge_tangency,
-                       options.planner.edge_tangency_weight > 0, geometry)
-      .give_to(planner);
+  read_planner_picture(picture, planner.candidates(), options.picture_reading(), geometry).give_to(planner);
   std::vector<Eigen::Vector3d> taken;
   int requests = 0;
   const auto take = [&](const Eigen::Vector3d& d) {
@@ -245,6 +243,10 @@ std::vector<Eigen::Vector3d> whole_sphere_order(int nside) {
     if (best) pick = *best;
   }
   return order;
+}
+
+PictureReading PlanningOptions::picture_reading() const {
+  return {segmentation, edge_tangency, planner.edge_tangency_weight > 0, picture_median};
 }
 
 void PlanningOptions::validate() const {

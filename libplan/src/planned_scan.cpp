@@ -45,6 +45,7 @@ nlohmann::json trajectory_to_json(const PlanningResult& r) {
             {"widest_gap_fraction", r.planner.widest_gap_fraction},
             {"edge_tangency_weight", r.planner.edge_tangency_weight},
             {"tangent_width_deg", r.edge_tangency.tangent_width_deg},
+            {"picture_median", r.picture_median},
             {"damage_floor_mm", r.planner.damage_floor_mm},
             {"unreachable_radius_deg", r.planner.unreachable_radius_deg}}},
           {"planning_step_seconds", {{"mean", r.mean_step_seconds()}, {"max", r.max_step_seconds()}}},

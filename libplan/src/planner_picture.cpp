@@ -10,14 +10,15 @@ void PlannerPicture::give_to(ViewPlanner& planner) const {
 }
 
 PlannerPicture read_planner_picture(const Volume& picture, const std::vector<Eigen::Vector3d>& candidates,
-                                    const SegmentationOptions& segmentation, const EdgeTangencyOptions& edge_tangency,
-                                    bool with_edge_demand, const DamageGeometry& geometry) {
-  const Volume clean = median_3x3x3(picture);
+                                    const PictureReading& reading, const DamageGeometry& geometry) {
+  const Volume filtered = reading.median ? median_3x3x3(picture) : Volume{};
+  const Volume& read = reading.median ? filtered : picture;
   PlannerPicture p;
-  p.segmentation = segment_absorbers(clean, segmentation);
+  p.segmentation = segment_absorbers(read, reading.segmentation);
   for (const DirectionDamage& d : direction_damage(p.segmentation, candidates, geometry))
     p.damage_mm.push_back(d.longest_path_mm);
-  if (with_edge_demand) p.edge_demand = tangent_edge_demand(clean, segmentation.region, candidates, edge_tangency);
+  if (reading.edge_demand)
+    p.edge_demand = tangent_edge_demand(read, reading.segmentation.region, candidates, reading.edge_tangency);
   return p;
 }
 

@@ -34,6 +34,7 @@ PlanningOptions PlanRequest::planning_options() const {
   p.planner.widest_gap_fraction = widest_gap_fraction;
   p.planner.edge_tangency_weight = edge_tangency_weight;
   p.edge_tangency.tangent_width_deg = tangent_width_deg;
+  p.picture_median = picture_median;
   p.planner.damage_floor_mm = 2 * coarse_voxel_mm;
   p.planner.seed = seed;
   p.reconstruction.binning = binning;

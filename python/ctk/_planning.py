@@ -81,8 +81,8 @@ def _hook(callback: Optional[ViewCallback]):
 def plan(out: str | os.PathLike, *, phantoms: Sequence[str], holder: str | os.PathLike = "reference", views: int = 100, scout_nside: int = 2,
          candidate_nside: int = 8, damage_exponent: float = 0.25, spread_exponent: float = 4.0,
          widest_gap_fraction: float = 0.5, edge_tangency_weight: float = 1.0, tangent_width_deg: float = 10.0,
-         seed: int = 1, coarse_size: int = 128, coarse_voxel_mm: float = 0.75, binning: int = 3,
-         detector_shape: tuple[int, int] = (720, 720), pitch_mm: float = 0.6, sdd_mm: float = 2150.0,
+         picture_median: bool = True, seed: int = 1, coarse_size: int = 128, coarse_voxel_mm: float = 0.75,
+         binning: int = 3, detector_shape: tuple[int, int] = (720, 720), pitch_mm: float = 0.6, sdd_mm: float = 2150.0,
          sod_mm: float = 1360.0, kvp: float = 90.0, filter_al_mm: float = 2.0, flat_counts: float = 1e4,
          compare: bool = False, compare_only: bool = False, random_draws: int = 1,
          compare_directions: Sequence[str | os.PathLike] = (), eval_size: int = 0,
@@ -119,8 +119,8 @@ def plan(out: str | os.PathLike, *, phantoms: Sequence[str], holder: str | os.Pa
 def plan_lab(lab: str | os.PathLike, setup: str | os.PathLike, out: str | os.PathLike, *, views: int = 100,
              scout_nside: int = 2, candidate_nside: int = 8, damage_exponent: float = 0.25, spread_exponent: float = 4.0,
              widest_gap_fraction: float = 0.5, edge_tangency_weight: float = 1.0, tangent_width_deg: float = 10.0,
-             seed: int = 1, coarse_size: int = 128, coarse_voxel_mm: float = 0.75, binning: int = 3,
-             sod_mm: float = 1360.0, timeout_s: int = 600,
+             picture_median: bool = True, seed: int = 1, coarse_size: int = 128, coarse_voxel_mm: float = 0.75,
+             binning: int = 3, sod_mm: float = 1360.0, timeout_s: int = 600,
              callback: Optional[ViewCallback] = None) -> Optional[PlannedTrajectory]:
     """`ctk plan --lab`: plans with a lab's acquisition process through request/answer files in
     `lab` (formats in libplan/README.md), from the lab's ctk-scan/1 `setup` (detector, robot
@@ -166,7 +166,7 @@ def view_matrix(direction, *, detector_shape: tuple[int, int] = (720, 720), pitc
 def plan_on_picture(picture: np.ndarray, *, reachable: Optional[Callable[[tuple[float, float, float]], bool]] = None,
                     views: int = 100, scout_nside: int = 2, candidate_nside: int = 8, damage_exponent: float = 0.25,
                     spread_exponent: float = 4.0, widest_gap_fraction: float = 0.5, edge_tangency_weight: float = 1.0,
-                    tangent_width_deg: float = 10.0, seed: int = 1, coarse_size: int = 128,
+                    tangent_width_deg: float = 10.0, picture_median: bool = True, seed: int = 1, coarse_size: int = 128,
                     coarse_voxel_mm: float = 0.75, sdd_mm: float = 2150.0, sod_mm: float = 1360.0) -> np.ndarray:
     """The directions (views, 3) the planner's rule draws when its picture of the sample is
     `picture` from the start (an array (z, y, x) on its coarse grid: coarse_size^3 voxels of

@@ -66,6 +66,7 @@ void plan_keywords(Plan& p, F&& f) {
   f("widest_gap_fraction", p.widest_gap_fraction);
   f("edge_tangency_weight", p.edge_tangency_weight);
   f("tangent_width_deg", p.tangent_width_deg);
+  f("picture_median", p.picture_median);
   f("seed", p.seed);
   f("coarse_size", p.coarse_size);
   f("coarse_voxel_mm", p.coarse_voxel_mm);

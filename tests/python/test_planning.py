@@ -64,6 +64,7 @@ def test_plan_compares_trajectories_and_writes_what_the_command_line_writes(tmp_
     assert [v["direction_holder"] for v in cli["views"]] == [v["direction_holder"] for v in planned.views]
     assert [v["status"] for v in cli["views"]] == [v["status"] for v in planned.views]
     assert cli["planner"] == planned.report["planner"]
+    assert planned.report["planner"]["picture_median"] is True  # the default, recorded
 
 
 def test_a_callback_returning_false_stops_the_plan(tmp_path):

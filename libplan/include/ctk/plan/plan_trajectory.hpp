@@ -16,6 +16,7 @@
 #include "ctk/plan/direction_damage.hpp"
 #include "ctk/plan/edge_tangency.hpp"
 #include "ctk/plan/incremental_reconstruction.hpp"
+#include "ctk/plan/planner_picture.hpp"
 #include "ctk/plan/view_planner.hpp"
 
 namespace ctk {
@@ -40,7 +41,9 @@ struct PlanningOptions {
   IncrementalOptions reconstruction;
   SegmentationOptions segmentation;  // its region is also where edges are looked for
   EdgeTangencyOptions edge_tangency;
+  bool picture_median = true;  // the coarse picture read through a 3^3 median (picture_median.hpp)
   CalibrationOptions calibration;
+  PictureReading picture_reading() const;  // the above as read_planner_picture takes them
   void validate() const;  // std::invalid_argument naming the field, its own and its parts'
 };
 
@@ -69,6 +72,7 @@ struct PlanningResult {
   std::vector<double> step_seconds;      // planner time of each planned (not scout) step
   PlannerOptions planner;                // the settings the draws were made with
   EdgeTangencyOptions edge_tangency;     // and how the edges' demand was found
+  bool picture_median = true;            // and whether the picture was read through a median
   int acquired() const;                  // projections taken
   int calibrated() const;                // of those, calibrated: the views of the trajectory
   double mean_step_seconds() const;      // of step_seconds (0 without planned steps)

@@ -14,6 +14,14 @@
 
 namespace ctk {
 
+// How a picture is read.
+struct PictureReading {
+  SegmentationOptions segmentation;  // its region is also where edges are looked for
+  EdgeTangencyOptions edge_tangency;
+  bool edge_demand = true;  // an edge share b of 0 never uses it, and it is the costlier half
+  bool median = true;       // through a 3^3 median first (picture_median.hpp)
+};
+
 struct PlannerPicture {
   AbsorberSegmentation segmentation;
   std::vector<double> damage_mm;    // per candidate (all zero when nothing was segmented)
@@ -22,11 +30,8 @@ struct PlannerPicture {
   void give_to(ViewPlanner& planner) const;
 };
 
-/// Reads `picture`, median-filtered first (picture_median.hpp), for `candidates`; the edges'
-/// demand only when `with_edge_demand` (an edge share b of 0 never uses it, and it is the costlier
-/// half).
+/// Reads `picture` for `candidates` as `reading` says.
 PlannerPicture read_planner_picture(const Volume& picture, const std::vector<Eigen::Vector3d>& candidates,
-                                    const SegmentationOptions& segmentation, const EdgeTangencyOptions& edge_tangency,
-                                    bool with_edge_demand, const DamageGeometry& geometry);
+                                    const PictureReading& reading, const DamageGeometry& geometry);
 
 }  // namespace ctk

@@ -24,6 +24,7 @@ struct PlanRequest {
   double widest_gap_fraction = PlannerOptions{}.widest_gap_fraction;
   double edge_tangency_weight = PlannerOptions{}.edge_tangency_weight;
   double tangent_width_deg = EdgeTangencyOptions{}.tangent_width_deg;
+  bool picture_median = PlanningOptions{}.picture_median;  // the coarse picture read through a 3^3 median
   std::uint64_t seed = 1;
   int coarse_size = 128;  // voxels per axis of the planner's volume
   double coarse_voxel_mm = 0.75;
