@@ -44,7 +44,7 @@ struct PlanningOptions {
   bool picture_median = true;  // the coarse picture read through a 3^3 median (picture_median.hpp)
   CalibrationOptions calibration;
   PictureReading picture_reading() const;  // the above as read_planner_picture takes them
-  void validate() const;  // std::invalid_argument naming the field, its own and its parts'
+  void validate() const;                   // std::invalid_argument naming the field, its own and its parts'
 };
 
 struct PlannedViewRecord {
