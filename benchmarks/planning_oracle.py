@@ -64,7 +64,8 @@ ABSORBER_ABOVE_PER_MM = 2 * 0.027  # the comparison's absorbers: twice the holde
 SCORES = {"level-matched": ("rmse_level_matched", "RMSE, levels matched"), "rmse": ("rmse", "RMSE")}
 STREAK_SHELL_MM = 5.0  # the shell around the absorbers where their streaks are scored
 RULE_DRAWS = 4  # seeds of the planner's rule drawn per picture in the rule check
-RULE_SETTINGS = ("damage_exponent", "spread_exponent", "widest_gap_fraction", "edge_tangency_weight", "tangent_width_deg")
+RULE_SETTINGS = ("damage_exponent", "spread_exponent", "widest_gap_fraction", "edge_tangency_weight", "tangent_width_deg",
+                 "picture_median")
 
 
 def run(command, log):
@@ -202,6 +203,18 @@ def oracle_search(proxy, depth, n, budget, rng, log):
             history.append({"evaluations": proxy.evaluations, "score_per_mm": best})
             log(f"  exchange kept after {proxy.evaluations} reconstructions: {best:.6f} ({(start - best) / start:+.2%})")
     return members, start, best, share, history, whole_sphere
+
+
+def random_sample_on_pool(ctk_bin, work, seed, views):
+    """Random sample `seed` (written to `work`/sample.json), its pool (simulated once), the proxy
+    scoring trajectories on it with the levels matched, and the score of the whole sphere's first
+    `views` views: what the rule-alone comparisons draw against."""
+    work.mkdir(parents=True, exist_ok=True)
+    sample_file = work / "sample.json"
+    sample_file.write_text(json.dumps(random_sample(seed), indent=1))
+    pool = pool_directions()
+    proxy = Proxy(simulate_pool(ctk_bin, work, sample_file, pool, seed), sample_file, "level-matched")
+    return sample_file, pool, proxy, proxy.score(proxy.reconstruct(list(range(views))))
 
 
 def nearest_pool_views(directions, pool):

@@ -31,8 +31,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnosis_population import cpu_name, cpu_slug  # noqa: E402
-from planning_oracle import Proxy, planner_settings, pool_directions, rule_gains, simulate_pool, truth_picture  # noqa: E402
-from planning_population import bootstrap_interval, random_sample  # noqa: E402
+from planning_oracle import planner_settings, random_sample_on_pool, rule_gains, truth_picture  # noqa: E402
+from planning_population import bootstrap_interval  # noqa: E402
 
 # Each setting: its plan_on_picture keywords and the same as `ctk plan` options, one moved at a
 # time from the library's defaults (kept in the results as `defaults`; when the even seeds were
@@ -51,13 +51,8 @@ SETTINGS = {
 
 
 def one_sample(ctk_bin, work, seed, views, draws, names, log):
-    work.mkdir(parents=True, exist_ok=True)
-    sample_file = work / "sample.json"
-    sample_file.write_text(json.dumps(random_sample(seed), indent=1))
     start = time.time()
-    pool = pool_directions()
-    proxy = Proxy(simulate_pool(ctk_bin, work, sample_file, pool, seed), sample_file, "level-matched")
-    whole = proxy.score(proxy.reconstruct(list(range(views))))
+    sample_file, pool, proxy, whole = random_sample_on_pool(ctk_bin, work, seed, views)
     truth = truth_picture(sample_file)
     gains = {}
     for name in names:
