@@ -64,6 +64,7 @@ ABSORBER_ABOVE_PER_MM = 2 * 0.027  # the comparison's absorbers: twice the holde
 SCORES = {"level-matched": ("rmse_level_matched", "RMSE, levels matched"), "rmse": ("rmse", "RMSE")}
 STREAK_SHELL_MM = 5.0  # the shell around the absorbers where their streaks are scored
 RULE_DRAWS = 4  # seeds of the planner's rule drawn per picture in the rule check
+TRUTH_READING = {"picture_median": False}  # how plan_on_picture reads the truth (truth_picture)
 RULE_SETTINGS = ("damage_exponent", "spread_exponent", "widest_gap_fraction", "edge_tangency_weight", "tangent_width_deg",
                  "picture_median")
 
@@ -232,7 +233,9 @@ def planner_settings():
 def truth_picture(sample_file):
     """The truth on the planner's coarse grid (its default size and voxel, centred), the holder
     with it (its wall is the planner's yardstick for absorbers): what `ctk.plan_on_picture` reads
-    when the rule is checked apart from its estimate."""
+    when the rule is checked apart from its estimate. The truth has no noise to take out: it is read
+    as it is (TRUTH_READING), not through the median meant for the planner's reconstructions, which
+    would take out plates thinner than two voxels."""
     defaults = ctk._ctk._plan_defaults()
     n, voxel = defaults["coarse_size"], defaults["coarse_voxel_mm"]
     return ctk.voxelise(["helix-holder", str(sample_file)], (n,) * 3, (voxel,) * 3, (-(n - 1) / 2 * voxel,) * 3)
@@ -259,8 +262,9 @@ def rule_check(proxy, work, sample_file, pool, views, whole):
     first trial), positive where better."""
     own, _ = ctk.read_volume(work / "plan" / "planned" / "coarse.nrrd")
     out = {"proxy_score_whole_sphere_per_mm": whole, "planner": planner_settings()}
-    for name, picture_of_sample in (("rule_on_truth", truth_picture(sample_file)), ("rule_on_own_picture", own)):
-        gains = rule_gains(proxy, picture_of_sample, pool, views, whole)
+    for name, picture_of_sample, reading in (("rule_on_truth", truth_picture(sample_file), TRUTH_READING),
+                                             ("rule_on_own_picture", own, {})):
+        gains = rule_gains(proxy, picture_of_sample, pool, views, whole, **reading)
         out[name] = {"mean": float(np.mean(gains)), "draws": gains}
     planned = json.loads((work / "plan" / "planned" / "trajectory.json").read_text())
     members = nearest_pool_views([v["direction_holder"] for v in planned["views"] if v.get("calibrated")], pool)

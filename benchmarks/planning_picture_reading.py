@@ -38,7 +38,7 @@ from scipy import ndimage
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnosis_population import cpu_name, cpu_slug  # noqa: E402
-from planning_oracle import (ITERATIONS, PENALTY, nearest_pool_views, planner_settings,  # noqa: E402
+from planning_oracle import (ITERATIONS, PENALTY, TRUTH_READING, nearest_pool_views, planner_settings,  # noqa: E402
                              random_sample_on_pool, rule_gains, truth_picture)
 from planning_population import bootstrap_interval  # noqa: E402
 
@@ -74,7 +74,7 @@ def one_sample(ctk_bin, work, lab, seed, views, draws, log):
     trajectory = json.loads((planned / "trajectory.json").read_text())
     directions = [v["direction_holder"] for v in trajectory["views"] if v.get("calibrated")]
     pictures = {"own": own, **{name: pool_picture(proxy, pool, directions[:k]) for name, k in PICTURES.items()}}
-    gains = {"truth": rule_gains(proxy, truth_picture(sample_file), pool, views, whole, draws)}
+    gains = {"truth": rule_gains(proxy, truth_picture(sample_file), pool, views, whole, draws, **TRUTH_READING)}
     for name, picture in pictures.items():
         for reading, (given, median) in readings_of(np.ascontiguousarray(picture, dtype=np.float32)).items():
             gains[f"{name}/{reading}"] = rule_gains(proxy, given, pool, views, whole, draws, picture_median=median)

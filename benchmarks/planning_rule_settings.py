@@ -31,7 +31,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnosis_population import cpu_name, cpu_slug  # noqa: E402
-from planning_oracle import planner_settings, random_sample_on_pool, rule_gains, truth_picture  # noqa: E402
+from planning_oracle import TRUTH_READING, planner_settings, random_sample_on_pool, rule_gains, truth_picture  # noqa: E402
 from planning_population import bootstrap_interval  # noqa: E402
 
 # Each setting: its plan_on_picture keywords and the same as `ctk plan` options, one moved at a
@@ -57,7 +57,7 @@ def one_sample(ctk_bin, work, seed, views, draws, names, log):
     gains = {}
     for name in names:
         keywords = SETTINGS[name][0]
-        gains[name] = rule_gains(proxy, truth, pool, views, whole, draws, **keywords)
+        gains[name] = rule_gains(proxy, truth, pool, views, whole, draws, **{**TRUTH_READING, **keywords})
         log(f"seed {seed} {name}: {100 * np.mean(gains[name]):+.2f} % ({', '.join(f'{100 * g:+.1f}' for g in gains[name])})")
     return {"seed": seed, "proxy_score_whole_sphere_per_mm": whole, "gains": gains, "seconds": time.time() - start}
 
