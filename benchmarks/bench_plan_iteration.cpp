@@ -4,11 +4,14 @@
 //    directions, the draw), measured over a whole simulated run of thesis sample 1
 //    (polychromatic, robot noise) with `views` views; the counters give the mean and the worst
 //    step. The simulator's rendering (the robot's move and exposure) is not counted.
+//  BM_PictureMedian/<boxed>: the 3^3 median the planner reads its 128^3 picture through, over
+//    the whole volume (0) or over the box a reading looks at (1, the planner's own).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 
 #include "ctk/phantoms/builtin_phantoms.hpp"
+#include "ctk/plan/picture_median.hpp"
 #include "ctk/plan/plan_trajectory.hpp"
 #include "ctk/plan/simulated_acquisition.hpp"
 
@@ -50,6 +53,17 @@ void BM_PlanningStep(benchmark::State& state) {
 }
 
 BENCHMARK(BM_PlanningStep)->Arg(100)->UseManualTime()->Iterations(1)->Unit(benchmark::kSecond);
+
+void BM_PictureMedian(benchmark::State& state) {
+  Volume picture(VolumeLayout::centred({128, 128, 128}, Eigen::Vector3d::Constant(0.75)));
+  for (std::size_t v = 0; v < picture.data.size(); ++v) picture.data[v] = static_cast<float>((v * 2654435761U) % 1000) * 1e-4f;
+  // The box of the planner's reading (sample region and holder wall, 28 mm about the axis, 45 mm
+  // along it, one voxel more): 78 x 78 x 124 of the 128^3 voxels.
+  const VoxelBox box{{25, 25, 2}, {103, 103, 126}};
+  for (auto _ : state) benchmark::DoNotOptimize(state.range(0) ? median_3x3x3(picture, box) : median_3x3x3(picture));
+}
+
+BENCHMARK(BM_PictureMedian)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace ctk

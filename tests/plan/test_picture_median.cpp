@@ -1,6 +1,7 @@
 // The 3 x 3 x 3 median the planner reads its picture through: a lone voxel is gone, a plane step
 // and a plate two voxels thick stay exactly where they were, a plate one voxel thick is gone, and
-// the border (neighbourhood clamped) keeps a constant volume constant.
+// the border (neighbourhood clamped) keeps a constant volume constant; a box filters its voxels as
+// the whole volume's median does and leaves the rest as they were.
 #include <gtest/gtest.h>
 
 #include "ctk/plan/picture_median.hpp"
@@ -45,6 +46,21 @@ TEST(PictureMedian, KeepsAStepAndAPlateTwoVoxelsThickAndRemovesOneVoxelThick) {
   for (int k = 1; k < 6; ++k)
     for (int j = 1; j < 7; ++j)
       for (int i = 1; i < 8; ++i) EXPECT_EQ(r.at(i, j, k), ramp.at(i, j, k)) << i << " " << j << " " << k;
+}
+
+TEST(PictureMedian, ABoxFiltersItsVoxelsAsTheWholeDoesAndCopiesTheRest) {
+  const Volume ramp = volume_of([](int i, int j, int k) { return (i * 7 + j * 3 + k * 5) % 11 * 0.01; });
+  const Volume whole = median_3x3x3(ramp);
+  const Volume boxed = median_3x3x3(ramp, VoxelBox{{-3, 2, 1}, {5, 8, 40}});  // clipped to the volume
+  int filtered = 0;
+  for (int k = 0; k < 7; ++k)
+    for (int j = 0; j < 8; ++j)
+      for (int i = 0; i < 9; ++i) {
+        const bool in = i < 5 && j >= 2 && k >= 1;
+        EXPECT_EQ(boxed.at(i, j, k), (in ? whole : ramp).at(i, j, k)) << i << " " << j << " " << k;
+        filtered += in && whole.at(i, j, k) != ramp.at(i, j, k);
+      }
+  EXPECT_GT(filtered, 50);  // the median does change this volume inside the box
 }
 
 }  // namespace
