@@ -389,6 +389,7 @@ def main():
     out = a.out or Path(__file__).resolve().parent / "results" / f"planning_oracle-{cpu_slug()}.json"
     if a.rescore:
         result = json.loads(out.read_text())
+        result["rescored"] = {"command": " ".join(sys.argv), "work": str(a.work)}  # the folders scored now
         for c in result["cases"]:
             work = a.work / f"seed-{c['seed']}"
             c["gains"], c["whole_sphere"] = scored(work / "plan")
