@@ -230,15 +230,22 @@ def planner_settings():
     return {k: v for k, v in ctk._ctk._plan_defaults().items() if k in RULE_SETTINGS}
 
 
+def coarse_grid():
+    """The planner's coarse grid at the library's defaults: voxels per axis, voxel size (mm), and
+    the origin (centre of voxel 0, mm) that centres it on the holder."""
+    defaults = ctk._ctk._plan_defaults()
+    n, voxel = defaults["coarse_size"], defaults["coarse_voxel_mm"]
+    return n, voxel, (-(n - 1) / 2 * voxel,) * 3
+
+
 def truth_picture(sample_file):
     """The truth on the planner's coarse grid (its default size and voxel, centred), the holder
     with it (its wall is the planner's yardstick for absorbers): what `ctk.plan_on_picture` reads
     when the rule is checked apart from its estimate. The truth has no noise to take out: it is read
     as it is (TRUTH_READING), not through the median meant for the planner's reconstructions, which
     would take out plates thinner than two voxels."""
-    defaults = ctk._ctk._plan_defaults()
-    n, voxel = defaults["coarse_size"], defaults["coarse_voxel_mm"]
-    return ctk.voxelise(["helix-holder", str(sample_file)], (n,) * 3, (voxel,) * 3, (-(n - 1) / 2 * voxel,) * 3)
+    n, voxel, origin = coarse_grid()
+    return ctk.voxelise(["helix-holder", str(sample_file)], (n,) * 3, (voxel,) * 3, origin)
 
 
 def rule_gains(proxy, picture_of_sample, pool, views, whole, draws=RULE_DRAWS, **settings):

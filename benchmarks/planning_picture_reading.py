@@ -38,8 +38,8 @@ from scipy import ndimage
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnosis_population import cpu_name, cpu_slug  # noqa: E402
-from planning_oracle import (ITERATIONS, PENALTY, TRUTH_READING, nearest_pool_views, planner_settings,  # noqa: E402
-                             random_sample_on_pool, rule_gains, truth_picture)
+from planning_oracle import (ITERATIONS, PENALTY, TRUTH_READING, coarse_grid, nearest_pool_views,  # noqa: E402
+                             planner_settings, random_sample_on_pool, rule_gains, truth_picture)
 from planning_population import bootstrap_interval  # noqa: E402
 
 import ctk  # noqa: E402
@@ -51,11 +51,9 @@ READINGS = ("as-it-is", "gaussian-1-voxel", "median-3")
 def pool_picture(proxy, pool, directions):
     """The pool's views nearest `directions` reconstructed on the planner's coarse grid, as the
     proxy reconstructs (WLS-CG, gradient penalty)."""
-    defaults = ctk._ctk._plan_defaults()
-    n, voxel = defaults["coarse_size"], defaults["coarse_voxel_mm"]
+    n, voxel, origin = coarse_grid()
     members = nearest_pool_views(directions, pool)
-    projector = ctk.Projector(proxy.P[members], (n, n, n), voxel, (-(n - 1) / 2 * voxel,) * 3,
-                              detector_shape=proxy.detector_shape)
+    projector = ctk.Projector(proxy.P[members], (n, n, n), voxel, origin, detector_shape=proxy.detector_shape)
     return ctk.wls_cg(projector, proxy.b[members], weights=proxy.w[members], iterations=ITERATIONS, tolerance=0.0,
                       lambda_=PENALTY, regulariser="gradient").x
 
